@@ -1,0 +1,29 @@
+#include "components/builtin.hpp"
+
+namespace pneumo {
+
+void register_builtin_components(Registry& r) {
+  using namespace components;
+  register_volume(r);
+  register_iso6358_throttle(r);
+  register_pressure_source(r);
+  register_atmosphere(r);
+  register_heat_convection(r);
+  register_thermal_mass(r);
+  register_fixed_temperature(r);
+  register_translational_mass(r);
+  register_fixed_position(r);
+  register_force_source(r);
+  register_signal_source(r);
+}
+
+const Registry& builtin_registry() {
+  static const Registry registry = [] {
+    Registry r;
+    register_builtin_components(r);
+    return r;
+  }();
+  return registry;
+}
+
+}  // namespace pneumo

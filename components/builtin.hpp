@@ -1,0 +1,28 @@
+// The built-in component library. Each component lives in its own file and
+// registers itself by type name through one function listed in builtin.cpp.
+#pragma once
+
+#include "framework/model/registry.hpp"
+
+namespace pneumo::components {
+
+void register_volume(Registry& r);
+void register_iso6358_throttle(Registry& r);
+void register_pressure_source(Registry& r);
+void register_atmosphere(Registry& r);
+void register_heat_convection(Registry& r);
+void register_thermal_mass(Registry& r);
+void register_fixed_temperature(Registry& r);
+void register_translational_mass(Registry& r);
+void register_fixed_position(Registry& r);
+void register_force_source(Registry& r);
+void register_signal_source(Registry& r);
+
+}  // namespace pneumo::components
+
+namespace pneumo {
+// All built-in component types.
+void register_builtin_components(Registry& r);
+// A registry holding the built-in types (built once).
+const Registry& builtin_registry();
+}  // namespace pneumo

@@ -1,0 +1,28 @@
+// A flange held in place (the frame).
+#include "components/builtin.hpp"
+
+namespace pneumo::components {
+
+class FixedPosition final : public ComponentT<FixedPosition> {
+ public:
+  static ComponentInfo describe() {
+    ComponentInfo i;
+    i.type = "fixed_position";
+    i.description = "Flange fixed at position s0 (the machine frame).";
+    i.parameters = {ParameterSpec::scalar("s0", "m", "position", 0.0)};
+    i.ports = {{"flange", Domain::translational, Causality::acausal, "flange"}};
+    i.equations = {"fixed position"};
+    return i;
+  }
+  explicit FixedPosition(const Construction& c) : ComponentT(c), s0_(c.params["s0"]) {}
+  template <class T>
+  void equations(const Eval<T>& e, T* r) const { r[0] = e.flange(0).s - s0_; }
+  void start(StartValues& s, const GasModel&) const override { s.guess_position(0, s0_); }
+
+ private:
+  double s0_;
+};
+
+void register_fixed_position(Registry& r) { r.add<FixedPosition>(); }
+
+}  // namespace pneumo::components

@@ -1,0 +1,39 @@
+// The ISO 6358 flow law, shared by every component that contains a C-b
+// resistance (throttle, valve paths, cylinder cushion throttle).
+#pragma once
+
+#include "framework/core/smooth.hpp"
+#include "framework/model/gas.hpp"
+
+namespace pneumo::components {
+
+// Flow function phi(r) of the pressure ratio r = p_down/p_up <= 1:
+//   1                                  r <= b          (choked, eq. 16)
+//   sqrt(1 - ((r - b)/(1 - b))^2)      b < r <= r_lam  (subsonic, eq. 15)
+//   phi(r_lam) (1 - r)/(1 - r_lam)     r > r_lam       (laminar continuation)
+template <class T>
+T iso6358_phi(const T& r, double b, double r_lam) {
+  const T x = (min(r, T(r_lam)) - b) / (1.0 - b);
+  const T subsonic = sqrt(1.0 - max(x, T(0.0)) * max(x, T(0.0)));
+  const double x_lam = (r_lam - b) / (1.0 - b);
+  const double phi_lam = std::sqrt(1.0 - x_lam * x_lam);
+  const T laminar = phi_lam * (1.0 - r) / (1.0 - r_lam);
+  return select(value(r) <= r_lam, subsonic, laminar);
+}
+
+// Mass flow from port a to port b (negative for reverse flow). T_a and T_b are
+// the temperatures of the gas arriving from each side (the upstream one is
+// used). C in m3/(s Pa).
+template <class T>
+T iso6358_mass_flow(const T& p_a, const T& p_b, const T& T_a, const T& T_b, const T& C, double b, double r_lam,
+                    const GasModel& gas) {
+  const bool forward = value(p_a) >= value(p_b);
+  const T p_up = select(forward, p_a, p_b);
+  const T p_dn = select(forward, p_b, p_a);
+  const T T_up = select(forward, T_a, T_b);
+  const T phi = iso6358_phi(T(p_dn / p_up), b, r_lam);
+  const T m = C * gas.rho_ref * p_up * sqrt(gas.T_ref / T_up) * phi;
+  return select(forward, m, T(-m));
+}
+
+}  // namespace pneumo::components

@@ -1,0 +1,61 @@
+// ISO 6358 pneumatic resistance (seed 000 eq. 15-16): sonic conductance C and
+// critical pressure ratio b, flow in both directions. Above the pressure
+// ratio `laminar_ratio` the flow function is continued linearly in (1 - r),
+// so the mass flow is a smooth function of p_a - p_b through zero and the
+// Jacobian stays finite there.
+#include "components/builtin.hpp"
+#include "components/iso6358_flow.hpp"
+
+namespace pneumo::components {
+
+class Iso6358Throttle final : public ComponentT<Iso6358Throttle> {
+ public:
+  enum Port { kA, kB, kOpening };
+
+  static ComponentInfo describe() {
+    ComponentInfo i;
+    i.type = "iso6358_throttle";
+    i.description =
+        "ISO 6358 flow resistance (throttle, valve path, fitting): m_flow = C rho_ref p1 sqrt(T_ref/T1) phi(p2/p1, "
+        "b), both directions; isenthalpic. Optional signal 'opening' scales C (1 = fully open).";
+    i.parameters = {
+        ParameterSpec::scalar("C", "m3/(s*Pa)", "sonic conductance, e.g. 0.4 dm3/(s*bar)").non_negative(),
+        ParameterSpec::scalar("b", "1", "critical pressure ratio", 0.5).range(0.0, 0.999),
+        ParameterSpec::scalar("laminar_ratio", "1",
+                              "pressure ratio above which the flow is linear in (1 - p2/p1)", 0.999)
+            .open_range(0.0, 1.0),
+    };
+    i.ports = {{"a", Domain::pneumatic, Causality::acausal, "port a"},
+               {"b", Domain::pneumatic, Causality::acausal, "port b"},
+               {"opening", Domain::signal, Causality::input, "fraction of C that is open (default 1)", true, 1.0}};
+    i.observables = {{"m_flow", "kg/s", "mass flow from a to b"}};
+    i.equations = {"ISO 6358 mass flow", "mass balance", "stream temperature a", "stream temperature b"};
+    return i;
+  }
+
+  explicit Iso6358Throttle(const Construction& c)
+      : ComponentT(c), C_(c.params["C"]), b_(c.params["b"]), laminar_(c.params["laminar_ratio"]) {
+    if (laminar_ <= b_) throw ParameterError("laminar_ratio", "laminar_ratio must be larger than b");
+  }
+
+  template <class T>
+  void equations(const Eval<T>& e, T* r) const {
+    const auto a = e.gas_port(kA);
+    const auto b = e.gas_port(kB);
+    const T opening = max(e.signal(kOpening), T(0.0));
+    const T m = iso6358_mass_flow(a.p, b.p, a.T_in, b.T_in, T(C_ * opening), b_, laminar_, e.gas());
+    r[0] = a.m_flow - m;
+    r[1] = a.m_flow + b.m_flow;
+    r[2] = a.T_out - b.T_in;  // throttling of an ideal gas keeps its temperature
+    r[3] = b.T_out - a.T_in;
+  }
+
+  double observe(int, const Eval<double>& e) const override { return e.gas_port(kA).m_flow; }
+
+ private:
+  double C_, b_, laminar_;
+};
+
+void register_iso6358_throttle(Registry& r) { r.add<Iso6358Throttle>(); }
+
+}  // namespace pneumo::components

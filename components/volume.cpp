@@ -1,0 +1,78 @@
+// Rigid gas volume: mass and energy balance of an ideal gas, optional heat
+// port to a wall. States m and U (not p and T) so that mass and energy are
+// conserved by construction, to the solver's tolerance.
+#include "components/builtin.hpp"
+#include "framework/core/smooth.hpp"
+
+namespace pneumo::components {
+
+class Volume final : public ComponentT<Volume> {
+ public:
+  enum Port { kPort, kHeat };
+  enum Var { kM, kU, kT };
+  enum Observable { kP };
+
+  static ComponentInfo describe() {
+    ComponentInfo i;
+    i.type = "volume";
+    i.description = "Rigid gas volume with mass and energy balance (ideal gas); optional heat port to a wall.";
+    i.parameters = {
+        ParameterSpec::scalar("V", "m3", "volume").positive(),
+        ParameterSpec::scalar("p0", "Pa", "initial pressure, absolute", 101325.0).positive(),
+        ParameterSpec::scalar("T0", "K", "initial gas temperature", 293.15).positive(),
+    };
+    i.ports = {{"port", Domain::pneumatic, Causality::acausal, "gas port"},
+               {"heat", Domain::thermal, Causality::acausal, "heat port to the wall (insulated if unconnected)", true}};
+    i.variables = {{"m", "kg", "gas mass"}, {"U", "J", "internal energy of the gas"}, {"T", "K", "gas temperature"}};
+    i.observables = {{"p", "Pa", "pressure, absolute"}};
+    i.equations = {"mass balance", "energy balance", "gas law p V = m R T", "U = m c_v T",
+                   "outflow temperature", "wall temperature seen by the heat port"};
+    return i;
+  }
+
+  explicit Volume(const Construction& c)
+      : ComponentT(c), V_(c.params["V"]), p0_(c.params["p0"]), T0_(c.params["T0"]) {}
+
+  template <class T>
+  void equations(const Eval<T>& e, T* r) const {
+    const auto port = e.gas_port(kPort);
+    const auto heat = e.heat_port(kHeat);
+    const T& m = e.var(kM);
+    const T& U = e.var(kU);
+    const T& Tg = e.var(kT);
+    const GasModel& gas = e.gas();
+    e.reject_unless_positive(m);
+    e.reject_unless_positive(Tg);
+    // Enthalpy carried by the flow: inflow at the upstream temperature T_in,
+    // outflow at the gas temperature. smooth_pos(x) - smooth_pos(-x) == x, so
+    // this is exactly m_flow * c_p * T_upstream away from zero flow and
+    // conservative between neighbours at any flow.
+    const double eps = gas.m_flow_small;
+    const T H = gas.cp() * (smooth_pos(port.m_flow, eps) * port.T_in - smooth_pos(T(-port.m_flow), eps) * Tg);
+    r[0] = e.der(kM) - port.m_flow;
+    r[1] = e.der(kU) - H - heat.Q;
+    r[2] = port.p * V_ - m * gas.R * Tg;
+    r[3] = U - m * gas.cv() * Tg;
+    r[4] = port.T_out - Tg;
+    r[5] = heat.T - Tg;
+  }
+
+  double observe(int, const Eval<double>& e) const override { return e.gas_port(kPort).p; }
+
+  void start(StartValues& s, const GasModel& gas) const override {
+    const double m0 = p0_ * V_ / (gas.R * T0_);
+    s.fix_var(kM, m0);
+    s.fix_var(kU, m0 * gas.cv() * T0_);
+    s.guess_var(kT, T0_);
+    s.guess_pressure(kPort, p0_);
+    s.guess_temperature(kPort, T0_);
+    s.guess_temperature(kHeat, T0_);
+  }
+
+ private:
+  double V_, p0_, T0_;
+};
+
+void register_volume(Registry& r) { r.add<Volume>(); }
+
+}  // namespace pneumo::components

@@ -1,0 +1,683 @@
+#include "framework/assembly/system.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <map>
+#include <numeric>
+#include <random>
+#include <set>
+
+#include "framework/core/smooth.hpp"
+
+namespace pneumo {
+
+namespace {
+
+// ---------------------------------------------------------------------------
+// Blocks.
+
+class ComponentBlock final : public Block {
+ public:
+  template <class T>
+  void eval(double t, const T* y, const T* yp, T* r, const EvalContext& c) const {
+    Eval<T> e(*component, t, y, yp, c.modes + mode0, connected.get(), *c.gas, c.invalid);
+    component->residual(e, r);
+  }
+  void residual(double t, const double* y, const double* yp, double* r, const EvalContext& c) const override {
+    eval(t, y, yp, r, c);
+  }
+  void residual(double t, const Dual* y, const Dual* yp, Dual* r, const EvalContext& c) const override {
+    eval(t, y, yp, r, c);
+  }
+  void residual(double t, const Pattern* y, const Pattern* yp, Pattern* r, const EvalContext& c) const override {
+    eval(t, y, yp, r, c);
+  }
+};
+
+// Through variables of a node sum to zero (Kirchhoff).
+class FlowSumBlock final : public Block {
+ public:
+  template <class T>
+  void eval(const T* y, T* r) const {
+    T s = y[0];
+    for (std::size_t i = 1; i < vars.size(); ++i) s = s + y[i];
+    r[0] = s;
+  }
+  void residual(double, const double* y, const double*, double* r, const EvalContext&) const override { eval(y, r); }
+  void residual(double, const Dual* y, const Dual*, Dual* r, const EvalContext&) const override { eval(y, r); }
+  void residual(double, const Pattern* y, const Pattern*, Pattern* r, const EvalContext&) const override { eval(y, r); }
+};
+
+// inStream for a node of three or more pneumatic ports: the temperature of
+// the gas arriving at port i is the mix of what the other ports deliver,
+// weighted by their smoothed outflows into the node (Modelica's stream
+// connector rule, regularised so that it stays defined at zero flow).
+// vars: [T_in_i, (m_flow_j, T_out_j) for j != i]
+class StreamMixBlock final : public Block {
+ public:
+  template <class T>
+  void eval(const T* y, T* r, const EvalContext& c) const {
+    const double eps = c.gas->m_flow_small;
+    T w_sum = 0.0, wt_sum = 0.0;
+    for (std::size_t j = 1; j + 1 < vars.size(); j += 2) {
+      const T w = smooth_pos(T(-y[j]), eps);  // outflow of port j = flow into the node
+      w_sum = w_sum + w;
+      wt_sum = wt_sum + w * y[j + 1];
+    }
+    r[0] = y[0] - wt_sum / w_sum;
+  }
+  void residual(double, const double* y, const double*, double* r, const EvalContext& c) const override { eval(y, r, c); }
+  void residual(double, const Dual* y, const Dual*, Dual* r, const EvalContext& c) const override { eval(y, r, c); }
+  void residual(double, const Pattern* y, const Pattern*, Pattern* r, const EvalContext& c) const override { eval(y, r, c); }
+};
+
+// An unconnected optional signal input holds its default value.
+class SignalDefaultBlock final : public Block {
+ public:
+  double value = 0.0;
+  template <class T>
+  void eval(const T* y, T* r) const { r[0] = y[0] - value; }
+  void residual(double, const double* y, const double*, double* r, const EvalContext&) const override { eval(y, r); }
+  void residual(double, const Dual* y, const Dual*, Dual* r, const EvalContext&) const override { eval(y, r); }
+  void residual(double, const Pattern* y, const Pattern*, Pattern* r, const EvalContext&) const override { eval(y, r); }
+};
+
+// Lower bound of a variable's typical magnitude, by unit.
+double nominal_floor(const std::string& unit) {
+  static const std::map<std::string, double> floors{
+      {"Pa", 1e4}, {"K", 10.0},  {"kg", 1e-9}, {"J", 1e-4},  {"kg/s", 1e-6}, {"W", 1e-3},
+      {"m", 1e-3}, {"m/s", 1e-3}, {"N", 1e-1}, {"m3", 1e-9}, {"1", 1e-3}};
+  auto it = floors.find(unit);
+  return it == floors.end() ? 1.0 : it->second;
+}
+
+struct PortVars {
+  int across = -1;
+  int flow = -1;
+  int t_out = -1;
+};
+
+std::string node_text(const Circuit& c, const std::vector<PortId>& ports) {
+  std::string s = "{";
+  for (std::size_t i = 0; i < ports.size(); ++i) s += (i ? ", " : "") + c.port_name(ports[i]);
+  return s + "}";
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------
+
+System::System(Circuit circuit) : circuit_(std::move(circuit)) {
+  build_nodes();
+  build_pattern();
+  check_structure();
+}
+
+System::~System() = default;
+
+void System::build_nodes() {
+  const Circuit& c = circuit_;
+  auto new_var = [&](std::string name, double start, unsigned char kind, double nominal) {
+    var_names_.push_back(std::move(name));
+    start_value_.push_back(start);
+    start_kind_.push_back(kind);
+    nominal_.push_back(nominal);
+    return n_++;
+  };
+
+  // Union-find of ports into nodes.
+  std::map<std::pair<int, int>, int> port_node;  // (component, port) -> node
+  std::vector<std::vector<PortId>> nodes;
+  std::vector<SourceLocation> node_where;
+  for (const auto& conn : c.connections) {
+    std::set<int> existing;
+    for (const auto& p : conn.ports) {
+      auto it = port_node.find({p.component, p.port});
+      if (it != port_node.end()) existing.insert(it->second);
+    }
+    int target;
+    if (existing.empty()) {
+      target = static_cast<int>(nodes.size());
+      nodes.emplace_back();
+      node_where.push_back(conn.where);
+    } else {
+      target = *existing.begin();
+      for (int other : existing) {
+        if (other == target) continue;
+        for (const auto& p : nodes[other]) {
+          nodes[target].push_back(p);
+          port_node[{p.component, p.port}] = target;
+        }
+        nodes[other].clear();
+      }
+    }
+    for (const auto& p : conn.ports) {
+      if (!port_node.count({p.component, p.port})) {
+        nodes[target].push_back(p);
+        port_node[{p.component, p.port}] = target;
+      }
+    }
+  }
+  // Unconnected ports: optional ones get a node of their own, others are errors.
+  for (std::size_t ci = 0; ci < c.components.size(); ++ci) {
+    const auto& info = c.components[ci]->info();
+    for (std::size_t pi = 0; pi < info.ports.size(); ++pi) {
+      if (port_node.count({static_cast<int>(ci), static_cast<int>(pi)})) continue;
+      const auto& ps = info.ports[pi];
+      if (!ps.optional) {
+        throw InputError(c.component_where[ci], c.components[ci]->name(), "",
+                         "port '" + ps.name + "' (" + domain_name(ps.domain) +
+                             ") is not connected; connect it under 'connections:' (dangling port)");
+      }
+      port_node[{static_cast<int>(ci), static_cast<int>(pi)}] = static_cast<int>(nodes.size());
+      nodes.push_back({PortId{static_cast<int>(ci), static_cast<int>(pi)}});
+      node_where.push_back(c.component_where[ci]);
+    }
+  }
+  // Domain and causality checks.
+  for (std::size_t ni = 0; ni < nodes.size(); ++ni) {
+    const auto& ports = nodes[ni];
+    if (ports.empty()) continue;
+    const auto& first = c.components[ports[0].component]->info().ports[ports[0].port];
+    int outputs = 0;
+    for (const auto& p : ports) {
+      const auto& ps = c.components[p.component]->info().ports[p.port];
+      if (ps.domain != first.domain)
+        throw InputError(node_where[ni], c.components[p.component]->name(), "",
+                         "cannot connect " + c.port_name(ports[0]) + " (" + domain_name(first.domain) + ") with " +
+                             c.port_name(p) + " (" + domain_name(ps.domain) + ")");
+      if (ps.causality == Causality::output) ++outputs;
+    }
+    if (first.domain == Domain::signal) {
+      if (outputs > 1)
+        throw InputError(node_where[ni], "", "", "signal node " + node_text(c, ports) + " has " +
+                                                     std::to_string(outputs) + " outputs driving it; only one may");
+      if (outputs == 0 && ports.size() > 1)
+        throw InputError(node_where[ni], "", "", "signal node " + node_text(c, ports) +
+                                                     " connects only inputs; nothing drives it");
+    }
+  }
+
+  // Variables: node across variables first.
+  std::vector<int> node_across(nodes.size(), -1);
+  for (std::size_t ni = 0; ni < nodes.size(); ++ni) {
+    if (nodes[ni].empty()) continue;
+    const auto& ps = c.components[nodes[ni][0].component]->info().ports[nodes[ni][0].port];
+    const std::string where = nodes[ni].size() == 1 ? c.port_name(nodes[ni][0]) : node_text(c, nodes[ni]);
+    switch (ps.domain) {
+      case Domain::pneumatic: node_across[ni] = new_var("p at " + where, c.gas.p_ambient, 0, 1e5); break;
+      case Domain::thermal: node_across[ni] = new_var("T at " + where, c.gas.T_ambient, 0, 300.0); break;
+      case Domain::translational: node_across[ni] = new_var("s at " + where, 0.0, 0, 1e-3); break;
+      case Domain::signal: node_across[ni] = new_var("value at " + where, ps.default_value, 0, 1.0); break;
+    }
+  }
+
+  // Component blocks with their own variables.
+  std::map<std::pair<int, int>, PortVars> port_vars;
+  int row = 0, mode = 0, root = 0;
+  for (std::size_t ci = 0; ci < c.components.size(); ++ci) {
+    const Component& comp = *c.components[ci];
+    const auto& info = comp.info();
+    if (comp.n_local() > kMaxLocal)
+      throw StructureError("component '" + comp.name() + "' (" + info.type + ") has " +
+                           std::to_string(comp.n_local()) + " local variables; the limit is " +
+                           std::to_string(kMaxLocal));
+    auto b = std::make_unique<ComponentBlock>();
+    b->component = &comp;
+    b->component_index = static_cast<int>(ci);
+    b->label = comp.name() + " (" + info.type + ")";
+    b->where = c.component_where[ci];
+    b->vars.assign(comp.n_local(), -1);
+    b->connected.reset(new bool[info.ports.size() + 1]);
+    for (std::size_t pi = 0; pi < info.ports.size(); ++pi) {
+      const auto& ps = info.ports[pi];
+      const int node = port_node[{static_cast<int>(ci), static_cast<int>(pi)}];
+      b->connected[pi] = nodes[node].size() > 1;
+      const int o = comp.port_offset(static_cast<int>(pi));
+      const std::string pn = comp.name() + "." + ps.name;
+      PortVars pv;
+      pv.across = node_across[node];
+      b->vars[o] = pv.across;
+      switch (ps.domain) {
+        case Domain::pneumatic:
+          pv.flow = b->vars[o + 1] = new_var(pn + ".m_flow", 0.0, 0, 1e-6);
+          pv.t_out = b->vars[o + 2] = new_var(pn + ".T_out", c.gas.T_ambient, 0, 300.0);
+          break;
+        case Domain::thermal: pv.flow = b->vars[o + 1] = new_var(pn + ".Q", 0.0, 0, 1e-3); break;
+        case Domain::translational: pv.flow = b->vars[o + 1] = new_var(pn + ".f", 0.0, 0, 1e-1); break;
+        case Domain::signal: break;
+      }
+      port_vars[{static_cast<int>(ci), static_cast<int>(pi)}] = pv;
+    }
+    // Start values from the component (local), merged into the global start.
+    std::vector<double> local_start(comp.n_local(), 0.0);
+    std::vector<StartValues::Kind> local_kind(comp.n_local(), StartValues::Kind::none);
+    StartValues sv(comp, local_start.data(), local_kind.data());
+    comp.start(sv, c.gas);
+    for (std::size_t k = 0; k < info.variables.size(); ++k) {
+      const int local = comp.internal_offset() + static_cast<int>(k);
+      const auto& vs = info.variables[k];
+      const double start = local_start[local];
+      const double nominal = vs.nominal > 0 ? vs.nominal : std::max(std::abs(start), nominal_floor(vs.unit));
+      b->vars[local] = new_var(comp.name() + "." + vs.name, start, static_cast<unsigned char>(local_kind[local]), nominal);
+    }
+    for (int local = 0; local < comp.internal_offset(); ++local) {
+      const int g = b->vars[local];
+      if (g < 0 || local_kind[local] == StartValues::Kind::none) continue;
+      const auto kind = static_cast<unsigned char>(local_kind[local]);
+      if (kind > start_kind_[g]) {  // fixed beats guess beats none
+        start_value_[g] = local_start[local];
+        start_kind_[g] = kind;
+        nominal_[g] = std::max(nominal_[g], std::abs(local_start[local]));
+      }
+    }
+    b->row0 = row;
+    b->n_rows = comp.n_equations();
+    for (int k = 0; k < b->n_rows; ++k)
+      b->row_names.push_back(comp.name() + ": " +
+                             (k < static_cast<int>(info.equations.size()) ? info.equations[k]
+                                                                          : "equation " + std::to_string(k + 1)));
+    row += b->n_rows;
+    b->mode0 = mode;
+    mode += info.modes;
+    b->root0 = root;
+    root += info.roots;
+    blocks_.push_back(std::move(b));
+  }
+  modes_.assign(mode, 0.0);
+  n_roots_ = root;
+  reset_modes();
+
+  // Stream routing: T_in of each pneumatic port.
+  for (std::size_t ni = 0; ni < nodes.size(); ++ni) {
+    const auto& ports = nodes[ni];
+    if (ports.empty()) continue;
+    if (c.components[ports[0].component]->info().ports[ports[0].port].domain != Domain::pneumatic) continue;
+    auto t_in_slot = [&](const PortId& p) -> int& {
+      auto& blk = *blocks_[p.component];
+      return blk.vars[c.components[p.component]->port_offset(p.port) + 3];
+    };
+    if (ports.size() == 1) {
+      t_in_slot(ports[0]) = port_vars[{ports[0].component, ports[0].port}].t_out;  // closed port
+    } else if (ports.size() == 2) {
+      t_in_slot(ports[0]) = port_vars[{ports[1].component, ports[1].port}].t_out;
+      t_in_slot(ports[1]) = port_vars[{ports[0].component, ports[0].port}].t_out;
+    } else {
+      for (std::size_t i = 0; i < ports.size(); ++i) {
+        auto mix = std::make_unique<StreamMixBlock>();
+        const int t_in = new_var(c.port_name(ports[i]) + ".T_in", c.gas.T_ambient, 0, 300.0);
+        t_in_slot(ports[i]) = t_in;
+        mix->vars.push_back(t_in);
+        for (std::size_t j = 0; j < ports.size(); ++j) {
+          if (j == i) continue;
+          const auto& pv = port_vars[{ports[j].component, ports[j].port}];
+          mix->vars.push_back(pv.flow);
+          mix->vars.push_back(pv.t_out);
+        }
+        mix->label = "stream mixing at " + node_text(c, ports);
+        mix->where = node_where[ni];
+        mix->row0 = row++;
+        mix->n_rows = 1;
+        mix->row_names.push_back("inStream(T) of " + c.port_name(ports[i]) + " at " + node_text(c, ports));
+        blocks_.push_back(std::move(mix));
+      }
+    }
+  }
+  // Node balances and signal defaults.
+  for (std::size_t ni = 0; ni < nodes.size(); ++ni) {
+    const auto& ports = nodes[ni];
+    if (ports.empty()) continue;
+    const auto& ps = c.components[ports[0].component]->info().ports[ports[0].port];
+    if (ps.domain == Domain::signal) {
+      bool driven = false;
+      for (const auto& p : ports)
+        driven |= c.components[p.component]->info().ports[p.port].causality == Causality::output;
+      if (driven) continue;
+      auto def = std::make_unique<SignalDefaultBlock>();
+      def->value = ps.default_value;
+      def->vars = {node_across[ni]};
+      def->label = "default of unconnected input " + c.port_name(ports[0]);
+      def->where = node_where[ni];
+      def->row0 = row++;
+      def->n_rows = 1;
+      def->row_names.push_back(def->label);
+      blocks_.push_back(std::move(def));
+      continue;
+    }
+    auto sum = std::make_unique<FlowSumBlock>();
+    for (const auto& p : ports) sum->vars.push_back(port_vars[{p.component, p.port}].flow);
+    sum->label = std::string(ps.domain == Domain::pneumatic ? "mass" : ps.domain == Domain::thermal ? "heat" : "force") +
+                 " balance at " + node_text(c, ports);
+    sum->where = node_where[ni];
+    sum->row0 = row++;
+    sum->n_rows = 1;
+    sum->row_names.push_back(sum->label);
+    blocks_.push_back(std::move(sum));
+  }
+
+  if (row != n_)
+    throw StructureError("internal error: " + std::to_string(row) + " equations for " + std::to_string(n_) +
+                         " variables");
+  for (const auto& b : blocks_)
+    for (int v : b->vars)
+      if (v < 0) throw StructureError("internal error: unmapped local variable in " + b->label);
+}
+
+void System::reset_modes() {
+  for (const auto& b : blocks_)
+    if (b->component) b->component->initial_modes(modes_.data() + b->mode0);
+}
+
+template <class T>
+void System::eval_block(const Block& b, double t, const T* y, const T* yp, T* r, const EvalContext& c) const {
+  b.residual(t, y, yp, r, c);
+}
+
+void System::build_pattern() {
+  dep_y_.assign(n_, {});
+  dep_yp_.assign(n_, {});
+  std::vector<std::set<int>> sy(n_), syp(n_);
+  std::mt19937 rng(12345);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  // Evaluate at the start point and at two perturbed points; the union of
+  // the dependencies is the structural pattern.
+  for (int pass = 0; pass < 3; ++pass) {
+    std::vector<double> y0(n_), yp0(n_);
+    start_values(y0, yp0);
+    if (pass > 0)
+      for (int i = 0; i < n_; ++i) {
+        y0[i] += 0.05 * nominal_[i] * u(rng) + 0.01 * y0[i] * u(rng);
+        yp0[i] = 0.1 * nominal_[i] * u(rng);
+      }
+    bool invalid = false;
+    EvalContext ctx{&circuit_.gas, modes_.data(), &invalid};
+    std::vector<Pattern> ly(kMaxLocal), lyp(kMaxLocal), r(kMaxLocal * 2);
+    for (const auto& b : blocks_) {
+      const int nl = static_cast<int>(b->vars.size());
+      for (int i = 0; i < nl; ++i) {
+        ly[i] = Pattern(y0[b->vars[i]]);
+        ly[i].deps.set(i);
+        lyp[i] = Pattern(yp0[b->vars[i]]);
+        lyp[i].deps.set(kMaxLocal + i);
+      }
+      r.assign(std::max(1, b->n_rows), Pattern(0.0));
+      b->residual(0.0, ly.data(), lyp.data(), r.data(), ctx);
+      for (int k = 0; k < b->n_rows; ++k)
+        for (int i = 0; i < nl; ++i) {
+          if (r[k].deps.test(i)) sy[b->row0 + k].insert(b->vars[i]);
+          if (r[k].deps.test(kMaxLocal + i)) syp[b->row0 + k].insert(b->vars[i]);
+        }
+    }
+  }
+  id_.assign(n_, 0.0);
+  std::vector<std::set<int>> cols(n_);
+  for (int row = 0; row < n_; ++row) {
+    dep_y_[row].assign(sy[row].begin(), sy[row].end());
+    dep_yp_[row].assign(syp[row].begin(), syp[row].end());
+    for (int c : sy[row]) cols[c].insert(row);
+    for (int c : syp[row]) {
+      cols[c].insert(row);
+      id_[c] = 1.0;
+    }
+  }
+  col_ptr_.assign(n_ + 1, 0);
+  row_idx_.clear();
+  std::map<std::pair<int, int>, int> pos;
+  for (int c = 0; c < n_; ++c) {
+    col_ptr_[c] = static_cast<long>(row_idx_.size());
+    for (int r : cols[c]) {
+      pos[{r, c}] = static_cast<int>(row_idx_.size());
+      row_idx_.push_back(r);
+    }
+  }
+  col_ptr_[n_] = static_cast<long>(row_idx_.size());
+  for (auto& b : blocks_) {
+    const int nl = static_cast<int>(b->vars.size());
+    b->jac_pos.assign(static_cast<std::size_t>(b->n_rows) * nl, -1);
+    for (int k = 0; k < b->n_rows; ++k)
+      for (int i = 0; i < nl; ++i) {
+        auto it = pos.find({b->row0 + k, b->vars[i]});
+        if (it != pos.end()) b->jac_pos[static_cast<std::size_t>(k) * nl + i] = it->second;
+      }
+  }
+}
+
+void System::check_structure() const {
+  // Candidate (equation, variable) pairs for an index-1 matching.
+  std::vector<std::vector<int>> adj(n_);
+  for (int r = 0; r < n_; ++r) {
+    for (int c : dep_y_[r])
+      if (id_[c] == 0.0) adj[r].push_back(c);
+    for (int c : dep_yp_[r]) adj[r].push_back(c);
+  }
+  std::vector<int> match_col(n_, -1), match_row(n_, -1);
+  std::vector<int> seen(n_, -1);
+  std::function<bool(int, int)> augment = [&](int r, int stamp) -> bool {
+    for (int c : adj[r]) {
+      if (seen[c] == stamp) continue;
+      seen[c] = stamp;
+      if (match_col[c] < 0 || augment(match_col[c], stamp)) {
+        match_col[c] = r;
+        match_row[r] = c;
+        return true;
+      }
+    }
+    return false;
+  };
+  for (int r = 0; r < n_; ++r) augment(r, r);
+  std::vector<int> free_rows, free_cols;
+  for (int r = 0; r < n_; ++r)
+    if (match_row[r] < 0) free_rows.push_back(r);
+  for (int c = 0; c < n_; ++c)
+    if (match_col[c] < 0) free_cols.push_back(c);
+  if (free_rows.empty()) return;
+
+  // Dulmage-Mendelsohn style diagnosis: equations reachable from unmatched
+  // equations by alternating paths form the over-determined part; variables
+  // reachable from unmatched variables the under-determined part.
+  std::vector<std::vector<int>> col_rows(n_);
+  for (int r = 0; r < n_; ++r)
+    for (int c : adj[r]) col_rows[c].push_back(r);
+  std::set<int> over_rows, over_cols, under_rows, under_cols;
+  std::vector<int> stack(free_rows);
+  while (!stack.empty()) {
+    const int r = stack.back();
+    stack.pop_back();
+    if (!over_rows.insert(r).second) continue;
+    for (int c : adj[r]) {
+      over_cols.insert(c);
+      if (match_col[c] >= 0) stack.push_back(match_col[c]);
+    }
+  }
+  stack = free_cols;
+  while (!stack.empty()) {
+    const int c = stack.back();
+    stack.pop_back();
+    if (!under_cols.insert(c).second) continue;
+    for (int r : col_rows[c]) {
+      under_rows.insert(r);
+      if (match_row[r] >= 0) stack.push_back(match_row[r]);
+    }
+  }
+  auto row_name = [&](int r) {
+    for (const auto& b : blocks_)
+      if (r >= b->row0 && r < b->row0 + b->n_rows)
+        return b->row_names[r - b->row0] + " [" + b->where.to_string() + "]";
+    return std::string("?");
+  };
+  std::string msg = "the circuit's equations are structurally singular (or of index > 1): " +
+                    std::to_string(free_rows.size()) + " equation(s) cannot be paired with an unknown.\n";
+  msg += "  over-determined - these " + std::to_string(over_rows.size()) + " equations constrain only " +
+         std::to_string(over_cols.size()) + " unknown(s):\n";
+  for (int r : over_rows) msg += "    equation  " + row_name(r) + "\n";
+  for (int c : over_cols) msg += "    unknown   " + var_names_[c] + "\n";
+  msg += "  under-determined - these unknowns are not fixed by any remaining equation:\n";
+  for (int c : under_cols) msg += "    unknown   " + var_names_[c] + "\n";
+  msg +=
+      "  hint: two components that both set the pressure (or temperature, or position) of one node - e.g. two "
+      "volumes or a source and a volume connected with nothing between them - need a flow component (throttle, "
+      "hose, valve) between them.";
+  throw StructureError(msg);
+}
+
+void System::start_values(std::vector<double>& y0, std::vector<double>& yp0) const {
+  y0 = start_value_;
+  yp0.assign(n_, 0.0);
+}
+
+int System::residual(double t, const double* y, const double* yp, double* F) const {
+  bool invalid = false;
+  EvalContext ctx{&circuit_.gas, modes_.data(), &invalid};
+  double ly[kMaxLocal], lyp[kMaxLocal];
+  for (const auto& b : blocks_) {
+    const std::size_t nl = b->vars.size();
+    for (std::size_t i = 0; i < nl; ++i) {
+      ly[i] = y[b->vars[i]];
+      lyp[i] = yp[b->vars[i]];
+    }
+    b->residual(t, ly, lyp, F + b->row0, ctx);
+  }
+  if (invalid) return 1;
+  for (int i = 0; i < n_; ++i)
+    if (!std::isfinite(F[i])) return 1;
+  return 0;
+}
+
+int System::jacobian(double t, const double* y, const double* yp, double cj, double* values) const {
+  std::fill(values, values + nnz(), 0.0);
+  bool invalid = false;
+  EvalContext ctx{&circuit_.gas, modes_.data(), &invalid};
+  static thread_local std::vector<Dual> ly(kMaxLocal), lyp(kMaxLocal), r(kMaxLocal * 2);
+  for (const auto& b : blocks_) {
+    const int nl = static_cast<int>(b->vars.size());
+    for (int i = 0; i < nl; ++i) {
+      // One pass gives dF/dy + cj dF/dy': y_i seeded with 1, y'_i with cj.
+      ly[i] = Dual::variable(y[b->vars[i]], i, 1.0, nl);
+      lyp[i] = Dual::variable(yp[b->vars[i]], i, cj, nl);
+    }
+    if (static_cast<int>(r.size()) < b->n_rows) r.resize(b->n_rows);
+    b->residual(t, ly.data(), lyp.data(), r.data(), ctx);
+    for (int k = 0; k < b->n_rows; ++k) {
+      const Dual& f = r[k];
+      for (int i = 0; i < f.n; ++i) {
+        const double d = f.d[i];
+        if (d == 0.0) continue;
+        const int p = b->jac_pos[static_cast<std::size_t>(k) * nl + i];
+        if (p >= 0) values[p] += d;
+        else ++pattern_misses_;
+      }
+    }
+  }
+  return invalid ? 1 : 0;
+}
+
+void System::jacobian_parts(double t, const double* y, const double* yp, std::vector<double>& dFdy,
+                            std::vector<double>& dFdyp) const {
+  dFdy.assign(static_cast<std::size_t>(n_) * n_, 0.0);
+  dFdyp.assign(static_cast<std::size_t>(n_) * n_, 0.0);
+  bool invalid = false;
+  EvalContext ctx{&circuit_.gas, modes_.data(), &invalid};
+  std::vector<Dual> ly(kMaxLocal), lyp(kMaxLocal), r(kMaxLocal * 2);
+  for (int part = 0; part < 2; ++part)
+    for (const auto& b : blocks_) {
+      const int nl = static_cast<int>(b->vars.size());
+      for (int i = 0; i < nl; ++i) {
+        ly[i] = Dual::variable(y[b->vars[i]], i, part == 0 ? 1.0 : 0.0, nl);
+        lyp[i] = Dual::variable(yp[b->vars[i]], i, part == 1 ? 1.0 : 0.0, nl);
+      }
+      if (static_cast<int>(r.size()) < b->n_rows) r.resize(b->n_rows);
+      b->residual(t, ly.data(), lyp.data(), r.data(), ctx);
+      auto& out = part == 0 ? dFdy : dFdyp;
+      for (int k = 0; k < b->n_rows; ++k)
+        for (int i = 0; i < nl; ++i)
+          out[static_cast<std::size_t>(b->row0 + k) * n_ + b->vars[i]] += r[k].deriv(i);
+    }
+}
+
+void System::roots(double t, const double* y, const double* yp, double* g) const {
+  bool invalid = false;
+  double ly[kMaxLocal], lyp[kMaxLocal];
+  for (const auto& b : blocks_) {
+    if (!b->component || b->component->info().roots == 0) continue;
+    const std::size_t nl = b->vars.size();
+    for (std::size_t i = 0; i < nl; ++i) {
+      ly[i] = y[b->vars[i]];
+      lyp[i] = yp[b->vars[i]];
+    }
+    Eval<double> e(*b->component, t, ly, lyp, modes_.data() + b->mode0, b->connected.get(), circuit_.gas, &invalid);
+    b->component->roots(e, g + b->root0);
+  }
+}
+
+std::vector<double> System::time_events() const {
+  std::vector<double> out;
+  for (const auto& b : blocks_)
+    if (b->component)
+      for (double t : b->component->time_events()) out.push_back(t);
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
+bool System::handle_time_event(double t, const double* y, const double* yp, std::vector<EventLogEntry>& log) {
+  bool changed = false;
+  bool invalid = false;
+  double ly[kMaxLocal], lyp[kMaxLocal];
+  for (const auto& b : blocks_) {
+    if (!b->component) continue;
+    const auto evs = b->component->time_events();
+    bool due = false;
+    for (double te : evs) due |= std::abs(te - t) <= 1e-12 * std::max(1.0, std::abs(t));
+    if (!due) continue;
+    for (std::size_t i = 0; i < b->vars.size(); ++i) {
+      ly[i] = y[b->vars[i]];
+      lyp[i] = yp[b->vars[i]];
+    }
+    Eval<double> e(*b->component, t, ly, lyp, modes_.data() + b->mode0, b->connected.get(), circuit_.gas, &invalid);
+    const EventResult res = b->component->on_event(e, modes_.data() + b->mode0, EventKind::time, -1, 0);
+    changed |= res.changed;
+    if (!res.message.empty()) log.push_back({t, b->component->name(), res.message});
+  }
+  return changed;
+}
+
+bool System::handle_roots(double t, const double* y, const double* yp, const int* root_info,
+                          std::vector<EventLogEntry>& log) {
+  bool changed = false;
+  bool invalid = false;
+  double ly[kMaxLocal], lyp[kMaxLocal];
+  for (const auto& b : blocks_) {
+    if (!b->component) continue;
+    const int nr = b->component->info().roots;
+    for (int k = 0; k < nr; ++k) {
+      const int dir = root_info[b->root0 + k];
+      if (dir == 0) continue;
+      for (std::size_t i = 0; i < b->vars.size(); ++i) {
+        ly[i] = y[b->vars[i]];
+        lyp[i] = yp[b->vars[i]];
+      }
+      Eval<double> e(*b->component, t, ly, lyp, modes_.data() + b->mode0, b->connected.get(), circuit_.gas,
+                     &invalid);
+      const EventResult res = b->component->on_event(e, modes_.data() + b->mode0, EventKind::root, k, dir);
+      changed |= res.changed;
+      if (!res.message.empty()) log.push_back({t, b->component->name(), res.message});
+    }
+  }
+  return changed;
+}
+
+double System::probe(const Probe& p, double t, const double* y, const double* yp) const {
+  const Block& b = *blocks_[p.component];  // component blocks come first, in order
+  if (p.kind == Probe::Kind::local) return y[b.vars[p.index]];
+  double ly[kMaxLocal], lyp[kMaxLocal];
+  for (std::size_t i = 0; i < b.vars.size(); ++i) {
+    ly[i] = y[b.vars[i]];
+    lyp[i] = yp[b.vars[i]];
+  }
+  bool invalid = false;
+  Eval<double> e(*b.component, t, ly, lyp, modes_.data() + b.mode0, b.connected.get(), circuit_.gas, &invalid);
+  return b.component->observe(p.index, e);
+}
+
+}  // namespace pneumo

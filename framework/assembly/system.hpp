@@ -1,0 +1,133 @@
+// Assembly: a Circuit becomes one DAE F(t, y, y') = 0.
+//
+//  * Nodes: every connection set shares one across variable; through
+//    variables sum to zero; pneumatic stream temperatures are routed (two
+//    ports: each sees the other's T_out) or mixed (three or more ports).
+//  * Equation blocks: each component owns a contiguous block of residual
+//    rows and reads its local variables through an index map (gather); the
+//    framework adds node blocks. Nothing advances a shared offset at run time.
+//  * Sparsity is found once by evaluating every block with the Pattern
+//    scalar, and stays fixed; IDASetId comes from the same pass.
+//  * A structural check (maximum matching of equations to variables, with
+//    differential variables matched through y' and algebraic ones through y)
+//    rejects structurally singular and higher-index systems before solving,
+//    naming the components and ports involved.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "framework/model/circuit.hpp"
+
+namespace pneumo {
+
+struct EvalContext {
+  const GasModel* gas = nullptr;
+  const double* modes = nullptr;  // all discrete modes of the system
+  bool* invalid = nullptr;
+};
+
+// One block of residual rows over a gathered set of variables.
+class Block {
+ public:
+  virtual ~Block() = default;
+  virtual void residual(double t, const double* y, const double* yp, double* r, const EvalContext& c) const = 0;
+  virtual void residual(double t, const Dual* y, const Dual* yp, Dual* r, const EvalContext& c) const = 0;
+  virtual void residual(double t, const Pattern* y, const Pattern* yp, Pattern* r, const EvalContext& c) const = 0;
+
+  std::string label;             // for diagnostics
+  SourceLocation where;          // of the component / connection
+  std::vector<int> vars;         // local -> global variable index
+  std::vector<std::string> row_names;
+  int row0 = 0;
+  int n_rows = 0;
+  const Component* component = nullptr;  // null for framework node blocks
+  int component_index = -1;
+  int mode0 = 0;
+  int root0 = 0;
+  std::unique_ptr<bool[]> connected;
+  std::vector<int> jac_pos;      // (local row * n_local + local var) -> CSC position or -1
+};
+
+struct EventLogEntry {
+  double t = 0.0;
+  std::string component;
+  std::string message;
+};
+
+class System {
+ public:
+  // Takes ownership of the circuit. Throws InputError (dangling or
+  // mismatched ports) or StructureError (singular / higher index).
+  explicit System(Circuit circuit);
+  ~System();
+  System(const System&) = delete;
+  System& operator=(const System&) = delete;
+
+  int size() const { return n_; }
+  const Circuit& circuit() const { return circuit_; }
+  const GasModel& gas() const { return circuit_.gas; }
+
+  // Residual; returns 0, or 1 if a component rejected the point (p <= 0, ...)
+  // or a residual is not finite: IDA then retries with a smaller step.
+  int residual(double t, const double* y, const double* yp, double* F) const;
+  // dF/dy + cj dF/dy' into `values` (CSC order of col_ptr/row_idx).
+  int jacobian(double t, const double* y, const double* yp, double cj, double* values) const;
+  // dF/dy and dF/dy' separately (dense, row-major n x n), for tests.
+  void jacobian_parts(double t, const double* y, const double* yp, std::vector<double>& dFdy,
+                      std::vector<double>& dFdyp) const;
+
+  const std::vector<long>& col_ptr() const { return col_ptr_; }
+  const std::vector<long>& row_idx() const { return row_idx_; }
+  long nnz() const { return static_cast<long>(row_idx_.size()); }
+  // 1.0 for differential variables (some equation has its y'), 0.0 algebraic.
+  const std::vector<double>& differential() const { return id_; }
+  // Typical magnitude of each variable, for absolute tolerances.
+  const std::vector<double>& nominal() const { return nominal_; }
+  const std::vector<std::string>& variable_names() const { return var_names_; }
+
+  void start_values(std::vector<double>& y0, std::vector<double>& yp0) const;
+
+  // Discrete modes and events.
+  std::vector<double>& modes() { return modes_; }
+  const std::vector<double>& modes() const { return modes_; }
+  void reset_modes();
+  int n_roots() const { return n_roots_; }
+  void roots(double t, const double* y, const double* yp, double* g) const;
+  std::vector<double> time_events() const;
+  // Apply time events due at t, or the roots flagged in root_info (IDA's
+  // +1/-1/0 per root). Returns true if any mode changed.
+  bool handle_time_event(double t, const double* y, const double* yp, std::vector<EventLogEntry>& log);
+  bool handle_roots(double t, const double* y, const double* yp, const int* root_info,
+                    std::vector<EventLogEntry>& log);
+
+  double probe(const Probe& p, double t, const double* y, const double* yp) const;
+
+  // Number of Jacobian entries that AD found outside the structural pattern
+  // (should stay 0; reported in the statistics).
+  long pattern_misses() const { return pattern_misses_; }
+
+ private:
+  void build_nodes();
+  void build_pattern();
+  void check_structure() const;
+  template <class T>
+  void eval_block(const Block& b, double t, const T* y, const T* yp, T* r, const EvalContext& c) const;
+
+  Circuit circuit_;
+  std::vector<std::unique_ptr<Block>> blocks_;
+  int n_ = 0;
+  std::vector<std::string> var_names_;
+  std::vector<double> start_value_;
+  std::vector<unsigned char> start_kind_;
+  std::vector<double> nominal_;
+  std::vector<double> id_;
+  std::vector<long> col_ptr_, row_idx_;
+  std::vector<std::vector<int>> dep_y_, dep_yp_;  // per row: structural columns
+  std::vector<double> modes_;
+  int n_roots_ = 0;
+  mutable long pattern_misses_ = 0;
+};
+
+}  // namespace pneumo

@@ -1,0 +1,174 @@
+// The `pneumo` command line.
+//   pneumo simulate NETLIST [--set NAME=VALUE ...] [-o results.csv] [--stats]
+//   pneumo components [TYPE]
+// Exit status: 0 success, 1 simulation failed, 2 bad input or usage.
+#include <CLI/CLI.hpp>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <sstream>
+
+#include "components/builtin.hpp"
+#include "framework/core/units.hpp"
+#include "framework/run/run.hpp"
+
+namespace {
+
+using namespace pneumo;
+
+const char* kVersion = "0.1.0";
+
+void print_component(const ComponentInfo& info, std::ostream& out) {
+  out << info.type << "\n  " << info.description << "\n";
+  out << "  ports:\n";
+  for (const auto& p : info.ports) {
+    out << "    " << p.name << " (" << domain_name(p.domain);
+    if (p.causality == Causality::input) out << " input";
+    if (p.causality == Causality::output) out << " output";
+    if (p.optional) out << ", optional";
+    out << ")  " << p.description << "\n";
+  }
+  if (!info.parameters.empty()) out << "  parameters:\n";
+  for (const auto& p : info.parameters) {
+    out << "    " << p.name;
+    if (p.kind == ParameterKind::scalar) {
+      out << " [" << p.unit << "]";
+      if (p.default_value) out << " default " << *p.default_value;
+      else out << " required";
+      out << ", " << p.range_text();
+    } else if (p.kind == ParameterKind::table) {
+      out << " [table of rows (";
+      for (std::size_t i = 0; i < p.columns.size(); ++i) out << (i ? ", " : "") << p.columns[i];
+      out << ")]" << (p.required_table ? " required" : " optional");
+    } else {
+      out << " [text";
+      if (!p.choices.empty()) {
+        out << ": ";
+        for (std::size_t i = 0; i < p.choices.size(); ++i) out << (i ? "|" : "") << p.choices[i];
+      }
+      out << "]";
+      if (p.default_text) out << " default " << *p.default_text;
+    }
+    out << "  " << p.description << "\n";
+  }
+  if (!info.variables.empty() || !info.observables.empty()) out << "  outputs:\n";
+  for (const auto& v : info.variables) out << "    " << v.name << " [" << v.unit << "]  " << v.description << "\n";
+  for (const auto& v : info.observables) out << "    " << v.name << " [" << v.unit << "]  " << v.description << "\n";
+}
+
+void print_stats(const SolverResult& r, double seconds, std::ostream& out) {
+  const auto& s = r.stats;
+  out << "solver: IDA + KLU, " << s.variables << " variables, " << s.nonzeros << " Jacobian nonzeros\n"
+      << "  steps " << s.steps << ", residual evaluations " << s.residual_evals << ", Jacobian evaluations "
+      << s.jacobian_evals << "\n"
+      << "  nonlinear iterations " << s.nonlinear_iterations << ", convergence failures " << s.nonlinear_failures
+      << ", error test failures " << s.error_test_failures << "\n"
+      << "  root function evaluations " << s.root_evals << ", re-initialisations " << s.reinitialisations
+      << ", events " << r.events.size() << "\n"
+      << "  wall time " << seconds * 1e3 << " ms\n";
+  if (s.pattern_misses > 0)
+    out << "  WARNING: " << s.pattern_misses << " Jacobian entries fell outside the structural pattern\n";
+}
+
+int simulate_command(const std::string& netlist_path, const std::vector<std::string>& sets, std::string output,
+                     bool stats, bool quiet) {
+  Netlist nl = load_netlist(netlist_path);
+  for (const auto& s : sets) apply_override(nl, s);
+  if (nl.outputs.empty())
+    throw InputError(SourceLocation{nl.file, 1, 1}, "", "", "the netlist has no 'outputs:'; nothing would be written");
+  if (output.empty()) output = std::filesystem::path(netlist_path).stem().string() + ".csv";
+
+  const auto t0 = std::chrono::steady_clock::now();
+  RunResult run = run_simulation(nl, builtin_registry());
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+
+  if (!quiet)
+    for (const auto& ev : run.solver.events)
+      std::cout << "event t = " << ev.t << " s  " << ev.component << ": " << ev.message << "\n";
+  if (!run.solver.ok) {
+    const std::string partial = write_partial_csv(output, run.table, run.solver.message);
+    std::cerr << "pneumo: simulation of " << netlist_path << " failed: " << run.solver.message << "\n";
+    if (!partial.empty())
+      std::cerr << "pneumo: no results written to " << output << "; the rows computed so far are in " << partial
+                << "\n";
+    if (stats) print_stats(run.solver, seconds, std::cerr);
+    return 1;
+  }
+  write_csv_atomic(output, run.table);
+  if (!quiet) {
+    std::cout << "wrote " << run.table.rows.size() << " rows x " << run.table.names.size() << " columns to "
+              << output << "\n";
+    // Final values: quick sanity for the user.
+    if (!run.table.rows.empty()) {
+      const auto& last = run.table.rows.back();
+      std::cout << "final:";
+      for (std::size_t i = 0; i < last.size(); ++i)
+        std::cout << " " << run.table.names[i] << "=" << last[i] << (run.table.units[i].empty() ? "" : " ")
+                  << run.table.units[i];
+      std::cout << "\n";
+    }
+  }
+  if (stats) print_stats(run.solver, seconds, std::cout);
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"pneumo - acausal simulation of pneumatic drives (YAML netlist -> DAE -> SUNDIALS IDA + KLU)"};
+  app.set_version_flag("--version", kVersion);
+  app.require_subcommand(1);
+
+  auto* sim = app.add_subcommand("simulate", "simulate a netlist and write the outputs to CSV");
+  std::string netlist, output;
+  std::vector<std::string> sets;
+  bool stats = false, quiet = false;
+  sim->add_option("netlist", netlist, "netlist file (YAML)")->required();
+  sim->add_option("--set", sets,
+                  "override a top-level parameter: NAME=VALUE, VALUE an SI number or a quantity ('7 bar')")
+      ->take_all();
+  sim->add_option("-o,--output", output, "results CSV (default: NETLIST_STEM.csv)");
+  sim->add_flag("--stats", stats, "print solver statistics");
+  sim->add_flag("-q,--quiet", quiet, "print nothing but errors");
+
+  auto* comps = app.add_subcommand("components", "list component types, or show one");
+  std::string type;
+  comps->add_option("type", type, "component type to describe");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
+  }
+
+  try {
+    if (*sim) return simulate_command(netlist, sets, output, stats, quiet);
+    if (*comps) {
+      const Registry& reg = builtin_registry();
+      if (!type.empty()) {
+        const auto* entry = reg.find(type);
+        if (!entry) {
+          std::cerr << "pneumo: no component type '" << type << "' (run 'pneumo components' for the list)\n";
+          return 2;
+        }
+        print_component(*entry->info, std::cout);
+        return 0;
+      }
+      for (const auto& t : reg.types()) print_component(*reg.find(t)->info, std::cout);
+      return 0;
+    }
+  } catch (const InputError& e) {
+    std::cerr << e.what() << "\n";
+    return 2;
+  } catch (const StructureError& e) {
+    std::cerr << "pneumo: " << netlist << ": " << e.what() << "\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "pneumo: error: " << e.what() << "\n";
+    return 2;
+  }
+  return 0;
+}

@@ -1,0 +1,117 @@
+#include "framework/io/results.hpp"
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <sstream>
+#include <stdexcept>
+
+namespace pneumo {
+
+namespace fs = std::filesystem;
+
+int ResultsTable::column(const std::string& name) const {
+  for (std::size_t i = 0; i < names.size(); ++i)
+    if (names[i] == name) return static_cast<int>(i);
+  return -1;
+}
+
+namespace {
+
+void write_table(std::ostream& out, const ResultsTable& table) {
+  for (std::size_t i = 0; i < table.names.size(); ++i) {
+    out << (i ? "," : "") << table.names[i];
+    if (i < table.units.size() && !table.units[i].empty()) out << " [" << table.units[i] << "]";
+  }
+  out << "\n" << std::setprecision(10);
+  for (const auto& row : table.rows) {
+    for (std::size_t i = 0; i < row.size(); ++i) out << (i ? "," : "") << row[i];
+    out << "\n";
+  }
+}
+
+}  // namespace
+
+void write_csv_atomic(const std::string& path, const ResultsTable& table) {
+  const fs::path target(path);
+  const fs::path tmp = target.string() + ".writing";
+  {
+    std::ofstream out(tmp);
+    if (!out) throw std::runtime_error("cannot write results file '" + path + "'");
+    write_table(out, table);
+    out.flush();
+    if (!out) {
+      std::error_code ec;
+      fs::remove(tmp, ec);
+      throw std::runtime_error("error while writing results file '" + path + "'");
+    }
+  }
+  std::error_code ec;
+  fs::rename(tmp, target, ec);
+  if (ec) {
+    fs::remove(tmp, ec);
+    throw std::runtime_error("cannot move results into '" + path + "': " + ec.message());
+  }
+}
+
+std::string write_partial_csv(const std::string& path, const ResultsTable& table, const std::string& reason) {
+  std::error_code ec;
+  fs::remove(path, ec);
+  fs::path partial(path);
+  partial.replace_extension(".partial.csv");
+  std::ofstream out(partial);
+  if (!out) return "";
+  std::string one_line = reason;
+  for (auto& ch : one_line)
+    if (ch == '\n') ch = ' ';
+  out << "# INCOMPLETE: the run failed; " << one_line << "\n";
+  write_table(out, table);
+  return partial.string();
+}
+
+ResultsTable read_csv(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("cannot open '" + path + "'");
+  ResultsTable t;
+  std::string line;
+  int line_no = 0;
+  bool header = false;
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (line.empty() || line[0] == '#') continue;
+    std::stringstream ss(line);
+    std::string cell;
+    if (!header) {
+      while (std::getline(ss, cell, ',')) {
+        std::string unit;
+        const auto open = cell.find(" [");
+        if (open != std::string::npos && cell.back() == ']') {
+          unit = cell.substr(open + 2, cell.size() - open - 3);
+          cell = cell.substr(0, open);
+        }
+        t.names.push_back(cell);
+        t.units.push_back(unit);
+      }
+      header = true;
+      continue;
+    }
+    std::vector<double> row;
+    while (std::getline(ss, cell, ',')) {
+      try {
+        std::size_t used = 0;
+        row.push_back(std::stod(cell, &used));
+      } catch (const std::exception&) {
+        throw std::runtime_error(path + ":" + std::to_string(line_no) + ": not a number: '" + cell + "'");
+      }
+    }
+    if (row.size() != t.names.size())
+      throw std::runtime_error(path + ":" + std::to_string(line_no) + ": expected " +
+                               std::to_string(t.names.size()) + " values, found " + std::to_string(row.size()));
+    t.rows.push_back(std::move(row));
+  }
+  if (!header) throw std::runtime_error(path + ": no header line");
+  return t;
+}
+
+}  // namespace pneumo

@@ -1,0 +1,31 @@
+// Results files. A results file is either complete or absent: it is written
+// to a temporary file beside the target and renamed into place only when the
+// run has succeeded. A failed run removes any stale file of that name and
+// leaves its data in NAME.partial.csv, whose first line says it is incomplete.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace pneumo {
+
+struct ResultsTable {
+  std::vector<std::string> names;  // first column is always "t"
+  std::vector<std::string> units;
+  std::vector<std::vector<double>> rows;
+
+  void add_row(std::vector<double> row) { rows.push_back(std::move(row)); }
+  int column(const std::string& name) const;
+};
+
+// Header "t [s],p [Pa],...". Throws std::runtime_error naming the path.
+void write_csv_atomic(const std::string& path, const ResultsTable& table);
+
+// For a failed run: removes `path` if present, writes PATH.partial.csv with a
+// leading "# INCOMPLETE ..." comment line. Returns the partial file's path.
+std::string write_partial_csv(const std::string& path, const ResultsTable& table, const std::string& reason);
+
+// Read a CSV written by write_csv_atomic (or any numeric CSV with a header).
+ResultsTable read_csv(const std::string& path);
+
+}  // namespace pneumo

@@ -1,0 +1,371 @@
+// The component interface.
+//
+// A component is immutable after construction: a description (parameters
+// with unit, default and range; ports; internal variables), and equations
+// written once as a template over the scalar type. The framework owns all
+// state (y, y', discrete modes) and hands the component a read-only view of
+// its local variables through Eval<T>. No Jacobian code, no solver code.
+//
+// Local variable layout (what Eval indexes into): the ports in declared
+// order, each with its domain's variables, then the internal variables.
+//   pneumatic:     p (across, Pa abs), m_flow (through, kg/s, positive INTO
+//                  the component), T_out (stream: the temperature the gas
+//                  leaving the component through this port has), T_in (the
+//                  stream temperature of gas entering through the port, i.e.
+//                  Modelica's inStream(T_out); supplied by the framework)
+//   thermal:       T (across, K), Q (through, W, positive into the component)
+//   translational: s (across, position, m), f (through, force on the
+//                  component at this flange, N)
+//   signal:        value (across)
+// A component provides one equation per through variable, one per stream
+// variable T_out, one per signal output and one per internal variable.
+#pragma once
+
+#include <limits>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "framework/core/scalar.hpp"
+#include "framework/model/gas.hpp"
+
+namespace pneumo {
+
+enum class Domain { pneumatic, thermal, translational, signal };
+enum class Causality { acausal, input, output };
+
+const char* domain_name(Domain d);
+// Number of local variables of a port of this domain.
+int port_width(Domain d);
+// Number of equations the component owes per port of this kind.
+int port_equations(Domain d, Causality c);
+
+struct PortSpec {
+  std::string name;
+  Domain domain = Domain::pneumatic;
+  Causality causality = Causality::acausal;
+  std::string description;
+  // An optional port may stay unconnected: a pneumatic or thermal port is
+  // then closed (no flow), a mechanical flange free (no force), a signal
+  // input holds `default_value`.
+  bool optional = false;
+  double default_value = 0.0;
+};
+
+enum class ParameterKind { scalar, table, text };
+
+using Table = std::vector<std::vector<double>>;
+
+struct ParameterSpec {
+  std::string name;
+  std::string unit;  // SI unit expression, e.g. "Pa", "m3", "m3/(s*Pa)", "1"
+  std::string description;
+  ParameterKind kind = ParameterKind::scalar;
+  std::optional<double> default_value;  // scalars; none = required
+  double min = -std::numeric_limits<double>::infinity();
+  double max = std::numeric_limits<double>::infinity();
+  bool min_exclusive = false;
+  bool max_exclusive = false;
+  // tables: units of the columns (rows are read as SI numbers or quantities)
+  std::vector<std::string> columns;
+  bool required_table = true;
+  // text parameters: allowed values (empty = any), default
+  std::vector<std::string> choices;
+  std::optional<std::string> default_text;
+
+  // Builders so that a component's parameter list reads like a table.
+  static ParameterSpec scalar(std::string name, std::string unit, std::string description,
+                              std::optional<double> default_value = std::nullopt) {
+    ParameterSpec s;
+    s.name = std::move(name);
+    s.unit = std::move(unit);
+    s.description = std::move(description);
+    s.default_value = default_value;
+    return s;
+  }
+  static ParameterSpec table(std::string name, std::vector<std::string> columns,
+                             std::string description, bool required = true) {
+    ParameterSpec s;
+    s.name = std::move(name);
+    s.kind = ParameterKind::table;
+    s.columns = std::move(columns);
+    s.description = std::move(description);
+    s.required_table = required;
+    return s;
+  }
+  static ParameterSpec text(std::string name, std::vector<std::string> choices,
+                            std::string description, std::optional<std::string> def) {
+    ParameterSpec s;
+    s.name = std::move(name);
+    s.kind = ParameterKind::text;
+    s.choices = std::move(choices);
+    s.description = std::move(description);
+    s.default_text = std::move(def);
+    return s;
+  }
+  ParameterSpec positive() && { min = 0.0; min_exclusive = true; return std::move(*this); }
+  ParameterSpec non_negative() && { min = 0.0; return std::move(*this); }
+  ParameterSpec range(double lo, double hi) && { min = lo; max = hi; return std::move(*this); }
+  ParameterSpec open_range(double lo, double hi) && {
+    min = lo; max = hi; min_exclusive = max_exclusive = true; return std::move(*this);
+  }
+  std::string range_text() const;
+  bool in_range(double v) const;
+};
+
+struct VariableSpec {
+  std::string name;
+  std::string unit;
+  std::string description;
+  // Typical magnitude used to scale absolute tolerances; 0 = from the unit.
+  double nominal = 0.0;
+};
+
+struct ObservableSpec {
+  std::string name;
+  std::string unit;
+  std::string description;
+};
+
+struct ComponentInfo {
+  std::string type;
+  std::string description;
+  std::vector<ParameterSpec> parameters;
+  std::vector<PortSpec> ports;
+  std::vector<VariableSpec> variables;      // internal variables
+  std::vector<ObservableSpec> observables;  // derived outputs
+  std::vector<std::string> equations;       // optional names, for diagnostics
+  int modes = 0;                            // discrete state values
+  int roots = 0;                            // state event functions
+
+  int port_index(const std::string& name) const;
+  const ParameterSpec* parameter(const std::string& name) const;
+};
+
+// Parameter values after unit conversion and range checks, SI.
+class ParameterValues {
+ public:
+  double operator[](const std::string& name) const { return scalar(name); }
+  double scalar(const std::string& name) const;
+  const Table& table(const std::string& name) const;
+  const std::string& text(const std::string& name) const;
+  bool has(const std::string& name) const;
+
+  void set_scalar(const std::string& name, double v) { scalars_[name] = v; }
+  void set_table(const std::string& name, Table t) { tables_[name] = std::move(t); }
+  void set_text(const std::string& name, std::string t) { texts_[name] = std::move(t); }
+
+ private:
+  std::map<std::string, double> scalars_;
+  std::map<std::string, Table> tables_;
+  std::map<std::string, std::string> texts_;
+};
+
+// Thrown by a component constructor when a combination of parameter values is
+// invalid; the netlist layer adds file, line and component name.
+class ParameterError : public std::runtime_error {
+ public:
+  ParameterError(std::string parameter, const std::string& message)
+      : std::runtime_error(message), parameter_(std::move(parameter)) {}
+  const std::string& parameter() const { return parameter_; }
+
+ private:
+  std::string parameter_;
+};
+
+template <class T>
+struct GasPortView {
+  const T& p;
+  const T& m_flow;
+  const T& T_out;
+  const T& T_in;
+};
+template <class S>
+struct HeatPortView {
+  const S& T;  // temperature
+  const S& Q;  // heat flow into the component
+};
+template <class T>
+struct FlangeView {
+  const T& s;
+  const T& f;
+  const T& v;  // ds/dt
+};
+
+class Component;
+
+// Read-only view of one component's local variables during an evaluation.
+template <class T>
+class Eval {
+ public:
+  Eval(const Component& c, double t, const T* y, const T* yp, const double* modes,
+       const bool* connected, const GasModel& gas, bool* invalid)
+      : c_(c), t_(t), y_(y), yp_(yp), modes_(modes), connected_(connected), gas_(gas),
+        invalid_(invalid) {}
+
+  double t() const { return t_; }
+  const GasModel& gas() const { return gas_; }
+  const T& y(int local) const { return y_[local]; }
+  const T& yp(int local) const { return yp_[local]; }
+
+  inline GasPortView<T> gas_port(int port) const;
+  inline HeatPortView<T> heat_port(int port) const;
+  inline FlangeView<T> flange(int port) const;
+  inline const T& signal(int port) const;
+  inline const T& var(int k) const;  // internal variable k
+  inline const T& der(int k) const;  // its time derivative
+  inline int port_offset(int port) const;
+  double mode(int k) const { return modes_[k]; }
+  bool connected(int port) const { return connected_[port]; }
+
+  // Flag the evaluation as invalid (e.g. a pressure <= 0 during a Newton
+  // iterate): IDA then retries with a smaller step instead of failing.
+  void reject_unless_positive(const T& x) const {
+    if (!(value(x) > 0.0)) *invalid_ = true;
+  }
+
+ private:
+  const Component& c_;
+  double t_;
+  const T* y_;
+  const T* yp_;
+  const double* modes_;
+  const bool* connected_;
+  const GasModel& gas_;
+  bool* invalid_;
+};
+
+// Start values for one component's local variables. `fix` marks a
+// differential state whose initial value is given (IDACalcIC keeps it);
+// `guess` is only a starting point for the consistent-initialisation Newton.
+class StartValues {
+ public:
+  enum class Kind : unsigned char { none, guess, fixed };
+  StartValues(const Component& c, double* values, Kind* kinds) : c_(c), v_(values), k_(kinds) {}
+  void fix_var(int k, double v);
+  void guess_var(int k, double v);
+  void fix_local(int local, double v) { set(local, v, Kind::fixed); }
+  void guess_local(int local, double v) { set(local, v, Kind::guess); }
+  void guess_pressure(int port, double p);
+  void guess_temperature(int port, double T);  // T_out of a gas port / T of a heat port
+  void fix_position(int port, double s);
+  void guess_position(int port, double s);
+
+ private:
+  void set(int local, double v, Kind k) {
+    if (k_[local] == Kind::fixed && k != Kind::fixed) return;
+    v_[local] = v;
+    k_[local] = k;
+  }
+  const Component& c_;
+  double* v_;
+  Kind* k_;
+};
+
+enum class EventKind { time, root };
+
+struct EventResult {
+  bool changed = false;  // discrete modes changed: the solver re-initialises
+  std::string message;   // for the event log ("" = not worth logging)
+};
+
+struct Construction {
+  std::string name;
+  std::shared_ptr<const ComponentInfo> info;
+  ParameterValues params;
+};
+
+class Component {
+ public:
+  explicit Component(const Construction& c);
+  virtual ~Component() = default;
+  Component(const Component&) = delete;
+  Component& operator=(const Component&) = delete;
+
+  const std::string& name() const { return name_; }
+  const ComponentInfo& info() const { return *info_; }
+  int n_local() const { return n_local_; }
+  int n_equations() const { return n_equations_; }
+  int port_offset(int port) const { return port_offset_[port]; }
+  int internal_offset() const { return internal_offset_; }
+
+  virtual void residual(const Eval<double>& e, double* r) const = 0;
+  virtual void residual(const Eval<Dual>& e, Dual* r) const = 0;
+  virtual void residual(const Eval<Pattern>& e, Pattern* r) const = 0;
+
+  // Initial values (fixed differential states) and guesses, in SI.
+  virtual void start(StartValues& s, const GasModel& gas) const { (void)s; (void)gas; }
+  virtual double observe(int k, const Eval<double>& e) const { (void)k; (void)e; return 0.0; }
+
+  // Discrete modes and events. Time events are known in advance (the solver
+  // stops there); roots are state events g(t, y, y') = 0 located by IDA.
+  virtual void initial_modes(double* modes) const { (void)modes; }
+  virtual std::vector<double> time_events() const { return {}; }
+  virtual void roots(const Eval<double>& e, double* g) const { (void)e; (void)g; }
+  // Update the discrete modes at an event (a time event of this component, or
+  // its root function `root` crossing zero in direction `direction`).
+  virtual EventResult on_event(const Eval<double>& e, double* modes, EventKind kind, int root,
+                               int direction) const {
+    (void)e; (void)modes; (void)kind; (void)root; (void)direction;
+    return {};
+  }
+
+ private:
+  std::string name_;
+  std::shared_ptr<const ComponentInfo> info_;
+  std::vector<int> port_offset_;
+  int internal_offset_ = 0;
+  int n_local_ = 0;
+  int n_equations_ = 0;
+};
+
+// CRTP glue: the derived class defines
+//   template <class T> void equations(const Eval<T>& e, T* r) const;
+template <class Derived>
+class ComponentT : public Component {
+ public:
+  using Component::Component;
+  void residual(const Eval<double>& e, double* r) const final { self().equations(e, r); }
+  void residual(const Eval<Dual>& e, Dual* r) const final { self().equations(e, r); }
+  void residual(const Eval<Pattern>& e, Pattern* r) const final { self().equations(e, r); }
+
+ private:
+  const Derived& self() const { return static_cast<const Derived&>(*this); }
+};
+
+// ---------------------------------------------------------------------------
+template <class T>
+int Eval<T>::port_offset(int port) const {
+  return c_.port_offset(port);
+}
+template <class T>
+GasPortView<T> Eval<T>::gas_port(int port) const {
+  const int o = c_.port_offset(port);
+  return {y_[o], y_[o + 1], y_[o + 2], y_[o + 3]};
+}
+template <class T>
+HeatPortView<T> Eval<T>::heat_port(int port) const {
+  const int o = c_.port_offset(port);
+  return {y_[o], y_[o + 1]};
+}
+template <class T>
+FlangeView<T> Eval<T>::flange(int port) const {
+  const int o = c_.port_offset(port);
+  return {y_[o], y_[o + 1], yp_[o]};
+}
+template <class T>
+const T& Eval<T>::signal(int port) const {
+  return y_[c_.port_offset(port)];
+}
+template <class T>
+const T& Eval<T>::var(int k) const {
+  return y_[c_.internal_offset() + k];
+}
+template <class T>
+const T& Eval<T>::der(int k) const {
+  return yp_[c_.internal_offset() + k];
+}
+
+}  // namespace pneumo

@@ -1,0 +1,514 @@
+#include "framework/netlist/netlist.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <fstream>
+#include <numeric>
+#include <set>
+#include <sstream>
+
+namespace pneumo {
+
+namespace {
+
+using units::Dimension;
+
+std::string join(const std::vector<std::string>& v, const std::string& sep = ", ") {
+  std::string s;
+  for (std::size_t i = 0; i < v.size(); ++i) s += (i ? sep : "") + v[i];
+  return s;
+}
+
+bool is_identifier(const std::string& s) {
+  if (s.empty() || !(std::isalpha(static_cast<unsigned char>(s[0])) || s[0] == '_')) return false;
+  return std::all_of(s.begin(), s.end(), [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) || c == '_';
+  });
+}
+
+// Edit distance, for "did you mean" hints.
+std::size_t distance(const std::string& a, const std::string& b) {
+  std::vector<std::size_t> prev(b.size() + 1), cur(b.size() + 1);
+  std::iota(prev.begin(), prev.end(), 0);
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    cur[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j)
+      cur[j] = std::min({prev[j] + 1, cur[j - 1] + 1, prev[j - 1] + (a[i - 1] == b[j - 1] ? 0 : 1)});
+    std::swap(prev, cur);
+  }
+  return prev[b.size()];
+}
+
+std::string choices_hint(const std::string& given, const std::vector<std::string>& valid) {
+  std::string best;
+  std::size_t best_d = 3;
+  for (const auto& v : valid) {
+    const auto d = distance(given, v);
+    if (d < best_d) best_d = d, best = v;
+  }
+  std::string s;
+  if (!best.empty()) s = "did you mean '" + best + "'? ";
+  return s + "valid: " + (valid.empty() ? std::string("none") : join(valid));
+}
+
+class Reader {
+ public:
+  explicit Reader(std::string file) : file_(std::move(file)) {}
+
+  SourceLocation at(const YAML::Node& n) const { return location_of(file_, n); }
+
+  [[noreturn]] void fail(const YAML::Node& n, const std::string& component, const std::string& parameter,
+                         const std::string& message) const {
+    throw InputError(at(n), component, parameter, message);
+  }
+
+  // A mapping whose keys are unique strings; returns (key, key node, value).
+  struct Entry {
+    std::string key;
+    YAML::Node key_node;
+    YAML::Node value;
+  };
+  std::vector<Entry> mapping(const YAML::Node& n, const std::string& what, const std::string& component = "") const {
+    if (!n.IsMap()) fail(n, component, "", what + " must be a mapping (key: value)");
+    std::vector<Entry> out;
+    std::set<std::string> seen;
+    for (auto it = n.begin(); it != n.end(); ++it) {
+      if (!it->first.IsScalar()) fail(it->first, component, "", "keys of " + what + " must be plain names");
+      const std::string key = it->first.Scalar();
+      if (!seen.insert(key).second)
+        fail(it->first, component, "", "duplicate key '" + key + "' in " + what);
+      out.push_back({key, it->first, it->second});
+    }
+    return out;
+  }
+
+  std::string scalar_text(const YAML::Node& n, const std::string& component, const std::string& parameter,
+                          const std::string& what) const {
+    if (!n.IsScalar()) fail(n, component, parameter, what + " must be a single value, not a list or mapping");
+    return n.Scalar();
+  }
+
+  // A number or a quantity with unit; `expected` is checked if the text has a unit.
+  double quantity(const YAML::Node& n, double ambient, const Dimension& expected, const std::string& expected_unit,
+                  const std::string& component, const std::string& parameter) const {
+    const std::string text = scalar_text(n, component, parameter, "the value");
+    units::Quantity q{};
+    try {
+      q = units::parse_quantity(text, ambient);
+    } catch (const units::ParseError& e) {
+      SourceLocation w = at(n);
+      if (w.column > 0 && n.Tag() != "!") w.column += static_cast<int>(e.column);
+      throw InputError(w, component, parameter, std::string("cannot read '") + text + "': " + e.what());
+    }
+    if (q.had_unit && !(q.dim == expected))
+      fail(n, component, parameter,
+           "'" + text + "' has dimension " + q.dim.to_string() + " but a value in " + expected_unit + " (" +
+               expected.to_string() + ") is expected");
+    return q.si_value;
+  }
+
+  const std::string& file() const { return file_; }
+
+ private:
+  std::string file_;
+};
+
+}  // namespace
+
+SourceLocation location_of(const std::string& file, const YAML::Node& node) {
+  SourceLocation w;
+  w.file = file;
+  if (node.IsDefined() && node.Mark().line >= 0) {
+    w.line = node.Mark().line + 1;
+    w.column = node.Mark().column + 1;
+  }
+  return w;
+}
+
+const TopParameter* Netlist::parameter(const std::string& name) const {
+  for (const auto& p : parameters)
+    if (p.name == name) return &p;
+  return nullptr;
+}
+
+Netlist load_netlist(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(SourceLocation{path, 0, 0}, "", "", "cannot open the netlist file");
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  return parse_netlist(buffer.str(), path);
+}
+
+Netlist parse_netlist(const std::string& text, const std::string& file_name) {
+  Reader r(file_name);
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::ParserException& e) {
+    throw InputError(SourceLocation{file_name, e.mark.line + 1, e.mark.column + 1}, "", "",
+                     "YAML syntax error: " + e.msg);
+  }
+  if (!root.IsDefined() || root.IsNull())
+    throw InputError(SourceLocation{file_name, 1, 1}, "", "", "the netlist is empty");
+
+  Netlist nl;
+  nl.file = file_name;
+  static const std::vector<std::string> kTopKeys{"title",      "description", "gas",     "ambient",
+                                                 "parameters", "components",  "connections", "outputs",
+                                                 "simulation"};
+  std::map<std::string, YAML::Node> top;
+  for (const auto& e : r.mapping(root, "the netlist")) {
+    if (std::find(kTopKeys.begin(), kTopKeys.end(), e.key) == kTopKeys.end())
+      r.fail(e.key_node, "", "", "unknown section '" + e.key + "'; " + choices_hint(e.key, kTopKeys));
+    top[e.key] = e.value;
+  }
+
+  using namespace units::dims;
+  // ambient first: gauge pressures everywhere else are relative to it.
+  if (top.count("ambient")) {
+    for (const auto& e : r.mapping(top["ambient"], "ambient")) {
+      if (e.key == "p") nl.gas.p_ambient = r.quantity(e.value, 101325.0, pressure, "Pa", "", "ambient.p");
+      else if (e.key == "T") nl.gas.T_ambient = r.quantity(e.value, 0, temperature, "K", "", "ambient.T");
+      else r.fail(e.key_node, "", "", "unknown key '" + e.key + "' in ambient; valid: p, T");
+    }
+    if (!(nl.gas.p_ambient > 0) || !(nl.gas.T_ambient > 0))
+      r.fail(top["ambient"], "", "ambient", "ambient pressure and temperature must be > 0");
+  }
+  if (top.count("gas")) {
+    for (const auto& e : r.mapping(top["gas"], "gas")) {
+      const double a = nl.gas.p_ambient;
+      if (e.key == "R") nl.gas.R = r.quantity(e.value, a, Dimension{.m = 2, .s = -2, .K = -1}, "J/(kg*K)", "", "gas.R");
+      else if (e.key == "kappa") nl.gas.kappa = r.quantity(e.value, a, none, "1", "", "gas.kappa");
+      else if (e.key == "rho_ref") nl.gas.rho_ref = r.quantity(e.value, a, density, "kg/m3", "", "gas.rho_ref");
+      else if (e.key == "T_ref") nl.gas.T_ref = r.quantity(e.value, a, temperature, "K", "", "gas.T_ref");
+      else if (e.key == "m_flow_small") nl.gas.m_flow_small = r.quantity(e.value, a, mass_flow, "kg/s", "", "gas.m_flow_small");
+      else r.fail(e.key_node, "", "", "unknown key '" + e.key + "' in gas; valid: R, kappa, rho_ref, T_ref, m_flow_small");
+    }
+    if (!(nl.gas.R > 0)) r.fail(top["gas"], "", "gas.R", "R must be > 0");
+    if (!(nl.gas.kappa > 1)) r.fail(top["gas"], "", "gas.kappa", "kappa must be > 1");
+  }
+  if (top.count("parameters") && !top["parameters"].IsNull()) {
+    for (const auto& e : r.mapping(top["parameters"], "parameters")) {
+      if (!is_identifier(e.key)) r.fail(e.key_node, "", e.key, "parameter names must be identifiers");
+      const std::string text = r.scalar_text(e.value, "", e.key, "a top-level parameter");
+      TopParameter p;
+      p.name = e.key;
+      p.where = r.at(e.value);
+      try {
+        const auto q = units::parse_quantity(text, nl.gas.p_ambient);
+        p.si_value = q.si_value;
+        p.dim = q.dim;
+        p.had_unit = q.had_unit;
+      } catch (const units::ParseError& err) {
+        r.fail(e.value, "", e.key, std::string("cannot read '") + text + "': " + err.what());
+      }
+      nl.parameters.push_back(p);
+    }
+  }
+  if (!top.count("components") || top["components"].IsNull())
+    throw InputError(SourceLocation{file_name, 1, 1}, "", "", "the netlist has no 'components' section");
+  {
+    for (const auto& e : r.mapping(top["components"], "components")) {
+      if (!is_identifier(e.key))
+        r.fail(e.key_node, e.key, "", "component names must be identifiers (letters, digits, _)");
+      ComponentDecl c;
+      c.name = e.key;
+      c.where = r.at(e.key_node);
+      bool has_type = false;
+      for (const auto& pe : r.mapping(e.value, "component '" + e.key + "'", e.key)) {
+        if (pe.key == "type") {
+          c.type = r.scalar_text(pe.value, e.key, "type", "the type");
+          has_type = true;
+        } else {
+          c.parameters.emplace_back(pe.key, pe.value);
+        }
+      }
+      if (!has_type) r.fail(e.key_node, e.key, "type", "the component has no 'type'");
+      nl.components.push_back(std::move(c));
+    }
+  }
+  if (top.count("connections") && !top["connections"].IsNull()) {
+    const auto& cs = top["connections"];
+    if (!cs.IsSequence()) r.fail(cs, "", "", "connections must be a list of lists of ports, e.g. - [a.port, b.port]");
+    for (const auto& item : cs) {
+      if (!item.IsSequence() || item.size() < 2)
+        r.fail(item, "", "", "each connection is a list of two or more ports, e.g. [source.port, valve.a]");
+      ConnectionDecl conn;
+      conn.where = r.at(item);
+      for (const auto& pn : item) {
+        const std::string s = r.scalar_text(pn, "", "", "a port reference");
+        const auto dot = s.find('.');
+        if (dot == std::string::npos || dot == 0 || dot + 1 == s.size())
+          r.fail(pn, "", "", "port reference '" + s + "' must be component.port");
+        conn.ports.push_back({s.substr(0, dot), s.substr(dot + 1), r.at(pn)});
+      }
+      nl.connections.push_back(std::move(conn));
+    }
+  }
+  if (top.count("outputs") && !top["outputs"].IsNull()) {
+    const auto& os = top["outputs"];
+    auto add = [&](const std::string& name, const YAML::Node& where, const YAML::Node& ref) {
+      const std::string s = r.scalar_text(ref, "", "", "an output reference");
+      const auto dot = s.find('.');
+      if (dot == std::string::npos || dot == 0 || dot + 1 == s.size())
+        r.fail(ref, "", "", "output '" + s + "' must be component.variable");
+      for (const auto& o : nl.outputs)
+        if (o.name == name) r.fail(where, "", "", "duplicate output name '" + name + "'");
+      nl.outputs.push_back({name, s.substr(0, dot), s.substr(dot + 1), r.at(ref)});
+    };
+    if (os.IsMap()) {
+      for (const auto& e : r.mapping(os, "outputs")) add(e.key, e.key_node, e.value);
+    } else if (os.IsSequence()) {
+      for (const auto& item : os) add(r.scalar_text(item, "", "", "an output"), item, item);
+    } else {
+      r.fail(os, "", "", "outputs must be a mapping name: component.variable");
+    }
+  }
+  if (top.count("simulation") && !top["simulation"].IsNull()) {
+    auto& s = nl.simulation;
+    const double a = nl.gas.p_ambient;
+    for (const auto& e : r.mapping(top["simulation"], "simulation")) {
+      const std::string p = "simulation." + e.key;
+      if (e.key == "t_start") s.t_start = r.quantity(e.value, a, time, "s", "", p);
+      else if (e.key == "t_end") s.t_end = r.quantity(e.value, a, time, "s", "", p);
+      else if (e.key == "rtol") s.rtol = r.quantity(e.value, a, none, "1", "", p);
+      else if (e.key == "atol") s.atol = r.quantity(e.value, a, none, "1", "", p);
+      else if (e.key == "output_interval") s.output_interval = r.quantity(e.value, a, time, "s", "", p);
+      else if (e.key == "max_step") s.max_step = r.quantity(e.value, a, time, "s", "", p);
+      else
+        r.fail(e.key_node, "", "", "unknown key '" + e.key +
+                                       "' in simulation; valid: t_start, t_end, rtol, atol, output_interval, max_step");
+    }
+    if (!(s.t_end > s.t_start)) r.fail(top["simulation"], "", "simulation.t_end", "t_end must be > t_start");
+    if (!(s.rtol > 0 && s.rtol < 1)) r.fail(top["simulation"], "", "simulation.rtol", "rtol must be in (0, 1)");
+    if (!(s.atol > 0)) r.fail(top["simulation"], "", "simulation.atol", "atol must be > 0");
+    if (!(s.output_interval > 0)) r.fail(top["simulation"], "", "simulation.output_interval", "output_interval must be > 0");
+  }
+  return nl;
+}
+
+void apply_override(Netlist& nl, const std::string& assignment) {
+  const SourceLocation where{"--set " + assignment, 0, 0};
+  const auto eq = assignment.find('=');
+  if (eq == std::string::npos || eq == 0)
+    throw InputError(where, "", "", "expected NAME=VALUE, e.g. --set p_supply=7e5 or --set p_supply='7 bar'");
+  const std::string name = assignment.substr(0, eq);
+  const std::string text = assignment.substr(eq + 1);
+  TopParameter* p = nullptr;
+  for (auto& tp : nl.parameters)
+    if (tp.name == name) p = &tp;
+  if (!p) {
+    std::vector<std::string> names;
+    for (const auto& tp : nl.parameters) names.push_back(tp.name);
+    throw InputError(where, "", name,
+                     "no top-level parameter '" + name + "' in " + nl.file + "; " + choices_hint(name, names));
+  }
+  units::Quantity q{};
+  try {
+    q = units::parse_quantity(text, nl.gas.p_ambient);
+  } catch (const units::ParseError& e) {
+    throw InputError(where, "", name, std::string("cannot read '") + text + "': " + e.what());
+  }
+  if (q.had_unit && p->had_unit && !(q.dim == p->dim))
+    throw InputError(where, "", name,
+                     "'" + text + "' has dimension " + q.dim.to_string() + " but '" + name + "' is declared with " +
+                         p->dim.to_string() + " at " + p->where.to_string());
+  p->si_value = q.si_value;
+  if (q.had_unit) {
+    p->dim = q.dim;
+    p->had_unit = true;
+  }
+}
+
+namespace {
+
+Dimension spec_dimension(const ParameterSpec& spec) { return units::dimension_of(spec.unit); }
+
+}  // namespace
+
+double parameter_value(const Netlist& nl, const ComponentDecl& c, const ParameterSpec& spec,
+                       const YAML::Node& node) {
+  Reader r(nl.file);
+  const std::string text = r.scalar_text(node, c.name, spec.name, "the value");
+  const Dimension dim = spec_dimension(spec);
+  if (is_identifier(text)) {
+    const TopParameter* tp = nl.parameter(text);
+    if (!tp) {
+      std::vector<std::string> names;
+      for (const auto& p : nl.parameters) names.push_back(p.name);
+      r.fail(node, c.name, spec.name, "'" + text + "' is neither a number nor a top-level parameter; " +
+                                          choices_hint(text, names));
+    }
+    if (tp->had_unit && !(tp->dim == dim))
+      r.fail(node, c.name, spec.name,
+             "top-level parameter '" + text + "' (" + tp->where.to_string() + ") has dimension " +
+                 tp->dim.to_string() + " but this parameter needs " + spec.unit + " (" + dim.to_string() + ")");
+    return tp->si_value;
+  }
+  return r.quantity(node, nl.gas.p_ambient, dim, spec.unit, c.name, spec.name);
+}
+
+Circuit elaborate(const Netlist& nl, const Registry& registry) {
+  Reader r(nl.file);
+  Circuit circuit;
+  circuit.gas = nl.gas;
+  std::map<std::string, int> index;
+
+  for (const auto& c : nl.components) {
+    const Registry::Entry* entry = registry.find(c.type);
+    if (!entry) {
+      // Point at the type value if we can find it.
+      throw InputError(c.where, c.name, "type", "unknown component type '" + c.type + "'; " +
+                                                    choices_hint(c.type, registry.types()) +
+                                                    " (run 'pneumo components' for the list)");
+    }
+    const ComponentInfo& info = *entry->info;
+    Construction k;
+    k.name = c.name;
+    k.info = entry->info;
+    std::set<std::string> given;
+    for (const auto& [pname, pnode] : c.parameters) {
+      const ParameterSpec* spec = info.parameter(pname);
+      if (!spec) {
+        std::vector<std::string> names;
+        for (const auto& s : info.parameters) names.push_back(s.name);
+        SourceLocation w = r.at(pnode);
+        throw InputError(w, c.name, pname, "unknown parameter of type '" + c.type + "'; " + choices_hint(pname, names));
+      }
+      given.insert(pname);
+      switch (spec->kind) {
+        case ParameterKind::scalar: {
+          const double v = parameter_value(nl, c, *spec, pnode);
+          if (!spec->in_range(v))
+            r.fail(pnode, c.name, pname, "value " + units::format_si(v, spec_dimension(*spec)) +
+                                             " is out of range; valid: " + spec->range_text() + " (" + spec->unit + ")");
+          k.params.set_scalar(pname, v);
+          break;
+        }
+        case ParameterKind::table: {
+          if (!pnode.IsSequence() || pnode.size() == 0)
+            r.fail(pnode, c.name, pname, "a table is a list of rows, e.g. [[0, 0], [1.5, 0.12 dm3/(s*bar)]]");
+          Table t;
+          for (const auto& row : pnode) {
+            if (!row.IsSequence() || row.size() != spec->columns.size())
+              r.fail(row, c.name, pname,
+                     "each row needs " + std::to_string(spec->columns.size()) + " values (" + join(spec->columns) + ")");
+            std::vector<double> vals;
+            std::size_t col = 0;
+            for (const auto& cell : row) {
+              ParameterSpec cs = ParameterSpec::scalar(pname, spec->columns[col++], "");
+              vals.push_back(parameter_value(nl, c, cs, cell));
+            }
+            t.push_back(std::move(vals));
+          }
+          k.params.set_table(pname, std::move(t));
+          break;
+        }
+        case ParameterKind::text: {
+          const std::string v = r.scalar_text(pnode, c.name, pname, "the value");
+          if (!spec->choices.empty() &&
+              std::find(spec->choices.begin(), spec->choices.end(), v) == spec->choices.end())
+            r.fail(pnode, c.name, pname, "'" + v + "' is not allowed; " + choices_hint(v, spec->choices));
+          k.params.set_text(pname, v);
+          break;
+        }
+      }
+    }
+    for (const auto& spec : info.parameters) {
+      if (given.count(spec.name)) continue;
+      if (spec.kind == ParameterKind::scalar && spec.default_value) {
+        k.params.set_scalar(spec.name, *spec.default_value);
+      } else if (spec.kind == ParameterKind::text && spec.default_text) {
+        k.params.set_text(spec.name, *spec.default_text);
+      } else if (spec.kind == ParameterKind::table && !spec.required_table) {
+        // optional table: absent
+      } else {
+        throw InputError(c.where, c.name, spec.name,
+                         "missing required parameter '" + spec.name + "' (" + spec.unit + "): " + spec.description);
+      }
+    }
+    try {
+      circuit.components.push_back(entry->make(k));
+    } catch (const ParameterError& e) {
+      SourceLocation w = c.where;
+      for (const auto& [pname, pnode] : c.parameters)
+        if (pname == e.parameter()) w = r.at(pnode);
+      throw InputError(w, c.name, e.parameter(), e.what());
+    }
+    circuit.component_where.push_back(c.where);
+    index[c.name] = static_cast<int>(circuit.components.size()) - 1;
+  }
+
+  auto resolve = [&](const PortRefDecl& ref) -> PortId {
+    auto it = index.find(ref.component);
+    if (it == index.end()) {
+      std::vector<std::string> names;
+      for (const auto& [n, i] : index) names.push_back(n);
+      throw InputError(ref.where, ref.component, "", "no component named '" + ref.component + "'; " +
+                                                         choices_hint(ref.component, names));
+    }
+    const auto& info = circuit.components[it->second]->info();
+    const int port = info.port_index(ref.port);
+    if (port < 0) {
+      std::vector<std::string> names;
+      for (const auto& p : info.ports) names.push_back(p.name);
+      throw InputError(ref.where, ref.component, "",
+                       "type '" + info.type + "' has no port '" + ref.port + "'; " + choices_hint(ref.port, names));
+    }
+    return {it->second, port};
+  };
+  for (const auto& conn : nl.connections) {
+    Connection c;
+    c.where = conn.where;
+    for (const auto& ref : conn.ports) {
+      const PortId id = resolve(ref);
+      if (std::find(c.ports.begin(), c.ports.end(), id) != c.ports.end())
+        throw InputError(ref.where, ref.component, "", "port '" + ref.port + "' appears twice in one connection");
+      c.ports.push_back(id);
+    }
+    circuit.connections.push_back(std::move(c));
+  }
+
+  for (const auto& o : nl.outputs) {
+    auto it = index.find(o.component);
+    if (it == index.end()) {
+      std::vector<std::string> names;
+      for (const auto& [n, i] : index) names.push_back(n);
+      throw InputError(o.where, o.component, "", "output '" + o.name + "': no component named '" + o.component +
+                                                     "'; " + choices_hint(o.component, names));
+    }
+    const Component& comp = *circuit.components[it->second];
+    Probe probe;
+    probe.name = o.name;
+    probe.component = it->second;
+    const auto& obs = comp.info().observables;
+    for (std::size_t i = 0; i < obs.size(); ++i)
+      if (obs[i].name == o.quantity) {
+        probe.kind = Probe::Kind::observable;
+        probe.index = static_cast<int>(i);
+        probe.unit = obs[i].unit;
+      }
+    if (probe.index < 0) {
+      const auto names = local_variable_names(comp);
+      const auto unit_names = local_variable_units(comp);
+      for (std::size_t i = 0; i < names.size(); ++i)
+        if (names[i] == o.quantity) {
+          probe.kind = Probe::Kind::local;
+          probe.index = static_cast<int>(i);
+          probe.unit = unit_names[i];
+        }
+    }
+    if (probe.index < 0) {
+      std::vector<std::string> valid;
+      for (const auto& ob : obs) valid.push_back(ob.name);
+      for (const auto& n : local_variable_names(comp)) valid.push_back(n);
+      throw InputError(o.where, o.component, "", "output '" + o.name + "': type '" + comp.info().type +
+                                                     "' has no variable '" + o.quantity + "'; " +
+                                                     choices_hint(o.quantity, valid));
+    }
+    circuit.probes.push_back(probe);
+  }
+  return circuit;
+}
+
+}  // namespace pneumo

@@ -1,0 +1,106 @@
+// YAML netlists: reading, top-level parameter overrides and elaboration into
+// a Circuit of component instances. Every error names file:line:column, the
+// component and the parameter.
+//
+// Format (see README "Writing a netlist"):
+//   gas:        {R: 287.05 J/(kg*K), kappa: 1.4}          # optional, dry air
+//   ambient:    {p: 1 atm, T: 20 degC}                     # optional
+//   parameters: {p_supply: 5 bar, V: 1 L}                  # referenced by name
+//   components:
+//     tank: {type: volume, V: V, p0: 1 bar, T0: 293.15 K}
+//   connections:
+//     - [source.port, valve.a]
+//   outputs:    {p: tank.p, T: tank.T}
+//   simulation: {t_end: 2 s, rtol: 1e-6, atol: 1e-6, output_interval: 1 ms}
+#pragma once
+
+#include <yaml-cpp/yaml.h>
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "framework/core/error.hpp"
+#include "framework/core/units.hpp"
+#include "framework/model/circuit.hpp"
+#include "framework/model/registry.hpp"
+
+namespace pneumo {
+
+struct TopParameter {
+  std::string name;
+  double si_value = 0.0;
+  units::Dimension dim;
+  bool had_unit = false;  // false: a plain number, taken as SI
+  SourceLocation where;
+};
+
+struct ComponentDecl {
+  std::string name;
+  std::string type;
+  SourceLocation where;
+  std::vector<std::pair<std::string, YAML::Node>> parameters;  // in file order
+};
+
+struct PortRefDecl {
+  std::string component;
+  std::string port;
+  SourceLocation where;
+};
+
+struct ConnectionDecl {
+  std::vector<PortRefDecl> ports;
+  SourceLocation where;
+};
+
+struct OutputDecl {
+  std::string name;       // column name in the results
+  std::string component;  // instance
+  std::string quantity;   // variable, observable or port variable ("port.p")
+  SourceLocation where;
+};
+
+struct SimulationSettings {
+  double t_start = 0.0;
+  double t_end = 1.0;
+  double rtol = 1e-6;
+  // Absolute tolerance as a fraction of each variable's nominal magnitude
+  // (pressures ~1e5 Pa and masses ~1e-6 kg cannot share one absolute number).
+  double atol = 1e-6;
+  double output_interval = 1e-3;
+  double max_step = 0.0;  // 0 = solver's choice
+};
+
+struct Netlist {
+  std::string file;
+  GasModel gas;
+  std::vector<TopParameter> parameters;
+  std::vector<ComponentDecl> components;
+  std::vector<ConnectionDecl> connections;
+  std::vector<OutputDecl> outputs;
+  SimulationSettings simulation;
+
+  const TopParameter* parameter(const std::string& name) const;
+};
+
+// Read and check the structure of a netlist file (not yet the components'
+// parameters, which need the registry). Throws InputError.
+Netlist load_netlist(const std::string& path);
+Netlist parse_netlist(const std::string& text, const std::string& file_name);
+
+// Apply `NAME=VALUE` to a top-level parameter. VALUE is an SI number or a
+// quantity with unit ("7 bar"); its dimension must match the declaration.
+void apply_override(Netlist& netlist, const std::string& assignment);
+
+// Instantiate the components (parameters converted, defaulted and range
+// checked) and resolve the connections.
+Circuit elaborate(const Netlist& netlist, const Registry& registry);
+
+// Parse one scalar parameter value against its spec (exposed for tests and
+// for the fitting tools): number, quantity with unit, or top-level name.
+double parameter_value(const Netlist& netlist, const ComponentDecl& component,
+                       const ParameterSpec& spec, const YAML::Node& node);
+
+SourceLocation location_of(const std::string& file, const YAML::Node& node);
+
+}  // namespace pneumo
