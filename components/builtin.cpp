@@ -15,6 +15,7 @@ void register_builtin_components(Registry& r) {
   register_fixed_position(r);
   register_force_source(r);
   register_signal_source(r);
+  register_cushioned_cylinder(r);
 }
 
 const Registry& builtin_registry() {

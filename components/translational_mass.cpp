@@ -1,25 +1,27 @@
 // Point mass on a translational flange: ds/dt = v, m dv/dt = f (f is the sum
 // of forces the connected components exert on it).
+#include <cmath>
+#include <limits>
+
 #include "components/builtin.hpp"
 
 namespace pneumo::components {
 
 class TranslationalMass final : public ComponentT<TranslationalMass> {
  public:
-  enum Var { kV };
   static ComponentInfo describe() {
     ComponentInfo i;
     i.type = "translational_mass";
     i.description = "Sliding mass: ds/dt = v, m dv/dt = sum of forces on the flange.";
     i.parameters = {
         ParameterSpec::scalar("m", "kg", "mass").positive(),
-        ParameterSpec::scalar("s0", "m", "initial position", 0.0),
+        ParameterSpec::scalar("s0", "m", "initial position; default: set by the connected components (or 0)",
+                              std::numeric_limits<double>::quiet_NaN()),
         ParameterSpec::scalar("v0", "m/s", "initial velocity", 0.0),
     };
     i.ports = {{"flange", Domain::translational, Causality::acausal, "flange"}};
-    i.variables = {{"v", "m/s", "velocity"}};
-    i.observables = {{"s", "m", "position"}};
-    i.equations = {"Newton's law", "kinematics"};
+    i.observables = {{"s", "m", "position"}, {"v", "m/s", "velocity"}};
+    i.equations = {"Newton's law"};
     return i;
   }
   explicit TranslationalMass(const Construction& c)
@@ -28,14 +30,14 @@ class TranslationalMass final : public ComponentT<TranslationalMass> {
   template <class T>
   void equations(const Eval<T>& e, T* r) const {
     const auto fl = e.flange(0);
-    r[0] = m_ * e.der(kV) - fl.f;
-    r[1] = fl.v - e.var(kV);
+    r[0] = m_ * fl.a - fl.f;
   }
   void start(StartValues& s, const GasModel&) const override {
-    s.fix_position(0, s0_);
-    s.fix_var(kV, v0_);
+    if (std::isnan(s0_)) s.guess_position(0, 0.0);
+    else s.fix_position(0, s0_);
+    s.fix_velocity(0, v0_);
   }
-  double observe(int, const Eval<double>& e) const override { return e.flange(0).s; }
+  double observe(int k, const Eval<double>& e) const override { return k == 0 ? e.flange(0).s : e.flange(0).v; }
 
  private:
   double m_, s0_, v0_;

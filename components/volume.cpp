@@ -25,7 +25,7 @@ class Volume final : public ComponentT<Volume> {
                {"heat", Domain::thermal, Causality::acausal, "heat port to the wall (insulated if unconnected)", true}};
     i.variables = {{"m", "kg", "gas mass"}, {"U", "J", "internal energy of the gas"}, {"T", "K", "gas temperature"}};
     i.observables = {{"p", "Pa", "pressure, absolute"}};
-    i.equations = {"mass balance", "energy balance", "gas law p V = m R T", "U = m c_v T",
+    i.equations = {"mass balance", "energy balance", "gas law p = m R T / V", "T = U / (m c_v)",
                    "outflow temperature", "wall temperature seen by the heat port"};
     return i;
   }
@@ -51,8 +51,11 @@ class Volume final : public ComponentT<Volume> {
     const T H = gas.cp() * (smooth_pos(port.m_flow, eps) * port.T_in - smooth_pos(T(-port.m_flow), eps) * Tg);
     r[0] = e.der(kM) - port.m_flow;
     r[1] = e.der(kU) - H - heat.Q;
-    r[2] = port.p * V_ - m * gas.R * Tg;
-    r[3] = U - m * gas.cv() * Tg;
+    // Each algebraic equation is solved for its own variable (p in Pa, T in
+    // K): rows written as p V - m R T would scale with V and leave Newton
+    // matrices of tiny volumes numerically singular.
+    r[2] = port.p - m * gas.R * Tg / V_;
+    r[3] = Tg - U / (m * gas.cv());
     r[4] = port.T_out - Tg;
     r[5] = heat.T - Tg;
   }

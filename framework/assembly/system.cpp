@@ -72,6 +72,16 @@ class StreamMixBlock final : public Block {
   void residual(double, const Pattern* y, const Pattern*, Pattern* r, const EvalContext& c) const override { eval(y, r, c); }
 };
 
+// Kinematics of a translational node: ds/dt = v. vars: [s, v]
+class KinematicBlock final : public Block {
+ public:
+  template <class T>
+  void eval(const T* y, const T* yp, T* r) const { r[0] = yp[0] - y[1]; }
+  void residual(double, const double* y, const double* yp, double* r, const EvalContext&) const override { eval(y, yp, r); }
+  void residual(double, const Dual* y, const Dual* yp, Dual* r, const EvalContext&) const override { eval(y, yp, r); }
+  void residual(double, const Pattern* y, const Pattern* yp, Pattern* r, const EvalContext&) const override { eval(y, yp, r); }
+};
+
 // An unconnected optional signal input holds its default value.
 class SignalDefaultBlock final : public Block {
  public:
@@ -201,6 +211,7 @@ void System::build_nodes() {
 
   // Variables: node across variables first.
   std::vector<int> node_across(nodes.size(), -1);
+  std::vector<int> node_velocity(nodes.size(), -1);
   for (std::size_t ni = 0; ni < nodes.size(); ++ni) {
     if (nodes[ni].empty()) continue;
     const auto& ps = c.components[nodes[ni][0].component]->info().ports[nodes[ni][0].port];
@@ -208,7 +219,10 @@ void System::build_nodes() {
     switch (ps.domain) {
       case Domain::pneumatic: node_across[ni] = new_var("p at " + where, c.gas.p_ambient, 0, 1e5); break;
       case Domain::thermal: node_across[ni] = new_var("T at " + where, c.gas.T_ambient, 0, 300.0); break;
-      case Domain::translational: node_across[ni] = new_var("s at " + where, 0.0, 0, 1e-3); break;
+      case Domain::translational:
+        node_across[ni] = new_var("s at " + where, 0.0, 0, 1e-3);
+        node_velocity[ni] = new_var("v at " + where, 0.0, 0, 1e-2);
+        break;
       case Domain::signal: node_across[ni] = new_var("value at " + where, ps.default_value, 0, 1.0); break;
     }
   }
@@ -241,11 +255,14 @@ void System::build_nodes() {
       b->vars[o] = pv.across;
       switch (ps.domain) {
         case Domain::pneumatic:
-          pv.flow = b->vars[o + 1] = new_var(pn + ".m_flow", 0.0, 0, 1e-6);
+          pv.flow = b->vars[o + 1] = new_var(pn + ".m_flow", 0.0, 0, 1e-4);
           pv.t_out = b->vars[o + 2] = new_var(pn + ".T_out", c.gas.T_ambient, 0, 300.0);
           break;
         case Domain::thermal: pv.flow = b->vars[o + 1] = new_var(pn + ".Q", 0.0, 0, 1e-3); break;
-        case Domain::translational: pv.flow = b->vars[o + 1] = new_var(pn + ".f", 0.0, 0, 1e-1); break;
+        case Domain::translational:
+          pv.flow = b->vars[o + 1] = new_var(pn + ".f", 0.0, 0, 1.0);
+          b->vars[o + 2] = node_velocity[node];
+          break;
         case Domain::signal: break;
       }
       port_vars[{static_cast<int>(ci), static_cast<int>(pi)}] = pv;
@@ -344,6 +361,16 @@ void System::build_nodes() {
       def->row_names.push_back(def->label);
       blocks_.push_back(std::move(def));
       continue;
+    }
+    if (ps.domain == Domain::translational) {
+      auto kin = std::make_unique<KinematicBlock>();
+      kin->vars = {node_across[ni], node_velocity[ni]};
+      kin->label = "kinematics ds/dt = v at " + node_text(c, ports);
+      kin->where = node_where[ni];
+      kin->row0 = row++;
+      kin->n_rows = 1;
+      kin->row_names.push_back(kin->label);
+      blocks_.push_back(std::move(kin));
     }
     auto sum = std::make_unique<FlowSumBlock>();
     for (const auto& p : ports) sum->vars.push_back(port_vars[{p.component, p.port}].flow);

@@ -44,7 +44,7 @@ class Dual {
     Dual r(value);
     r.n = active;
     std::fill_n(r.d.begin(), active, 0.0);
-    r.d[slot] = seed;
+    if (slot >= 0 && slot < active) r.d[slot] = seed;
     return r;
   }
   double deriv(int i) const { return i < n ? d[i] : 0.0; }

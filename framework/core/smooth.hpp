@@ -16,10 +16,15 @@ inline T smooth_abs(const T& x, double eps) {
 }
 
 // Smooth max(x, 0) = (x + smooth_abs(x)) / 2. Note smooth_pos(x) -
-// smooth_pos(-x) == x exactly, which keeps upwinded energy flows conservative.
+// smooth_pos(-x) == x (to rounding), which keeps upwinded energy flows
+// conservative. For x << -eps the sum x + |x| cancels catastrophically (the
+// stream-mixing weights of receiving ports came out as rounding noise, and
+// so did their derivatives); there the same value is computed as
+// eps^2 / (2 (smooth_abs(x) - x)), which is exact algebra and stable.
 template <class T>
 inline T smooth_pos(const T& x, double eps) {
-  return 0.5 * (x + smooth_abs(x, eps));
+  const T s = smooth_abs(x, eps);
+  return select(value(x) >= 0.0, T(0.5 * (x + s)), T(0.5 * eps * eps / (s - x)));
 }
 
 // sign(x) regularised with tanh over the scale eps.

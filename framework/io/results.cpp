@@ -53,13 +53,19 @@ void write_csv_atomic(const std::string& path, const ResultsTable& table) {
     fs::remove(tmp, ec);
     throw std::runtime_error("cannot move results into '" + path + "': " + ec.message());
   }
+  fs::remove(partial_csv_path(path), ec);
+}
+
+std::string partial_csv_path(const std::string& path) {
+  fs::path partial(path);
+  partial.replace_extension(".partial.csv");
+  return partial.string();
 }
 
 std::string write_partial_csv(const std::string& path, const ResultsTable& table, const std::string& reason) {
   std::error_code ec;
   fs::remove(path, ec);
-  fs::path partial(path);
-  partial.replace_extension(".partial.csv");
+  const fs::path partial = partial_csv_path(path);
   std::ofstream out(partial);
   if (!out) return "";
   std::string one_line = reason;

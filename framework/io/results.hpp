@@ -19,7 +19,13 @@ struct ResultsTable {
 };
 
 // Header "t [s],p [Pa],...". Throws std::runtime_error naming the path.
+// On success also removes a stale PATH.partial.csv left by an earlier failed
+// run, so that the directory never holds results from two different runs.
 void write_csv_atomic(const std::string& path, const ResultsTable& table);
+
+// The name of the partial file for results path `path`: "out.csv" ->
+// "out.partial.csv", "out" -> "out.partial.csv".
+std::string partial_csv_path(const std::string& path);
 
 // For a failed run: removes `path` if present, writes PATH.partial.csv with a
 // leading "# INCOMPLETE ..." comment line. Returns the partial file's path.

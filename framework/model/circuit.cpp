@@ -11,7 +11,7 @@ struct Named {
 const std::vector<Named>& domain_variables(Domain d) {
   static const std::vector<Named> pneumatic{{"p", "Pa"}, {"m_flow", "kg/s"}, {"T_out", "K"}, {"T_in", "K"}};
   static const std::vector<Named> thermal{{"T", "K"}, {"Q", "W"}};
-  static const std::vector<Named> translational{{"s", "m"}, {"f", "N"}};
+  static const std::vector<Named> translational{{"s", "m"}, {"f", "N"}, {"v", "m/s"}};
   static const std::vector<Named> signal{{"value", "1"}};
   switch (d) {
     case Domain::pneumatic: return pneumatic;

@@ -19,7 +19,7 @@ int port_width(Domain d) {
   switch (d) {
     case Domain::pneumatic: return 4;  // p, m_flow, T_out, T_in
     case Domain::thermal: return 2;    // T, Q
-    case Domain::translational: return 2;  // s, f
+    case Domain::translational: return 3;  // s, f, v
     case Domain::signal: return 1;     // value
   }
   return 0;
@@ -101,6 +101,7 @@ void StartValues::guess_temperature(int port, double T) {
 }
 void StartValues::fix_position(int port, double s) { set(c_.port_offset(port), s, Kind::fixed); }
 void StartValues::guess_position(int port, double s) { set(c_.port_offset(port), s, Kind::guess); }
+void StartValues::fix_velocity(int port, double v) { set(c_.port_offset(port) + 2, v, Kind::fixed); }
 
 Component::Component(const Construction& c) : name_(c.name), info_(c.info) {
   int offset = 0;

@@ -15,7 +15,10 @@
 //                  Modelica's inStream(T_out); supplied by the framework)
 //   thermal:       T (across, K), Q (through, W, positive into the component)
 //   translational: s (across, position, m), f (through, force on the
-//                  component at this flange, N)
+//                  component at this flange, N), v (across, velocity, m/s;
+//                  the framework adds ds/dt = v once per node, so that
+//                  components use v as a variable and not s' - which would
+//                  put stiff damping and friction slopes on the 1/h diagonal)
 //   signal:        value (across)
 // A component provides one equation per through variable, one per stream
 // variable T_out, one per signal output and one per internal variable.
@@ -71,6 +74,7 @@ struct ParameterSpec {
   // tables: units of the columns (rows are read as SI numbers or quantities)
   std::vector<std::string> columns;
   bool required_table = true;
+  bool is_optional = false;
   // text parameters: allowed values (empty = any), default
   std::vector<std::string> choices;
   std::optional<std::string> default_text;
@@ -105,6 +109,8 @@ struct ParameterSpec {
     s.default_text = std::move(def);
     return s;
   }
+  // May be left out (the component checks ParameterValues::has()).
+  ParameterSpec optional() && { required_table = false; is_optional = true; return std::move(*this); }
   ParameterSpec positive() && { min = 0.0; min_exclusive = true; return std::move(*this); }
   ParameterSpec non_negative() && { min = 0.0; return std::move(*this); }
   ParameterSpec range(double lo, double hi) && { min = lo; max = hi; return std::move(*this); }
@@ -191,7 +197,8 @@ template <class T>
 struct FlangeView {
   const T& s;
   const T& f;
-  const T& v;  // ds/dt
+  const T& v;  // velocity (= ds/dt, an algebraic link kept by the framework)
+  const T& a;  // dv/dt
 };
 
 class Component;
@@ -252,6 +259,7 @@ class StartValues {
   void guess_temperature(int port, double T);  // T_out of a gas port / T of a heat port
   void fix_position(int port, double s);
   void guess_position(int port, double s);
+  void fix_velocity(int port, double v);
 
  private:
   void set(int local, double v, Kind k) {
@@ -353,7 +361,7 @@ HeatPortView<T> Eval<T>::heat_port(int port) const {
 template <class T>
 FlangeView<T> Eval<T>::flange(int port) const {
   const int o = c_.port_offset(port);
-  return {y_[o], y_[o + 1], yp_[o]};
+  return {y_[o], y_[o + 1], y_[o + 2], yp_[o + 2]};
 }
 template <class T>
 const T& Eval<T>::signal(int port) const {

@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <numeric>
 #include <set>
@@ -68,15 +71,25 @@ class Reader {
     YAML::Node key_node;
     YAML::Node value;
   };
-  std::vector<Entry> mapping(const YAML::Node& n, const std::string& what, const std::string& component = "") const {
+  // What the keys of a mapping name, so that errors about a key can say
+  // which component or parameter it is.
+  enum class Keys { sections, components, parameters };
+  std::vector<Entry> mapping(const YAML::Node& n, const std::string& what, const std::string& component = "",
+                             Keys keys = Keys::sections, const std::string& prefix = "") const {
     if (!n.IsMap()) fail(n, component, "", what + " must be a mapping (key: value)");
     std::vector<Entry> out;
-    std::set<std::string> seen;
+    std::map<std::string, YAML::Node> seen;
     for (auto it = n.begin(); it != n.end(); ++it) {
       if (!it->first.IsScalar()) fail(it->first, component, "", "keys of " + what + " must be plain names");
       const std::string key = it->first.Scalar();
-      if (!seen.insert(key).second)
-        fail(it->first, component, "", "duplicate key '" + key + "' in " + what);
+      if (seen.count(key)) {
+        const std::string comp = keys == Keys::components ? key : component;
+        const std::string param = keys == Keys::parameters ? prefix + key : "";
+        fail(it->first, comp, param,
+             "duplicate key '" + key + "' in " + what + " (first written at " + at(seen[key]).to_string() +
+                 "); YAML keys must be unique");
+      }
+      seen[key] = it->first;
       out.push_back({key, it->first, it->second});
     }
     return out;
@@ -115,6 +128,16 @@ class Reader {
 
 }  // namespace
 
+SourceLocation ComponentDecl::where_of(const std::string& parameter) const {
+  for (std::size_t i = 0; i < parameters.size(); ++i)
+    if (parameters[i].first == parameter) {
+      if (i < parameter_where.size()) return parameter_where[i];
+      SourceLocation w = location_of(where.file, parameters[i].second);
+      return w.line > 0 ? w : where;
+    }
+  return where;
+}
+
 SourceLocation location_of(const std::string& file, const YAML::Node& node) {
   SourceLocation w;
   w.file = file;
@@ -132,12 +155,88 @@ const TopParameter* Netlist::parameter(const std::string& name) const {
 }
 
 Netlist load_netlist(const std::string& path) {
+  // There is no line to point at: the message names the file only.
+  const SourceLocation where{path, 0, 0};
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec))
+    throw InputError(where, "", "", "cannot open the netlist file: no such file");
+  if (std::filesystem::is_directory(path, ec))
+    throw InputError(where, "", "", "cannot read the netlist: this is a directory, not a file");
+  errno = 0;
   std::ifstream in(path);
-  if (!in) throw InputError(SourceLocation{path, 0, 0}, "", "", "cannot open the netlist file");
+  if (!in)
+    throw InputError(where, "", "", std::string("cannot open the netlist file: ") +
+                                        (errno ? std::strerror(errno) : "unknown reason"));
   std::stringstream buffer;
   buffer << in.rdbuf();
+  if (in.bad()) throw InputError(where, "", "", "error while reading the netlist file");
   return parse_netlist(buffer.str(), path);
 }
+
+namespace {
+
+// yaml-cpp reports an unclosed '[', '{' or quote where it gives up, often
+// lines later. Find where the unclosed thing was opened (a heuristic scan of
+// the text before the error; returns line 0 if it finds nothing).
+struct Unclosed {
+  int line = 0, column = 0;
+  std::string what;
+};
+Unclosed find_unclosed(const std::string& text, std::size_t end) {
+  struct Open {
+    char c;
+    int line, column;
+  };
+  std::vector<Open> stack;
+  char quote = 0;
+  Open quote_at{};
+  int line = 1, column = 0;
+  char prev = '\n';  // previous non-blank character on this line, '\n' at line start
+  end = std::min(end, text.size());
+  for (std::size_t i = 0; i < end; ++i) {
+    const char ch = text[i];
+    ++column;
+    if (ch == '\n') {
+      ++line, column = 0, prev = '\n';
+      if (quote == '\'' || quote == '"') continue;  // quoted scalars may span lines
+      continue;
+    }
+    if (quote) {
+      if (quote == '"' && ch == '\\') {
+        ++i, ++column;
+      } else if (ch == quote) {
+        if (quote == '\'' && i + 1 < end && text[i + 1] == '\'') ++i, ++column;  // '' inside '...'
+        else quote = 0;
+      }
+      prev = ch;
+      continue;
+    }
+    const bool value_start = prev == '\n' || prev == ':' || prev == '-' || prev == ',' || prev == '[' ||
+                             prev == '{' || prev == '?';
+    if (ch == ' ' || ch == '\t' || ch == '\r') continue;
+    const bool after_blank = column == 1 || text[i - 1] == ' ' || text[i - 1] == '\t';
+    if (ch == '#' && after_blank) {
+      while (i + 1 < end && text[i + 1] != '\n') ++i, ++column;
+      continue;
+    }
+    if ((ch == '"' || ch == '\'') && value_start) {
+      quote = ch;
+      quote_at = {ch, line, column};
+    } else if ((ch == '[' || ch == '{') && (value_start || !stack.empty())) {
+      stack.push_back({ch, line, column});
+    } else if ((ch == ']' || ch == '}') && !stack.empty()) {
+      stack.pop_back();
+    }
+    prev = ch;
+  }
+  if (quote) return {quote_at.line, quote_at.column, std::string("the quoted value opened by ") + quote + " here"};
+  if (!stack.empty())
+    return {stack.back().line, stack.back().column,
+            std::string("the ") + (stack.back().c == '[' ? "list '['" : "mapping '{'") + " opened here"};
+  return {};
+}
+
+}  // namespace
 
 Netlist parse_netlist(const std::string& text, const std::string& file_name) {
   Reader r(file_name);
@@ -145,50 +244,83 @@ Netlist parse_netlist(const std::string& text, const std::string& file_name) {
   try {
     root = YAML::Load(text);
   } catch (const YAML::ParserException& e) {
-    throw InputError(SourceLocation{file_name, e.mark.line + 1, e.mark.column + 1}, "", "",
-                     "YAML syntax error: " + e.msg);
+    SourceLocation where{file_name, e.mark.line + 1, e.mark.column + 1};
+    std::string message = "YAML syntax error: " + e.msg;
+    if (e.msg.find("flow") != std::string::npos || e.msg.find("quote") != std::string::npos) {
+      const Unclosed u = find_unclosed(text, e.mark.pos >= 0 ? static_cast<std::size_t>(e.mark.pos) : text.size());
+      if (u.line > 0 && u.line <= where.line) {
+        message = "YAML syntax error: " + u.what + " is never closed (the parser gave up at line " +
+                  std::to_string(where.line) + ", column " + std::to_string(where.column) + ": " + e.msg + ")";
+        where.line = u.line;
+        where.column = u.column;
+      }
+    }
+    // Tabs cannot indent YAML; the parser's message does not say so.
+    std::size_t line_start = 0;
+    for (int l = 1; l < where.line && line_start != std::string::npos; ++l) {
+      line_start = text.find('\n', line_start);
+      if (line_start != std::string::npos) ++line_start;
+    }
+    if (line_start != std::string::npos) {
+      const std::size_t first = text.find_first_not_of(' ', line_start);
+      if (first != std::string::npos && text[first] == '\t')
+        message += " (line " + std::to_string(where.line) + " is indented with a tab; YAML allows only spaces)";
+    }
+    throw InputError(where, "", "", message);
   }
   if (!root.IsDefined() || root.IsNull())
     throw InputError(SourceLocation{file_name, 1, 1}, "", "", "the netlist is empty");
 
   Netlist nl;
   nl.file = file_name;
+  nl.parameters_where = SourceLocation{file_name, 1, 1};
   static const std::vector<std::string> kTopKeys{"title",      "description", "gas",     "ambient",
                                                  "parameters", "components",  "connections", "outputs",
                                                  "simulation"};
   std::map<std::string, YAML::Node> top;
+  std::map<std::string, YAML::Node> top_key;
   for (const auto& e : r.mapping(root, "the netlist")) {
     if (std::find(kTopKeys.begin(), kTopKeys.end(), e.key) == kTopKeys.end())
       r.fail(e.key_node, "", "", "unknown section '" + e.key + "'; " + choices_hint(e.key, kTopKeys));
     top[e.key] = e.value;
+    top_key[e.key] = e.key_node;
   }
+  if (top_key.count("parameters")) nl.parameters_where = r.at(top_key["parameters"]);
 
   using namespace units::dims;
   // ambient first: gauge pressures everywhere else are relative to it.
   if (top.count("ambient")) {
-    for (const auto& e : r.mapping(top["ambient"], "ambient")) {
+    std::map<std::string, YAML::Node> value_of;
+    for (const auto& e : r.mapping(top["ambient"], "ambient", "", Reader::Keys::parameters, "ambient.")) {
+      value_of[e.key] = e.value;
       if (e.key == "p") nl.gas.p_ambient = r.quantity(e.value, 101325.0, pressure, "Pa", "", "ambient.p");
       else if (e.key == "T") nl.gas.T_ambient = r.quantity(e.value, 0, temperature, "K", "", "ambient.T");
-      else r.fail(e.key_node, "", "", "unknown key '" + e.key + "' in ambient; valid: p, T");
+      else r.fail(e.key_node, "", "ambient." + e.key, "unknown key '" + e.key + "' in ambient; valid: p, T");
     }
-    if (!(nl.gas.p_ambient > 0) || !(nl.gas.T_ambient > 0))
-      r.fail(top["ambient"], "", "ambient", "ambient pressure and temperature must be > 0");
+    if (!(nl.gas.p_ambient > 0))
+      r.fail(value_of.count("p") ? value_of["p"] : top["ambient"], "", "ambient.p", "the ambient pressure must be > 0");
+    if (!(nl.gas.T_ambient > 0))
+      r.fail(value_of.count("T") ? value_of["T"] : top["ambient"], "", "ambient.T",
+             "the ambient temperature must be > 0 K");
   }
   if (top.count("gas")) {
-    for (const auto& e : r.mapping(top["gas"], "gas")) {
+    std::map<std::string, YAML::Node> value_of;
+    for (const auto& e : r.mapping(top["gas"], "gas", "", Reader::Keys::parameters, "gas.")) {
+      value_of[e.key] = e.value;
       const double a = nl.gas.p_ambient;
       if (e.key == "R") nl.gas.R = r.quantity(e.value, a, Dimension{.m = 2, .s = -2, .K = -1}, "J/(kg*K)", "", "gas.R");
       else if (e.key == "kappa") nl.gas.kappa = r.quantity(e.value, a, none, "1", "", "gas.kappa");
       else if (e.key == "rho_ref") nl.gas.rho_ref = r.quantity(e.value, a, density, "kg/m3", "", "gas.rho_ref");
       else if (e.key == "T_ref") nl.gas.T_ref = r.quantity(e.value, a, temperature, "K", "", "gas.T_ref");
       else if (e.key == "m_flow_small") nl.gas.m_flow_small = r.quantity(e.value, a, mass_flow, "kg/s", "", "gas.m_flow_small");
-      else r.fail(e.key_node, "", "", "unknown key '" + e.key + "' in gas; valid: R, kappa, rho_ref, T_ref, m_flow_small");
+      else r.fail(e.key_node, "", "gas." + e.key, "unknown key '" + e.key + "' in gas; valid: R, kappa, rho_ref, T_ref, m_flow_small");
     }
-    if (!(nl.gas.R > 0)) r.fail(top["gas"], "", "gas.R", "R must be > 0");
-    if (!(nl.gas.kappa > 1)) r.fail(top["gas"], "", "gas.kappa", "kappa must be > 1");
+    auto at_key = [&](const char* k) { return value_of.count(k) ? value_of[k] : top["gas"]; };
+    if (!(nl.gas.R > 0)) r.fail(at_key("R"), "", "gas.R", "R must be > 0");
+    if (!(nl.gas.kappa > 1)) r.fail(at_key("kappa"), "", "gas.kappa", "kappa must be > 1");
   }
   if (top.count("parameters") && !top["parameters"].IsNull()) {
-    for (const auto& e : r.mapping(top["parameters"], "parameters")) {
+    for (const auto& e : r.mapping(top["parameters"], "parameters", "", Reader::Keys::parameters)) {
       if (!is_identifier(e.key)) r.fail(e.key_node, "", e.key, "parameter names must be identifiers");
       const std::string text = r.scalar_text(e.value, "", e.key, "a top-level parameter");
       TopParameter p;
@@ -208,22 +340,29 @@ Netlist parse_netlist(const std::string& text, const std::string& file_name) {
   if (!top.count("components") || top["components"].IsNull())
     throw InputError(SourceLocation{file_name, 1, 1}, "", "", "the netlist has no 'components' section");
   {
-    for (const auto& e : r.mapping(top["components"], "components")) {
+    for (const auto& e : r.mapping(top["components"], "components", "", Reader::Keys::components)) {
       if (!is_identifier(e.key))
         r.fail(e.key_node, e.key, "", "component names must be identifiers (letters, digits, _)");
       ComponentDecl c;
       c.name = e.key;
       c.where = r.at(e.key_node);
       bool has_type = false;
-      for (const auto& pe : r.mapping(e.value, "component '" + e.key + "'", e.key)) {
+      if (!e.value.IsMap())
+        r.fail(e.value.IsNull() ? e.key_node : e.value, e.key, "",
+               "a component is a mapping with a 'type' and its parameters, e.g. " + e.key +
+                   ": {type: volume, V: 1 L}");
+      for (const auto& pe : r.mapping(e.value, "component '" + e.key + "'", e.key, Reader::Keys::parameters)) {
         if (pe.key == "type") {
           c.type = r.scalar_text(pe.value, e.key, "type", "the type");
+          c.type_where = r.at(pe.value);
           has_type = true;
         } else {
           c.parameters.emplace_back(pe.key, pe.value);
+          c.parameter_where.push_back(r.at(pe.key_node));
         }
       }
-      if (!has_type) r.fail(e.key_node, e.key, "type", "the component has no 'type'");
+      if (!has_type)
+        r.fail(e.key_node, e.key, "type", "the component has no 'type' (run 'pneumo components' for the list)");
       nl.components.push_back(std::move(c));
     }
   }
@@ -267,7 +406,9 @@ Netlist parse_netlist(const std::string& text, const std::string& file_name) {
   if (top.count("simulation") && !top["simulation"].IsNull()) {
     auto& s = nl.simulation;
     const double a = nl.gas.p_ambient;
-    for (const auto& e : r.mapping(top["simulation"], "simulation")) {
+    std::map<std::string, YAML::Node> value_of;
+    for (const auto& e : r.mapping(top["simulation"], "simulation", "", Reader::Keys::parameters, "simulation.")) {
+      value_of[e.key] = e.value;
       const std::string p = "simulation." + e.key;
       if (e.key == "t_start") s.t_start = r.quantity(e.value, a, time, "s", "", p);
       else if (e.key == "t_end") s.t_end = r.quantity(e.value, a, time, "s", "", p);
@@ -276,22 +417,35 @@ Netlist parse_netlist(const std::string& text, const std::string& file_name) {
       else if (e.key == "output_interval") s.output_interval = r.quantity(e.value, a, time, "s", "", p);
       else if (e.key == "max_step") s.max_step = r.quantity(e.value, a, time, "s", "", p);
       else
-        r.fail(e.key_node, "", "", "unknown key '" + e.key +
-                                       "' in simulation; valid: t_start, t_end, rtol, atol, output_interval, max_step");
+        r.fail(e.key_node, "", p,
+               "unknown key '" + e.key + "' in simulation; " +
+                   choices_hint(e.key, {"t_start", "t_end", "rtol", "atol", "output_interval", "max_step"}));
     }
-    if (!(s.t_end > s.t_start)) r.fail(top["simulation"], "", "simulation.t_end", "t_end must be > t_start");
-    if (!(s.rtol > 0 && s.rtol < 1)) r.fail(top["simulation"], "", "simulation.rtol", "rtol must be in (0, 1)");
-    if (!(s.atol > 0)) r.fail(top["simulation"], "", "simulation.atol", "atol must be > 0");
-    if (!(s.output_interval > 0)) r.fail(top["simulation"], "", "simulation.output_interval", "output_interval must be > 0");
+    auto at_key = [&](const char* k) { return value_of.count(k) ? value_of[k] : top["simulation"]; };
+    if (!(s.t_end > s.t_start))
+      r.fail(at_key("t_end"), "", "simulation.t_end",
+             "t_end (" + units::format_si(s.t_end, time) + ") must be > t_start (" + units::format_si(s.t_start, time) +
+                 ")");
+    if (!(s.rtol > 0 && s.rtol < 1)) r.fail(at_key("rtol"), "", "simulation.rtol", "rtol must be in (0, 1)");
+    if (!(s.atol > 0)) r.fail(at_key("atol"), "", "simulation.atol", "atol must be > 0");
+    if (!(s.output_interval > 0))
+      r.fail(at_key("output_interval"), "", "simulation.output_interval", "output_interval must be > 0");
+    if (!(s.max_step >= 0))
+      r.fail(at_key("max_step"), "", "simulation.max_step", "max_step must be > 0 (or 0 for the solver's choice)");
   }
   return nl;
 }
 
 void apply_override(Netlist& nl, const std::string& assignment) {
-  const SourceLocation where{"--set " + assignment, 0, 0};
+  // The mistake is on the command line, but the place to compare it with is
+  // the netlist: errors point at the declaration (or at 'parameters:').
+  const std::string option = "--set " + assignment;
+  const SourceLocation netlist_where =
+      nl.parameters_where.known() ? nl.parameters_where : SourceLocation{nl.file, 1, 1};
   const auto eq = assignment.find('=');
   if (eq == std::string::npos || eq == 0)
-    throw InputError(where, "", "", "expected NAME=VALUE, e.g. --set p_supply=7e5 or --set p_supply='7 bar'");
+    throw InputError(netlist_where, "", "",
+                     option + ": expected NAME=VALUE, e.g. --set p_supply=7e5 or --set p_supply='7 bar'");
   const std::string name = assignment.substr(0, eq);
   const std::string text = assignment.substr(eq + 1);
   TopParameter* p = nullptr;
@@ -300,19 +454,20 @@ void apply_override(Netlist& nl, const std::string& assignment) {
   if (!p) {
     std::vector<std::string> names;
     for (const auto& tp : nl.parameters) names.push_back(tp.name);
-    throw InputError(where, "", name,
-                     "no top-level parameter '" + name + "' in " + nl.file + "; " + choices_hint(name, names));
+    throw InputError(netlist_where, "", name,
+                     option + ": no top-level parameter '" + name + "' under 'parameters:' in " + nl.file +
+                         "; only those can be set; " + choices_hint(name, names));
   }
   units::Quantity q{};
   try {
     q = units::parse_quantity(text, nl.gas.p_ambient);
   } catch (const units::ParseError& e) {
-    throw InputError(where, "", name, std::string("cannot read '") + text + "': " + e.what());
+    throw InputError(p->where, "", name, option + ": cannot read '" + text + "': " + e.what());
   }
   if (q.had_unit && p->had_unit && !(q.dim == p->dim))
-    throw InputError(where, "", name,
-                     "'" + text + "' has dimension " + q.dim.to_string() + " but '" + name + "' is declared with " +
-                         p->dim.to_string() + " at " + p->where.to_string());
+    throw InputError(p->where, "", name,
+                     option + ": '" + text + "' has dimension " + q.dim.to_string() + " but '" + name +
+                         "' is declared here with dimension " + p->dim.to_string());
   p->si_value = q.si_value;
   if (q.had_unit) {
     p->dim = q.dim;
@@ -336,8 +491,11 @@ double parameter_value(const Netlist& nl, const ComponentDecl& c, const Paramete
     if (!tp) {
       std::vector<std::string> names;
       for (const auto& p : nl.parameters) names.push_back(p.name);
-      r.fail(node, c.name, spec.name, "'" + text + "' is neither a number nor a top-level parameter; " +
-                                          choices_hint(text, names));
+      r.fail(node, c.name, spec.name,
+             "'" + text + "' is not a number, a quantity with unit (e.g. '2 " + (spec.unit.empty() ? "1" : spec.unit) +
+                 "') or the name of a top-level parameter; " +
+                 (names.empty() ? std::string("the netlist declares no top-level parameters")
+                                : "top-level parameters: " + choices_hint(text, names)));
     }
     if (tp->had_unit && !(tp->dim == dim))
       r.fail(node, c.name, spec.name,
@@ -357,8 +515,7 @@ Circuit elaborate(const Netlist& nl, const Registry& registry) {
   for (const auto& c : nl.components) {
     const Registry::Entry* entry = registry.find(c.type);
     if (!entry) {
-      // Point at the type value if we can find it.
-      throw InputError(c.where, c.name, "type", "unknown component type '" + c.type + "'; " +
+      throw InputError(c.type_where.line > 0 ? c.type_where : c.where, c.name, "type", "unknown component type '" + c.type + "'; " +
                                                     choices_hint(c.type, registry.types()) +
                                                     " (run 'pneumo components' for the list)");
     }
@@ -372,16 +529,22 @@ Circuit elaborate(const Netlist& nl, const Registry& registry) {
       if (!spec) {
         std::vector<std::string> names;
         for (const auto& s : info.parameters) names.push_back(s.name);
-        SourceLocation w = r.at(pnode);
-        throw InputError(w, c.name, pname, "unknown parameter of type '" + c.type + "'; " + choices_hint(pname, names));
+        throw InputError(c.where_of(pname), c.name, pname,
+                         "unknown parameter of type '" + c.type + "'; " + choices_hint(pname, names) +
+                             " (run 'pneumo components " + c.type + "')");
       }
       given.insert(pname);
       switch (spec->kind) {
         case ParameterKind::scalar: {
           const double v = parameter_value(nl, c, *spec, pnode);
-          if (!spec->in_range(v))
-            r.fail(pnode, c.name, pname, "value " + units::format_si(v, spec_dimension(*spec)) +
+          if (!spec->in_range(v)) {
+            std::string from;
+            if (pnode.IsScalar() && is_identifier(pnode.Scalar()))
+              if (const TopParameter* tp = nl.parameter(pnode.Scalar()))
+                from = " (from top-level parameter '" + tp->name + "' at " + tp->where.to_string() + ")";
+            r.fail(pnode, c.name, pname, "value " + units::format_si(v, spec_dimension(*spec)) + from +
                                              " is out of range; valid: " + spec->range_text() + " (" + spec->unit + ")");
+          }
           k.params.set_scalar(pname, v);
           break;
         }
@@ -420,11 +583,13 @@ Circuit elaborate(const Netlist& nl, const Registry& registry) {
         k.params.set_scalar(spec.name, *spec.default_value);
       } else if (spec.kind == ParameterKind::text && spec.default_text) {
         k.params.set_text(spec.name, *spec.default_text);
-      } else if (spec.kind == ParameterKind::table && !spec.required_table) {
-        // optional table: absent
+      } else if (spec.is_optional || (spec.kind == ParameterKind::table && !spec.required_table)) {
+        // optional: absent
       } else {
         throw InputError(c.where, c.name, spec.name,
-                         "missing required parameter '" + spec.name + "' (" + spec.unit + "): " + spec.description);
+                         "missing required parameter '" + spec.name + "' of type '" + c.type + "' (" +
+                             (spec.kind == ParameterKind::table ? std::string("table") : spec.unit) + ", " +
+                             spec.description + "); add it, e.g. {type: " + c.type + ", " + spec.name + ": ...}");
       }
     }
     try {

@@ -38,8 +38,13 @@ struct TopParameter {
 struct ComponentDecl {
   std::string name;
   std::string type;
-  SourceLocation where;
+  SourceLocation where;       // of the component's name
+  SourceLocation type_where;  // of the value of 'type:'
   std::vector<std::pair<std::string, YAML::Node>> parameters;  // in file order
+  std::vector<SourceLocation> parameter_where;  // of each parameter's key, same order (may be empty)
+
+  // Where parameter `name` is written (its key), or the component if absent.
+  SourceLocation where_of(const std::string& parameter) const;
 };
 
 struct PortRefDecl {
@@ -79,6 +84,7 @@ struct Netlist {
   std::vector<ConnectionDecl> connections;
   std::vector<OutputDecl> outputs;
   SimulationSettings simulation;
+  SourceLocation parameters_where;  // of the 'parameters:' key; file:1:1 if there is none
 
   const TopParameter* parameter(const std::string& name) const;
 };
@@ -90,6 +96,8 @@ Netlist parse_netlist(const std::string& text, const std::string& file_name);
 
 // Apply `NAME=VALUE` to a top-level parameter. VALUE is an SI number or a
 // quantity with unit ("7 bar"); its dimension must match the declaration.
+// Errors point at the declaration (or at 'parameters:' for an unknown NAME)
+// and their message starts with "--set NAME=VALUE".
 void apply_override(Netlist& netlist, const std::string& assignment);
 
 // Instantiate the components (parameters converted, defaulted and range

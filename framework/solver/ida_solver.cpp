@@ -1,6 +1,7 @@
 #include "framework/solver/ida_solver.hpp"
 
 #include <ida/ida.h>
+#include <ida/ida_ls.h>
 #include <nvector/nvector_serial.h>
 #include <sundials/sundials_context.h>
 #include <sunlinsol/sunlinsol_klu.h>
@@ -49,12 +50,28 @@ struct UserData {
   std::exception_ptr error;  // exceptions never cross the C callbacks
   std::string last_message;
   std::vector<sunindextype> col_ptr, row_idx;
+  SUNLinearSolver klu = nullptr;
+  void* ida = nullptr;
+  // IDA integrates scaled variables y / nominal: pressures (1e5 Pa) and
+  // masses (1e-6 kg) in one Newton matrix would otherwise differ by 1e11 and
+  // leave the sparse LU numerically singular.
+  std::vector<double> nominal, y_phys, yp_phys;
+  const double* physical_y(N_Vector y) {
+    const double* s = N_VGetArrayPointer(y);
+    for (std::size_t i = 0; i < nominal.size(); ++i) y_phys[i] = s[i] * nominal[i];
+    return y_phys.data();
+  }
+  const double* physical_yp(N_Vector yp) {
+    const double* s = N_VGetArrayPointer(yp);
+    for (std::size_t i = 0; i < nominal.size(); ++i) yp_phys[i] = s[i] * nominal[i];
+    return yp_phys.data();
+  }
 };
 
 int residual_cb(realtype t, N_Vector y, N_Vector yp, N_Vector rr, void* user) {
   auto* u = static_cast<UserData*>(user);
   try {
-    return u->system->residual(t, N_VGetArrayPointer(y), N_VGetArrayPointer(yp), N_VGetArrayPointer(rr));
+    return u->system->residual(t, u->physical_y(y), u->physical_yp(yp), N_VGetArrayPointer(rr));
   } catch (...) {
     u->error = std::current_exception();
     return -1;
@@ -68,7 +85,19 @@ int jacobian_cb(realtype t, realtype cj, N_Vector y, N_Vector yp, N_Vector, SUNM
     // IDA zeroes the matrix (structure included) before each call.
     std::memcpy(SUNSparseMatrix_IndexPointers(J), u->col_ptr.data(), u->col_ptr.size() * sizeof(sunindextype));
     std::memcpy(SUNSparseMatrix_IndexValues(J), u->row_idx.data(), u->row_idx.size() * sizeof(sunindextype));
-    return u->system->jacobian(t, N_VGetArrayPointer(y), N_VGetArrayPointer(yp), cj, SUNSparseMatrix_Data(J));
+    // SUNLinSol_KLU refactors with the pivot order of its first factorisation
+    // and gives up (recoverably) when one of those pivots is now exactly zero
+    // - e.g. a throttle that went choked has dm/dp_down == 0. After such a
+    // failure, ask for a fresh factorisation with new pivots.
+    long last = 0;
+    if (u->klu && u->ida && IDAGetLastLinFlag(u->ida, &last) == IDA_SUCCESS && last == SUNLS_PACKAGE_FAIL_REC)
+      SUNLinSol_KLUReInit(u->klu, J, SUNSparseMatrix_NNZ(J), SUNKLU_REINIT_PARTIAL);
+    double* values = SUNSparseMatrix_Data(J);
+    const int flag = u->system->jacobian(t, u->physical_y(y), u->physical_yp(yp), cj, values);
+    // Chain rule for the scaling: column c is multiplied by nominal[c].
+    for (std::size_t c = 0; c + 1 < u->col_ptr.size(); ++c)
+      for (auto k = u->col_ptr[c]; k < u->col_ptr[c + 1]; ++k) values[k] *= u->nominal[c];
+    return flag;
   } catch (...) {
     u->error = std::current_exception();
     return -1;
@@ -78,7 +107,7 @@ int jacobian_cb(realtype t, realtype cj, N_Vector y, N_Vector yp, N_Vector, SUNM
 int root_cb(realtype t, N_Vector y, N_Vector yp, realtype* g, void* user) {
   auto* u = static_cast<UserData*>(user);
   try {
-    u->system->roots(t, N_VGetArrayPointer(y), N_VGetArrayPointer(yp), g);
+    u->system->roots(t, u->physical_y(y), u->physical_yp(yp), g);
     return 0;
   } catch (...) {
     u->error = std::current_exception();
@@ -115,16 +144,21 @@ SolverResult simulate(System& system, const SolverOptions& opt, const OutputFn& 
   std::vector<double> y0, yp0;
   system.reset_modes();
   system.start_values(y0, yp0);
-  std::copy(y0.begin(), y0.end(), N_VGetArrayPointer(y.get()));
-  std::copy(yp0.begin(), yp0.end(), N_VGetArrayPointer(yp.get()));
+  user.nominal = system.nominal();
+  user.y_phys.assign(n, 0.0);
+  user.yp_phys.assign(n, 0.0);
   for (int i = 0; i < n; ++i) {
-    N_VGetArrayPointer(atol.get())[i] = opt.atol * system.nominal()[i];
+    N_VGetArrayPointer(y.get())[i] = y0[i] / user.nominal[i];
+    N_VGetArrayPointer(yp.get())[i] = yp0[i] / user.nominal[i];
+    N_VGetArrayPointer(atol.get())[i] = opt.atol;
     N_VGetArrayPointer(id.get())[i] = system.differential()[i];
   }
 
   MatrixPtr A(SUNSparseMatrix(n, n, std::max<long>(1, system.nnz()), CSC_MAT, context.ctx));
   SolverPtr LS(SUNLinSol_KLU(y.get(), A.get(), context.ctx));
   IdaPtr mem(IDACreate(context.ctx));
+  user.klu = LS.get();
+  user.ida = mem.get();
   if (!A || !LS || !mem) throw std::runtime_error("cannot create the SUNDIALS solver objects");
   void* ida = mem.get();
 
@@ -154,7 +188,16 @@ SolverResult simulate(System& system, const SolverOptions& opt, const OutputFn& 
   };
   auto consistent_ic = [&]() -> bool {
     const double t_next = t + std::min(opt.output_interval, std::max(opt.t_end - t, 1e-9));
-    const int flag = IDACalcIC(ida, IDA_YA_YDP_INIT, t_next);
+    int flag = IDACalcIC(ida, IDA_YA_YDP_INIT, t_next);
+    if (flag < 0) {
+      // IDA's line search can stall on flow laws with flat (choked) pieces,
+      // e.g. a junction without volume fed by choked throttles; a full
+      // Newton without it converges from the same start (conservation_test).
+      check(IDAReInit(ida, t, y.get(), yp.get()), "IDAReInit");
+      check(IDASetLineSearchOffIC(ida, SUNTRUE), "IDASetLineSearchOffIC");
+      flag = IDACalcIC(ida, IDA_YA_YDP_INIT, t_next);
+      check(IDASetLineSearchOffIC(ida, SUNFALSE), "IDASetLineSearchOffIC");
+    }
     if (flag < 0) {
       fail("cannot find consistent initial values at t = " + std::to_string(t) + " s: " + flag_text(flag, user));
       return false;
@@ -174,7 +217,7 @@ SolverResult simulate(System& system, const SolverOptions& opt, const OutputFn& 
     IDAGetNumErrTestFails(ida, &v), s.error_test_failures += v;
     if (system.n_roots() > 0) IDAGetNumGEvals(ida, &v), s.root_evals += v;
   };
-  auto emit = [&]() { output(t, N_VGetArrayPointer(y.get()), N_VGetArrayPointer(yp.get())); };
+  auto emit = [&]() { output(t, user.physical_y(y.get()), user.physical_yp(yp.get())); };
 
   std::vector<double> events = system.time_events();
   events.erase(std::remove_if(events.begin(), events.end(), [&](double te) { return te > opt.t_end; }),
@@ -182,7 +225,7 @@ SolverResult simulate(System& system, const SolverOptions& opt, const OutputFn& 
   std::size_t next_event = 0;
   // Events at (or before) t_start set the initial modes.
   while (next_event < events.size() && events[next_event] <= opt.t_start + eps_t) {
-    system.handle_time_event(events[next_event], N_VGetArrayPointer(y.get()), N_VGetArrayPointer(yp.get()),
+    system.handle_time_event(events[next_event], user.physical_y(y.get()), user.physical_yp(yp.get()),
                              result.events);
     ++next_event;
   }
@@ -201,6 +244,7 @@ SolverResult simulate(System& system, const SolverOptions& opt, const OutputFn& 
     const int flag = IDASolve(ida, std::min(t_out, t_stop), &t_ret, y.get(), yp.get(), IDA_NORMAL);
     if (flag < 0) {
       t = t_ret;
+      emit();  // the last state IDA reached, for the partial results
       fail("integration failed at t = " + std::to_string(t_ret) + " s: " + flag_text(flag, user));
       break;
     }
@@ -208,10 +252,10 @@ SolverResult simulate(System& system, const SolverOptions& opt, const OutputFn& 
     bool reinit = false;
     if (flag == IDA_ROOT_RETURN) {
       check(IDAGetRootInfo(ida, root_info.data()), "IDAGetRootInfo");
-      reinit = system.handle_roots(t, N_VGetArrayPointer(y.get()), N_VGetArrayPointer(yp.get()), root_info.data(),
+      reinit = system.handle_roots(t, user.physical_y(y.get()), user.physical_yp(yp.get()), root_info.data(),
                                    result.events);
     } else if (next_event < events.size() && std::abs(t - t_event) <= eps_t) {
-      reinit = system.handle_time_event(t, N_VGetArrayPointer(y.get()), N_VGetArrayPointer(yp.get()), result.events);
+      reinit = system.handle_time_event(t, user.physical_y(y.get()), user.physical_yp(yp.get()), result.events);
       ++next_event;
     }
     if (reinit) {

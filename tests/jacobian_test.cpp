@@ -1,0 +1,324 @@
+// The AD Jacobian against finite differences, for every built-in component.
+//
+// What is checked, per circuit, at the consistent initial point and at a
+// point after a short simulation (flows, heat and motion under way):
+//  * System::jacobian_parts (forward-mode AD: dF/dy and dF/dy') equals
+//    central finite differences of System::residual;
+//  * System::jacobian(cj), the matrix IDA factorises, equals
+//    dF/dy + cj dF/dy' on the structural pattern, has nothing outside it,
+//    and reports no pattern misses.
+// Every registered component type must appear in some circuit below: a new
+// component without a snippet fails RegistryIsCovered.
+//
+// Tolerance. Entries are compared scaled by their variable's magnitude,
+// S_ij = J_ij * max(|y_j|, nominal_j) (the change of F_i for a relative change
+// of y_j), so that rows mixing Pa, kg and K compare like with like. A central
+// difference with relative step 1e-6 has truncation error ~1e-12 and
+// rounding error ~1e-10 of the row's largest scaled entry; asserted
+// |S_ad - S_fd| <= 1e-5 max(|S_ad|, 1e-3 max_j |S_ij|), i.e. relative 1e-5
+// for every entry that matters in its row. Where the residual has a kink
+// inside the stencil (choked/subsonic switch, end stop contact) the forward
+// and backward differences disagree and the entry is skipped; such entries
+// are counted and must stay rare.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "components/builtin.hpp"
+#include "framework/netlist/netlist.hpp"
+#include "framework/run/run.hpp"
+
+namespace pneumo {
+namespace {
+
+struct Snippet {
+  std::string name;
+  std::string netlist;          // YAML text
+  double t_short = 0.05;        // s, second check point
+  std::set<std::string> types;  // component types the snippet is there to cover
+};
+void PrintTo(const Snippet& s, std::ostream* os) { *os << s.name; }
+
+std::string read_file(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+const std::vector<Snippet>& snippets() {
+  static const std::vector<Snippet> list = {
+      {"tank_with_wall",
+       // Filling from a source and venting to the atmosphere at once, the gas
+       // exchanging heat with a wall that starts warmer than the gas.
+       R"(
+components:
+  source: {type: pressure_source, p: 6 bar, T: 300 K}
+  inlet:  {type: iso6358_throttle, C: 0.3 dm3/(s*bar), b: 0.3}
+  tank:   {type: volume, V: 0.5 L, p0: 2 bar, T0: 293.15 K}
+  outlet: {type: iso6358_throttle, C: 0.2 dm3/(s*bar), b: 0.5}
+  air:    {type: atmosphere}
+  film:   {type: heat_convection, alpha: 50 W/(m2*K), A: 0.02 m2}
+  wall:   {type: thermal_mass, C: 200 J/K, T0: 330 K}
+connections:
+  - [source.port, inlet.a]
+  - [inlet.b, tank.port]
+  - [tank.port, outlet.a]
+  - [outlet.b, air.port]
+  - [tank.heat, film.a]
+  - [film.b, wall.port]
+)",
+       0.05,
+       {"pressure_source", "iso6358_throttle", "volume", "atmosphere", "heat_convection", "thermal_mass"}},
+      {"tank_to_reservoir",
+       R"(
+components:
+  tank:      {type: volume, V: 1 L, p0: 8 bar, T0: 310 K}
+  orifice:   {type: iso6358_throttle, C: 0.1 dm3/(s*bar), b: 0.4}
+  air:       {type: atmosphere}
+  film:      {type: heat_convection, alpha: 20 W/(m2*K), A: 0.05 m2}
+  reservoir: {type: fixed_temperature, T: 290 K}
+connections:
+  - [tank.port, orifice.a]
+  - [orifice.b, air.port]
+  - [tank.heat, film.a]
+  - [film.b, reservoir.port]
+)",
+       0.1,
+       {"fixed_temperature"}},
+      {"signals",
+       // Every kind of signal source, each driving an input: a ramp opening a
+       // throttle, a table setting a supply pressure, a step and a constant
+       // forces (the step switches a discrete mode before the second point).
+       R"(
+components:
+  supply_p: {type: signal_source, kind: table, table: [[0, 4e5], [0.02, 5e5], [1, 6e5]]}
+  supply:   {type: pressure_source, p: 5 bar, T: 293.15 K}
+  opening:  {type: signal_source, kind: ramp, value: 0.2, height: 0.7, t_start: 0, duration: 0.1}
+  valve:    {type: iso6358_throttle, C: 0.3 dm3/(s*bar), b: 0.3}
+  tank:     {type: volume, V: 0.2 L, p0: 1.5 bar}
+  push_cmd: {type: signal_source, kind: step, value: 5, height: 20, t_start: 0.01}
+  push:     {type: force_source}
+  body:     {type: translational_mass, m: 1.5 kg, s0: 0.01 m, v0: 0.2 m/s}
+  drag_cmd: {type: signal_source, kind: constant, value: -3}
+  drag:     {type: force_source}
+connections:
+  - [supply_p.y, supply.p_in]
+  - [opening.y, valve.opening]
+  - [supply.port, valve.a]
+  - [valve.b, tank.port]
+  - [push_cmd.y, push.F_in]
+  - [push.flange, body.flange, drag.flange]
+  - [drag_cmd.y, drag.F_in]
+)",
+       0.03,
+       {"signal_source", "force_source", "translational_mass"}},
+      {"frame",
+       // The frame carrying a load force (nothing else can connect to it
+       // without a spring).
+       R"(
+components:
+  frame: {type: fixed_position, s0: 0.02 m}
+  load:  {type: force_source, F: 40 N}
+connections:
+  - [frame.flange, load.flange]
+)",
+       0.05,
+       {"fixed_position"}},
+      {"three_port_node",
+       // Not a component: the framework's stream mixing at a node of three
+       // pneumatic ports, with flows in both directions.
+       R"(
+components:
+  a:  {type: volume, V: 1 L, p0: 6 bar, T0: 350 K}
+  b:  {type: volume, V: 0.5 L, p0: 2 bar, T0: 300 K}
+  c:  {type: volume, V: 2 L, p0: 1 bar, T0: 260 K}
+  va: {type: iso6358_throttle, C: 0.2 dm3/(s*bar), b: 0.3}
+  vb: {type: iso6358_throttle, C: 0.1 dm3/(s*bar), b: 0.4}
+  vc: {type: iso6358_throttle, C: 0.3 dm3/(s*bar), b: 0.2}
+connections:
+  - [a.port, va.a]
+  - [b.port, vb.a]
+  - [c.port, vc.a]
+  - [va.b, vb.b, vc.b]
+)",
+       0.2,
+       {}},
+      {"cushion_rig",
+       // The paper's end-cushioning rig; the second point is in mid-stroke.
+       read_file(std::string(PNEUMO_SOURCE_DIR) + "/netlists/cushion_rig.yaml"),
+       0.05,
+       {"cushioned_cylinder"}},
+  };
+  return list;
+}
+
+TEST(Jacobian, RegistryIsCovered) {
+  std::set<std::string> covered;
+  for (const auto& s : snippets()) covered.insert(s.types.begin(), s.types.end());
+  for (const auto& type : builtin_registry().types())
+    EXPECT_TRUE(covered.count(type)) << "component type '" << type
+                                     << "' has no Jacobian test circuit; add a snippet to tests/jacobian_test.cpp";
+}
+
+struct Point {
+  double t;
+  std::vector<double> y, yp, modes;
+};
+
+// Central-difference check of jacobian_parts at one point. Returns the worst
+// relative error (in the scaled sense of the header) and counts skipped kinks.
+struct Comparison {
+  double worst = 0.0;
+  std::string worst_where;
+  int compared = 0;
+  int kinks = 0;
+};
+
+void compare_part(const System& sys, const Point& pt, bool wrt_yp, const std::vector<double>& J_ad, Comparison& out) {
+  const int n = sys.size();
+  std::vector<double> scale(n);
+  const auto& base = wrt_yp ? pt.yp : pt.y;
+  for (int j = 0; j < n; ++j) scale[j] = std::max(std::abs(base[j]), sys.nominal()[j]);
+
+  // J_fd column by column, plus the one-sided differences for the kink test.
+  std::vector<double> Jc(static_cast<std::size_t>(n) * n), Jf(Jc.size()), Jb(Jc.size());
+  std::vector<double> F0(n), Fp(n), Fm(n);
+  sys.residual(pt.t, pt.y.data(), pt.yp.data(), F0.data());
+  for (int j = 0; j < n; ++j) {
+    const double h = 1e-6 * scale[j];
+    std::vector<double> y = pt.y, yp = pt.yp;
+    auto& v = wrt_yp ? yp : y;
+    v[j] = base[j] + h;
+    sys.residual(pt.t, y.data(), yp.data(), Fp.data());
+    v[j] = base[j] - h;
+    sys.residual(pt.t, y.data(), yp.data(), Fm.data());
+    for (int i = 0; i < n; ++i) {
+      const std::size_t k = static_cast<std::size_t>(i) * n + j;
+      Jc[k] = (Fp[i] - Fm[i]) / (2 * h);
+      Jf[k] = (Fp[i] - F0[i]) / h;
+      Jb[k] = (F0[i] - Fm[i]) / h;
+    }
+  }
+  for (int i = 0; i < n; ++i) {
+    double row = 0.0;
+    for (int j = 0; j < n; ++j) {
+      const std::size_t k = static_cast<std::size_t>(i) * n + j;
+      row = std::max({row, std::abs(J_ad[k]) * scale[j], std::abs(Jc[k]) * scale[j]});
+    }
+    if (row == 0.0) continue;
+    for (int j = 0; j < n; ++j) {
+      const std::size_t k = static_cast<std::size_t>(i) * n + j;
+      const double ad = J_ad[k] * scale[j], fd = Jc[k] * scale[j];
+      if (ad == 0.0 && fd == 0.0) continue;
+      const double denom = std::max(std::abs(ad), 1e-3 * row);
+      // Forward and backward differences disagree by much more than their
+      // O(h) truncation error: a kink lies inside the stencil.
+      if (std::abs(Jf[k] - Jb[k]) * scale[j] > 1e-4 * denom) {
+        ++out.kinks;
+        continue;
+      }
+      ++out.compared;
+      const double err = std::abs(ad - fd) / denom;
+      if (err > out.worst) {
+        out.worst = err;
+        std::ostringstream w;
+        w << (wrt_yp ? "dF/dy'" : "dF/dy") << " row " << i << ", " << (wrt_yp ? "der(" : "")
+          << sys.variable_names()[j] << (wrt_yp ? ")" : "") << ": AD " << J_ad[k] << ", FD " << Jc[k];
+        out.worst_where = w.str();
+      }
+    }
+  }
+}
+
+// jacobian(cj) against the two parts on the pattern; zero outside it.
+void check_assembled(System& sys, const Point& pt, const std::vector<double>& dFdy, const std::vector<double>& dFdyp) {
+  const int n = sys.size();
+  const double cj = 1e3;  // 1/h for a 1 ms step
+  std::vector<double> values(sys.nnz());
+  sys.jacobian(pt.t, pt.y.data(), pt.yp.data(), cj, values.data());
+  EXPECT_EQ(sys.pattern_misses(), 0) << "AD found dependencies outside the structural pattern";
+  std::vector<char> in_pattern(static_cast<std::size_t>(n) * n, 0);
+  std::vector<double> row_max(n, 0.0);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      const std::size_t k = static_cast<std::size_t>(i) * n + j;
+      row_max[i] = std::max(row_max[i], std::abs(dFdy[k] + cj * dFdyp[k]));
+    }
+  int mismatches = 0;
+  for (int c = 0; c < n; ++c)
+    for (long p = sys.col_ptr()[c]; p < sys.col_ptr()[c + 1]; ++p) {
+      const int r = static_cast<int>(sys.row_idx()[p]);
+      const std::size_t k = static_cast<std::size_t>(r) * n + c;
+      in_pattern[k] = 1;
+      const double expected = dFdy[k] + cj * dFdyp[k];
+      if (std::abs(values[p] - expected) > 1e-12 * std::max(row_max[r], 1e-300) && mismatches++ < 5)
+        ADD_FAILURE() << "jacobian(cj) at (" << r << ", " << sys.variable_names()[c] << ") = " << values[p]
+                      << ", dF/dy + cj dF/dy' = " << expected;
+    }
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      const std::size_t k = static_cast<std::size_t>(i) * n + j;
+      if (!in_pattern[k] && (dFdy[k] != 0.0 || dFdyp[k] != 0.0) && mismatches++ < 5)
+        ADD_FAILURE() << "nonzero derivative outside the sparsity pattern: row " << i << ", "
+                      << sys.variable_names()[j];
+      // A variable whose derivative appears must be flagged differential for IDASetId.
+      if (dFdyp[k] != 0.0) {
+        EXPECT_EQ(sys.differential()[j], 1.0) << sys.variable_names()[j] << " appears differentiated";
+      }
+    }
+}
+
+class JacobianOf : public ::testing::TestWithParam<Snippet> {};
+
+TEST_P(JacobianOf, MatchesFiniteDifferencesAndPattern) {
+  const Snippet& snippet = GetParam();
+  const Netlist netlist = parse_netlist(snippet.netlist, snippet.name + ".yaml");
+  Circuit circuit = elaborate(netlist, builtin_registry());
+  for (const auto& type : snippet.types) {
+    bool present = false;
+    for (const auto& c : circuit.components) present |= c->info().type == type;
+    EXPECT_TRUE(present) << "snippet " << snippet.name << " claims to cover '" << type << "' but has none";
+  }
+  System sys(std::move(circuit));
+
+  std::vector<Point> points;
+  SolverOptions opt = solver_options(netlist.simulation);  // the netlist's tolerances
+  opt.t_end = opt.t_start + snippet.t_short;
+  opt.output_interval = snippet.t_short;
+  const SolverResult res = simulate(sys, opt, [&](double t, const double* y, const double* yp) {
+    points.push_back({t, std::vector<double>(y, y + sys.size()), std::vector<double>(yp, yp + sys.size()),
+                      sys.modes()});
+  });
+  ASSERT_TRUE(res.ok) << res.message;
+  ASSERT_GE(points.size(), 2u);
+  const Point* checks[] = {&points.front(), &points.back()};
+
+  for (const Point* pt : checks) {
+    SCOPED_TRACE("t = " + std::to_string(pt->t));
+    sys.modes() = pt->modes;
+    std::vector<double> dFdy, dFdyp;
+    sys.jacobian_parts(pt->t, pt->y.data(), pt->yp.data(), dFdy, dFdyp);
+    Comparison cmp;
+    compare_part(sys, *pt, false, dFdy, cmp);
+    compare_part(sys, *pt, true, dFdyp, cmp);
+    EXPECT_LT(cmp.worst, 1e-5) << "worst: " << cmp.worst_where;
+    EXPECT_GT(cmp.compared, sys.size()) << "too few entries compared";
+    EXPECT_LE(cmp.kinks, std::max(2, cmp.compared / 50)) << cmp.kinks << " entries at kinks, " << cmp.compared
+                                                         << " compared";
+    check_assembled(sys, *pt, dFdy, dFdyp);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Builtin, JacobianOf, ::testing::ValuesIn(snippets()),
+                         [](const ::testing::TestParamInfo<Snippet>& info) { return info.param.name; });
+
+}  // namespace
+}  // namespace pneumo
