@@ -13,6 +13,7 @@
 
 #include "components/builtin.hpp"
 #include "framework/core/units.hpp"
+#include "framework/io/plot.hpp"
 #include "framework/run/run.hpp"
 
 namespace {
@@ -73,13 +74,24 @@ void print_stats(const SolverResult& r, double seconds, std::ostream& out) {
     out << "  WARNING: " << s.pattern_misses << " Jacobian entries fell outside the structural pattern\n";
 }
 
+std::vector<std::string> split_list(const std::string& s) {
+  std::vector<std::string> out;
+  std::stringstream ss(s);
+  std::string item;
+  while (std::getline(ss, item, ','))
+    if (!item.empty()) out.push_back(item);
+  return out;
+}
+
 int simulate_command(const std::string& netlist_path, const std::vector<std::string>& sets, std::string output,
-                     bool stats, bool quiet) {
+                     bool stats, bool quiet, const std::string& plot_prefix, const std::string& plot_columns) {
   Netlist nl = load_netlist(netlist_path);
   for (const auto& s : sets) apply_override(nl, s);
   if (nl.outputs.empty())
     throw InputError(SourceLocation{nl.file, 1, 1}, "", "", "the netlist has no 'outputs:'; nothing would be written");
   if (output.empty()) output = std::filesystem::path(netlist_path).stem().string() + ".csv";
+  if (const auto parent = std::filesystem::path(output).parent_path(); !parent.empty())
+    std::filesystem::create_directories(parent);
 
   const auto t0 = std::chrono::steady_clock::now();
   RunResult run = run_simulation(nl, builtin_registry());
@@ -112,6 +124,10 @@ int simulate_command(const std::string& netlist_path, const std::vector<std::str
     }
   }
   if (stats) print_stats(run.solver, seconds, std::cout);
+  if (!plot_prefix.empty()) {
+    plot_results(output, plot_prefix, split_list(plot_columns), nl.file);
+    if (!quiet) std::cout << "plotted " << plot_prefix << ".png and " << plot_prefix << ".svg\n";
+  }
   return 0;
 }
 
@@ -133,6 +149,15 @@ int main(int argc, char** argv) {
   sim->add_option("-o,--output", output, "results CSV (default: NETLIST_STEM.csv)");
   sim->add_flag("--stats", stats, "print solver statistics");
   sim->add_flag("-q,--quiet", quiet, "print nothing but errors");
+  std::string plot_prefix, plot_columns;
+  sim->add_option("--plot", plot_prefix, "also plot the results to PREFIX.png and PREFIX.svg (gnuplot)");
+  sim->add_option("--columns", plot_columns, "columns to plot, comma separated (default: all)");
+
+  auto* plot = app.add_subcommand("plot", "plot a results CSV to PNG and SVG through gnuplot");
+  std::string plot_csv, plot_out;
+  plot->add_option("results", plot_csv, "results CSV")->required();
+  plot->add_option("-o,--output", plot_out, "output prefix (default: the CSV path without .csv)");
+  plot->add_option("--columns", plot_columns, "columns to plot, comma separated (default: all)");
 
   auto* comps = app.add_subcommand("components", "list component types, or show one");
   std::string type;
@@ -145,7 +170,14 @@ int main(int argc, char** argv) {
   }
 
   try {
-    if (*sim) return simulate_command(netlist, sets, output, stats, quiet);
+    if (*sim) return simulate_command(netlist, sets, output, stats, quiet, plot_prefix, plot_columns);
+    if (*plot) {
+      if (plot_out.empty()) plot_out = (std::filesystem::path(plot_csv).parent_path() /
+                                        std::filesystem::path(plot_csv).stem()).string();
+      plot_results(plot_csv, plot_out, split_list(plot_columns), plot_csv);
+      std::cout << "plotted " << plot_out << ".png and " << plot_out << ".svg\n";
+      return 0;
+    }
     if (*comps) {
       const Registry& reg = builtin_registry();
       if (!type.empty()) {

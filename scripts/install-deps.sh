@@ -1,0 +1,26 @@
+#!/usr/bin/env bash
+# Installs pneumo's build and run dependencies from Debian packages.
+# Idempotent; uses sudo when not run as root.
+set -euo pipefail
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+PACKAGES=(
+  build-essential cmake ninja-build pkg-config
+  libsundials-dev        # IDA, IDAS, SUNLinSol_KLU, SUNMatrix sparse (6.4)
+  libsuitesparse-dev     # KLU
+  libeigen3-dev
+  libyaml-cpp-dev
+  libcli11-dev
+  libgtest-dev googletest
+  gnuplot-nox            # pneumo plot
+)
+missing=()
+for p in "${PACKAGES[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ "${#missing[@]}" -gt 0 ]; then
+  echo "install-deps: installing ${missing[*]}"
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+echo "install-deps: all dependencies present"
