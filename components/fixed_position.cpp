@@ -16,8 +16,13 @@ class FixedPosition final : public ComponentT<FixedPosition> {
   }
   explicit FixedPosition(const Construction& c) : ComponentT(c), s0_(c.params["s0"]) {}
   template <class T>
-  void equations(const Eval<T>& e, T* r) const { r[0] = e.flange(0).s - s0_; }
-  void start(StartValues& s, const GasModel&) const override { s.guess_position(0, s0_); }
+  void equations(const Eval<T>& e, T* r) const {
+    // Held still: v = 0. The position itself is the node's differential
+    // state (ds/dt = v), fixed at s0 initially; writing s = s0 here would
+    // make the system index 2.
+    r[0] = e.flange(0).v;
+  }
+  void start(StartValues& s, const GasModel&) const override { s.fix_position(0, s0_); }
 
  private:
   double s0_;
