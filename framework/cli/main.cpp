@@ -87,14 +87,16 @@ int simulate_command(const std::string& netlist_path, const std::vector<std::str
                      bool stats, bool quiet, const std::string& plot_prefix, const std::string& plot_columns) {
   Netlist nl = load_netlist(netlist_path);
   for (const auto& s : sets) apply_override(nl, s);
-  if (nl.outputs.empty())
-    throw InputError(SourceLocation{nl.file, 1, 1}, "", "", "the netlist has no 'outputs:'; nothing would be written");
   if (output.empty()) output = std::filesystem::path(netlist_path).stem().string() + ".csv";
   if (const auto parent = std::filesystem::path(output).parent_path(); !parent.empty())
     std::filesystem::create_directories(parent);
 
   const auto t0 = std::chrono::steady_clock::now();
-  RunResult run = run_simulation(nl, builtin_registry());
+  System system(elaborate(nl, builtin_registry()));  // all input errors surface here
+  if (nl.outputs.empty())
+    throw InputError(SourceLocation{nl.file, 1, 1}, "", "",
+                     "the netlist has no 'outputs:' (name: component.variable); nothing would be written");
+  RunResult run = run_system(system, solver_options(nl.simulation));
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
   if (!quiet)
