@@ -16,7 +16,7 @@ struct GasModel {
   double T_ambient = 293.15;    // K
   // Mass flow below which the upwinding of stream temperatures is smoothed,
   // kg/s. Keeps the energy equations differentiable at zero flow.
-  double m_flow_small = 1e-9;
+  double m_flow_small = 1e-7;
 
   double cp() const { return kappa * R / (kappa - 1.0); }
   double cv() const { return R / (kappa - 1.0); }
