@@ -21,6 +21,7 @@
 #include <limits>
 
 #include "components/builtin.hpp"
+#include "components/enthalpy_flow.hpp"
 #include "components/friction.hpp"
 #include "components/iso6358_flow.hpp"
 
@@ -135,9 +136,7 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
     b_bore_ = p["bore_opening_b"];
     ramp_ = p["bore_opening_ramp"];
     const Table& t = p.table("cushion_C_of_z");
-    for (std::size_t k = 1; k < t.size(); ++k)
-      if (!(t[k][0] > t[k - 1][0]))
-        throw ParameterError("cushion_C_of_z", "opening z must increase (row " + std::to_string(k + 1) + ")");
+    require_increasing(t, "cushion_C_of_z", "opening z");
     double C_max = 0;
     for (const auto& row : t) C_max = std::max(C_max, row[1]);
     C_cushion_ = interpolate(t, p["z_EC"]);
@@ -195,8 +194,7 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
     const T check_open = min(max(T((s.p_ch - s.p_EC - crack_) / check_ramp_), T(0.0)), T(1.0));
     const T m_check = iso6358_mass_flow(s.p_EC, s.p_ch, T_EC, T_ch, T(C_check_ * check_open), b_check_, 0.999, gas);
     s.m_x = m_bore + m_throttle + m_check;
-    const double eps = gas.m_flow_small;
-    s.H_x = gas.cp() * (smooth_pos(s.m_x, eps) * T_EC - smooth_pos(T(-s.m_x), eps) * T_ch);
+    s.H_x = enthalpy_inflow(s.m_x, T_EC, T_ch, gas);  // EC -> ch
     // Friction: main-stroke and cushioning-zone sets blended by the opening.
     const T F_main = friction_force(friction_main_, s.v, s.p_A, s.p_EC, s.p_EC, gas.p_ambient, v_reg_, v_eps_);
     const T F_cush = friction_force(friction_cushion_, s.v, s.p_A, s.p_EC, s.p_EC, gas.p_ambient, v_reg_, v_eps_);
@@ -218,10 +216,9 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
     const auto hA = e.heat_port(kHeatA);
     const auto hC = e.heat_port(kHeatCap);
     const State<T> s = state(e);
-    const double eps = gas.m_flow_small;
     for (int k : {kMA, kTA, kMEC, kTEC, kMch, kTch}) e.reject_unless_positive(e.var(k));
     // Rod-side chamber A (volume grows with x).
-    const T H_A = gas.cp() * (smooth_pos(A.m_flow, eps) * A.T_in - smooth_pos(T(-A.m_flow), eps) * e.var(kTA));
+    const T H_A = enthalpy_inflow(A.m_flow, A.T_in, e.var(kTA), gas);
     r[0] = e.der(kMA) - A.m_flow;
     r[1] = e.der(kUA) - H_A + A.p * A_A_ * s.v - hA.Q;
     r[2] = A.p - e.var(kMA) * gas.R * e.var(kTA) / s.V_A;  // solved for p (scaling)
@@ -232,7 +229,7 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
     r[6] = e.der(kUEC) + s.H_x - s.p_EC * (A_B_ - A_CP_) * s.v - hC.Q;
     r[7] = e.var(kTEC) - e.var(kUEC) / (e.var(kMEC) * gas.cv());
     // Channel ch: inflow from EC, outflow through port B.
-    const T H_B = gas.cp() * (smooth_pos(B.m_flow, eps) * B.T_in - smooth_pos(T(-B.m_flow), eps) * e.var(kTch));
+    const T H_B = enthalpy_inflow(B.m_flow, B.T_in, e.var(kTch), gas);
     r[8] = e.der(kMch) - s.m_x - B.m_flow;
     r[9] = e.der(kUch) - s.H_x - H_B - s.p_ch * A_CP_ * s.v;
     r[10] = B.p - e.var(kMch) * gas.R * e.var(kTch) / s.V_ch;

@@ -6,32 +6,18 @@ namespace pneumo::components {
 
 namespace {
 
-FrictionCoefficients eq4(double FC, double FS, double vS, double kv, double a, double kp, FrictionPressure p) {
-  FrictionCoefficients c;
-  c.b0 = FC;
-  c.b1 = kp;
-  c.FS0 = FS;
-  c.FC = FC;
-  c.vS = vS;
-  c.kv0 = kv;
-  c.a = a;
-  c.pressure = p;
-  return c;
-}
-FrictionCoefficients eq7(double b, double FS, double FC, double vS, double kv, double a) {
-  FrictionCoefficients c;
-  c.b0 = b;
-  c.FS0 = FS;
-  c.FC = FC;
-  c.vS = vS;
-  c.kv0 = kv;
-  c.a = a;
-  return c;
-}
 FrictionCoefficients eq8(double b0, double b1, double FS0, double FS1, double FC, double vS, double kv0, double kv1,
                          double a, FrictionPressure p) {
   FrictionCoefficients c{b0, b1, FS0, FS1, FC, vS, kv0, kv1, a, p};
   return c;
+}
+// eq. 4: F = FC + k_p p + (FS - FC) exp(-|v|/vS) + kv |v|^a
+FrictionCoefficients eq4(double FC, double FS, double vS, double kv, double a, double kp, FrictionPressure p) {
+  return eq8(FC, kp, FS, 0, FC, vS, kv, 0, a, p);
+}
+// eq. 7: F = b + (FS - FC) exp(-|v|/vS) + kv |v|^a
+FrictionCoefficients eq7(double b, double FS, double FC, double vS, double kv, double a) {
+  return eq8(b, 0, FS, 0, FC, vS, kv, 0, a, FrictionPressure::none);
 }
 
 }  // namespace

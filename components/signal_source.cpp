@@ -40,9 +40,7 @@ class SignalSource final : public ComponentT<SignalSource> {
     if (c.params.has("table")) table_ = c.params.table("table");
     if (kind_ == "table") {
       if (table_.empty()) throw ParameterError("table", "kind 'table' needs a 'table' of [t, value] rows");
-      for (std::size_t k = 1; k < table_.size(); ++k)
-        if (!(table_[k][0] > table_[k - 1][0]))
-          throw ParameterError("table", "times must increase (row " + std::to_string(k + 1) + ")");
+      require_increasing(table_, "table", "times");
     }
   }
 

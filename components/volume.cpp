@@ -2,7 +2,7 @@
 // port to a wall. States m and U (not p and T) so that mass and energy are
 // conserved by construction, to the solver's tolerance.
 #include "components/builtin.hpp"
-#include "framework/core/smooth.hpp"
+#include "components/enthalpy_flow.hpp"
 
 namespace pneumo::components {
 
@@ -43,12 +43,7 @@ class Volume final : public ComponentT<Volume> {
     const GasModel& gas = e.gas();
     e.reject_unless_positive(m);
     e.reject_unless_positive(Tg);
-    // Enthalpy carried by the flow: inflow at the upstream temperature T_in,
-    // outflow at the gas temperature. smooth_pos(x) - smooth_pos(-x) == x, so
-    // this is exactly m_flow * c_p * T_upstream away from zero flow and
-    // conservative between neighbours at any flow.
-    const double eps = gas.m_flow_small;
-    const T H = gas.cp() * (smooth_pos(port.m_flow, eps) * port.T_in - smooth_pos(T(-port.m_flow), eps) * Tg);
+    const T H = enthalpy_inflow(port.m_flow, port.T_in, Tg, gas);
     r[0] = e.der(kM) - port.m_flow;
     r[1] = e.der(kU) - H - heat.Q;
     // Each algebraic equation is solved for its own variable (p in Pa, T in

@@ -108,6 +108,14 @@ struct PortVars {
   int t_out = -1;
 };
 
+// Copy a block's local variables (and their derivatives) out of the global vectors.
+void gather(const Block& b, const double* y, const double* yp, double* ly, double* lyp) {
+  for (std::size_t i = 0; i < b.vars.size(); ++i) {
+    ly[i] = y[b.vars[i]];
+    lyp[i] = yp[b.vars[i]];
+  }
+}
+
 std::string node_text(const Circuit& c, const std::vector<PortId>& ports) {
   std::string s = "{";
   for (std::size_t i = 0; i < ports.size(); ++i) s += (i ? ", " : "") + c.port_name(ports[i]);
@@ -396,11 +404,6 @@ void System::reset_modes() {
     if (b->component) b->component->initial_modes(modes_.data() + b->mode0);
 }
 
-template <class T>
-void System::eval_block(const Block& b, double t, const T* y, const T* yp, T* r, const EvalContext& c) const {
-  b.residual(t, y, yp, r, c);
-}
-
 void System::build_pattern() {
   dep_y_.assign(n_, {});
   dep_yp_.assign(n_, {});
@@ -558,11 +561,7 @@ int System::residual(double t, const double* y, const double* yp, double* F) con
   EvalContext ctx{&circuit_.gas, modes_.data(), &invalid};
   double ly[kMaxLocal], lyp[kMaxLocal];
   for (const auto& b : blocks_) {
-    const std::size_t nl = b->vars.size();
-    for (std::size_t i = 0; i < nl; ++i) {
-      ly[i] = y[b->vars[i]];
-      lyp[i] = yp[b->vars[i]];
-    }
+    gather(*b, y, yp, ly, lyp);
     b->residual(t, ly, lyp, F + b->row0, ctx);
   }
   if (invalid) return 1;
@@ -627,11 +626,7 @@ void System::roots(double t, const double* y, const double* yp, double* g) const
   double ly[kMaxLocal], lyp[kMaxLocal];
   for (const auto& b : blocks_) {
     if (!b->component || b->component->info().roots == 0) continue;
-    const std::size_t nl = b->vars.size();
-    for (std::size_t i = 0; i < nl; ++i) {
-      ly[i] = y[b->vars[i]];
-      lyp[i] = yp[b->vars[i]];
-    }
+    gather(*b, y, yp, ly, lyp);
     Eval<double> e(*b->component, t, ly, lyp, modes_.data() + b->mode0, b->connected.get(), circuit_.gas, &invalid);
     b->component->roots(e, g + b->root0);
   }
@@ -657,10 +652,7 @@ bool System::handle_time_event(double t, const double* y, const double* yp, std:
     bool due = false;
     for (double te : evs) due |= std::abs(te - t) <= 1e-12 * std::max(1.0, std::abs(t));
     if (!due) continue;
-    for (std::size_t i = 0; i < b->vars.size(); ++i) {
-      ly[i] = y[b->vars[i]];
-      lyp[i] = yp[b->vars[i]];
-    }
+    gather(*b, y, yp, ly, lyp);
     Eval<double> e(*b->component, t, ly, lyp, modes_.data() + b->mode0, b->connected.get(), circuit_.gas, &invalid);
     const EventResult res = b->component->on_event(e, modes_.data() + b->mode0, EventKind::time, -1, 0);
     changed |= res.changed;
@@ -680,10 +672,7 @@ bool System::handle_roots(double t, const double* y, const double* yp, const int
     for (int k = 0; k < nr; ++k) {
       const int dir = root_info[b->root0 + k];
       if (dir == 0) continue;
-      for (std::size_t i = 0; i < b->vars.size(); ++i) {
-        ly[i] = y[b->vars[i]];
-        lyp[i] = yp[b->vars[i]];
-      }
+      gather(*b, y, yp, ly, lyp);
       Eval<double> e(*b->component, t, ly, lyp, modes_.data() + b->mode0, b->connected.get(), circuit_.gas,
                      &invalid);
       const EventResult res = b->component->on_event(e, modes_.data() + b->mode0, EventKind::root, k, dir);
@@ -698,10 +687,7 @@ double System::probe(const Probe& p, double t, const double* y, const double* yp
   const Block& b = *blocks_[p.component];  // component blocks come first, in order
   if (p.kind == Probe::Kind::local) return y[b.vars[p.index]];
   double ly[kMaxLocal], lyp[kMaxLocal];
-  for (std::size_t i = 0; i < b.vars.size(); ++i) {
-    ly[i] = y[b.vars[i]];
-    lyp[i] = yp[b.vars[i]];
-  }
+  gather(b, y, yp, ly, lyp);
   bool invalid = false;
   Eval<double> e(*b.component, t, ly, lyp, modes_.data() + b.mode0, b.connected.get(), circuit_.gas, &invalid);
   return b.component->observe(p.index, e);

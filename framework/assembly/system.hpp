@@ -112,8 +112,6 @@ class System {
   void build_nodes();
   void build_pattern();
   void check_structure() const;
-  template <class T>
-  void eval_block(const Block& b, double t, const T* y, const T* yp, T* r, const EvalContext& c) const;
 
   Circuit circuit_;
   std::vector<std::unique_ptr<Block>> blocks_;

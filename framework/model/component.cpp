@@ -88,6 +88,12 @@ bool ParameterValues::has(const std::string& name) const {
   return scalars_.count(name) || tables_.count(name) || texts_.count(name);
 }
 
+void require_increasing(const Table& table, const std::string& parameter, const std::string& what) {
+  for (std::size_t k = 1; k < table.size(); ++k)
+    if (!(table[k][0] > table[k - 1][0]))
+      throw ParameterError(parameter, what + " must increase (row " + std::to_string(k + 1) + ")");
+}
+
 void StartValues::fix_var(int k, double v) { set(c_.internal_offset() + k, v, Kind::fixed); }
 void StartValues::guess_var(int k, double v) { set(c_.internal_offset() + k, v, Kind::guess); }
 void StartValues::guess_pressure(int port, double p) { set(c_.port_offset(port), p, Kind::guess); }

@@ -181,6 +181,10 @@ class ParameterError : public std::runtime_error {
   std::string parameter_;
 };
 
+// Throws ParameterError unless the first column of `table` strictly
+// increases (interpolation tables, schedules); `what` names that column.
+void require_increasing(const Table& table, const std::string& parameter, const std::string& what);
+
 template <class T>
 struct GasPortView {
   const T& p;
