@@ -1,5 +1,8 @@
 // Rigid gas volume: mass and energy balance of an ideal gas, optional heat
-// port to a wall. States m and U (not p and T) so that mass and energy are
+// port to a wall. An optional second gas port makes it a through-flow
+// volume (a line, a fitting between two resistances): gas entering at one
+// port mixes with the contents and leaves at the other, which a one-port
+// volume on a three-port node cannot do (it sees only the net flow). States m and U (not p and T) so that mass and energy are
 // conserved by construction, to the solver's tolerance.
 #include "components/builtin.hpp"
 #include "components/enthalpy_flow.hpp"
@@ -8,25 +11,29 @@ namespace pneumo::components {
 
 class Volume final : public ComponentT<Volume> {
  public:
-  enum Port { kPort, kHeat };
+  enum Port { kPort, kHeat, kPortB };
   enum Var { kM, kU, kT };
   enum Observable { kP };
 
   static ComponentInfo describe() {
     ComponentInfo i;
     i.type = "volume";
-    i.description = "Rigid gas volume with mass and energy balance (ideal gas); optional heat port to a wall.";
+    i.description = "Rigid gas volume with mass and energy balance (ideal gas); optional heat port to a wall and optional second gas "
+        "port (through-flow volume).";
     i.parameters = {
         ParameterSpec::scalar("V", "m3", "volume").positive(),
         ParameterSpec::scalar("p0", "Pa", "initial pressure, absolute", 101325.0).positive(),
         ParameterSpec::scalar("T0", "K", "initial gas temperature", 293.15).positive(),
     };
     i.ports = {{"port", Domain::pneumatic, Causality::acausal, "gas port"},
-               {"heat", Domain::thermal, Causality::acausal, "heat port to the wall (insulated if unconnected)", true}};
+               {"heat", Domain::thermal, Causality::acausal, "heat port to the wall (insulated if unconnected)", true},
+               {"port_b", Domain::pneumatic, Causality::acausal, "second gas port (closed if unconnected)", true}};
     i.variables = {{"m", "kg", "gas mass"}, {"U", "J", "internal energy of the gas"}, {"T", "K", "gas temperature"}};
     i.observables = {{"p", "Pa", "pressure, absolute"}};
-    i.equations = {"mass balance", "energy balance", "gas law p = m R T / V", "T = U / (m c_v)",
-                   "outflow temperature", "wall temperature seen by the heat port"};
+    i.equations = {"mass balance",        "energy balance",
+                   "gas law p = m R T / V", "T = U / (m c_v)",
+                   "outflow temperature", "wall temperature seen by the heat port",
+                   "pressure at port_b",  "outflow temperature at port_b"};
     return i;
   }
 
@@ -37,14 +44,15 @@ class Volume final : public ComponentT<Volume> {
   void equations(const Eval<T>& e, T* r) const {
     const auto port = e.gas_port(kPort);
     const auto heat = e.heat_port(kHeat);
+    const auto port_b = e.gas_port(kPortB);
     const T& m = e.var(kM);
     const T& U = e.var(kU);
     const T& Tg = e.var(kT);
     const GasModel& gas = e.gas();
     e.reject_unless_positive(m);
     e.reject_unless_positive(Tg);
-    const T H = enthalpy_inflow(port.m_flow, port.T_in, Tg, gas);
-    r[0] = e.der(kM) - port.m_flow;
+    const T H = enthalpy_inflow(port.m_flow, port.T_in, Tg, gas) + enthalpy_inflow(port_b.m_flow, port_b.T_in, Tg, gas);
+    r[0] = e.der(kM) - port.m_flow - port_b.m_flow;
     r[1] = e.der(kU) - H - heat.Q;
     // Each algebraic equation is solved for its own variable (p in Pa, T in
     // K): rows written as p V - m R T would scale with V and leave Newton
@@ -53,6 +61,8 @@ class Volume final : public ComponentT<Volume> {
     r[3] = Tg - U / (m * gas.cv());
     r[4] = port.T_out - Tg;
     r[5] = heat.T - Tg;
+    r[6] = port_b.p - port.p;
+    r[7] = port_b.T_out - Tg;
   }
 
   double observe(int, const Eval<double>& e) const override { return e.gas_port(kPort).p; }
@@ -65,6 +75,8 @@ class Volume final : public ComponentT<Volume> {
     s.guess_pressure(kPort, p0_);
     s.guess_temperature(kPort, T0_);
     s.guess_temperature(kHeat, T0_);
+    s.guess_pressure(kPortB, p0_);
+    s.guess_temperature(kPortB, T0_);
   }
 
  private:
