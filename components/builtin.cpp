@@ -16,6 +16,9 @@ void register_builtin_components(Registry& r) {
   register_force_source(r);
   register_signal_source(r);
   register_cushioned_cylinder(r);
+  register_friction_element(r);
+  register_spring_damper(r);
+  register_velocity_source(r);
 }
 
 const Registry& builtin_registry() {

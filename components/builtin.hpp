@@ -18,6 +18,9 @@ void register_fixed_position(Registry& r);
 void register_force_source(Registry& r);
 void register_signal_source(Registry& r);
 void register_cushioned_cylinder(Registry& r);
+void register_friction_element(Registry& r);
+void register_spring_damper(Registry& r);
+void register_velocity_source(Registry& r);
 
 }  // namespace pneumo::components
 

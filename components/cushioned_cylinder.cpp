@@ -1,5 +1,6 @@
 // Double-acting cylinder with integrated end-position cushioning at the cap
-// end (seed paper 000, fig. 1; ../shared/rigs/cushion-rig.yaml).
+// end and optionally at the rod end (seed paper 000, fig. 1;
+// ../shared/rigs/cushion-rig.yaml).
 //
 // x = 0 fully extended, x = stroke at the cap. The cap side is split into
 //   EC: the cushion annulus around the plug, V_EC = V0_EC + (A_B - A_CP)(stroke - x)
@@ -14,9 +15,41 @@
 // Force on the rod flange in +x (eq. 1-3 in one expression; the cushioning
 // terms vanish smoothly in the main stroke because p_EC = p_ch there):
 //   F = p_A A_A + p_amb A_R - p_EC (A_B - A_CP) - p_ch A_CP + F_friction + F_stops
-// Friction: seed 000 eq. 4/7/8 (components/friction.hpp), with a separate
-// coefficient set in the cushioning zone blended over the bore-opening ramp.
+// Friction (components/friction.hpp, `friction_model`): seed 000 eq. 4/7/8
+// presets, with a separate coefficient set in the cushioning zone blended
+// over the bore-opening ramp; or Coulomb + viscous; or LuGre (seed 002 eq. 8,
+// bristle state z as an internal variable - the piston can stick).
 // End stops: elastic, force = max(0, k pen + d pen_rate), never pulling.
+//
+// Rod-end cushioning (present when `rod_plug_diameter` is given; the
+// instance then has the extra chamber, port and roots - instance_info): the
+// rod side splits the same way into the rod cushion annulus ECr,
+//   V_ECr = V0_ECr + (A_B - A_CPr) x,
+// and the rod-side channel behind port A, V_A = V0_A + (A_CPr - A_R) x, with
+// its own bore opening (closing over a ramp before x = rod_cushion_length),
+// needle throttle and check valve. Without it the rod side is one chamber.
+//
+// Ports A and B are closed when unconnected (a gas spring). With
+// cushion_taps: yes the ports EC and EC_rod tap the cushion volumes
+// (sensors, leakage throttles): their flow enters that volume's balances,
+// p = p_EC, T_out = T_EC; closed when unconnected.
+//
+// Heat: with wall_alpha = 0 the heat ports are at the gas temperature
+// (insulated if unconnected; external heat_convection does the transfer).
+// With wall_alpha > 0 they are the walls and the gas exchanges
+//   Q = wall_alpha A(x) (T_wall - T_gas)
+// with them (seed 002 eq. 2), A(x) = both end faces + the lateral bore (and
+// rod, rod side) surface over the chamber's current length (stroke travel
+// plus dead volume / piston area). heat_A acts on the rod chamber (ECr with
+// rod cushioning), heat_cap on the cushion annulus EC; the channels are
+// adiabatic.
+//
+// Energy audit observables (W, positive into the gas unless said): H_* the
+// enthalpy flow in at each port, P_pdV_* = p dV/dt the work each chamber's
+// gas does on the piston, Q_* heat, H_cushion* the enthalpy flow through
+// the cushion throttles/bore opening, P_friction = F_friction v and P_stop =
+// F_stop v (<= 0 when dissipating; P_stop also stores E_stop), U_gas.
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -34,18 +67,26 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 class CushionedCylinder final : public ComponentT<CushionedCylinder> {
  public:
-  enum Port { kA, kB, kFlange, kHeatA, kHeatCap };
-  enum Var { kMA, kUA, kTA, kMEC, kUEC, kTEC, kMch, kUch, kTch };
-  enum Obs { kX, kV, kPA, kPEC, kPch, kTAo, kTECo, kTcho, kFfric, kFstop, kOpen, kCushionFlow };
-  enum Root { kRampStart, kCushionEntry, kStopRod, kStopCap };
+  enum Port { kA, kB, kFlange, kHeatA, kHeatCap, kTapEC, kTapECr };
+  // Internal variables; rod cushioning adds kMECr.., LuGre adds z (index z_var_).
+  enum Var { kMA, kUA, kTA, kMEC, kUEC, kTEC, kMch, kUch, kTch, kMECr, kUECr, kTECr };
+  enum Obs {
+    kX, kV, kPA, kPEC, kPch, kTAo, kTECo, kTcho, kFfric, kFstop, kOpen, kCushionFlow,
+    kZ, kFpressure, kHA, kHB, kHEC, kPdVA, kPdVEC, kPdVch, kPdV, kQA, kQcap, kHcushion, kPfric, kPstop, kEstop,
+    kUgas,
+    // rod cushioning only
+    kPECr, kTECro, kOpenR, kCushionFlowR, kHECr, kPdVECr, kHcushionR
+  };
+  enum Root { kRampStart, kCushionEntry, kStopRod, kStopCap, kRodRampStart, kRodCushionEntry };
 
   static ComponentInfo describe() {
     ComponentInfo i;
     i.type = "cushioned_cylinder";
     i.description =
-        "Double-acting cylinder with end-position cushioning at the cap end (plug, cushion annulus, needle throttle, "
-        "check valve), mass and energy balance in each chamber, Stribeck-type friction (seed 000 eq. 4/7/8), elastic "
-        "end stops. x = 0 extended, x = stroke at the cap; port A rod side, port B cap-side outlet.";
+        "Double-acting cylinder with end-position cushioning at the cap end and optionally at the rod end (plug, "
+        "cushion annulus, needle throttle, check valve), mass and energy balance in each chamber, friction (seed 000 "
+        "eq. 4/7/8 presets, Coulomb + viscous, LuGre), optional gas-to-wall heat transfer, elastic end stops. x = 0 "
+        "extended, x = stroke at the cap; port A rod side, port B cap-side outlet (both closed if unconnected).";
     using P = ParameterSpec;
     i.parameters = {
         P::scalar("bore", "m", "piston diameter").positive(),
@@ -54,7 +95,9 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
         P::scalar("plug_diameter", "m", "cushioning plug diameter").positive(),
         P::scalar("cushion_length", "m", "cushioning length (plug engages at x = stroke - cushion_length)")
             .positive(),
-        P::scalar("dead_volume_rod_side", "m3", "rod-side chamber volume at x = 0").positive(),
+        P::scalar("dead_volume_rod_side", "m3",
+                  "rod-side chamber volume at x = 0 (with rod cushioning: the rod-side channel behind port A)")
+            .positive(),
         P::scalar("dead_volume_cushion", "m3", "cushion annulus volume at x = stroke").positive(),
         P::scalar("dead_volume_channel", "m3", "outflow channel volume at x = stroke").positive(),
         P::scalar("bore_opening_C", "m3/(s*Pa)", "conductance cushion volume <-> channel while the plug is out")
@@ -70,33 +113,77 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
         P::scalar("check_b", "1", "critical pressure ratio of the check valve", 0.3).range(0, 0.99),
         P::scalar("check_cracking", "Pa", "cracking pressure difference of the check valve", 2e4).non_negative(),
         P::scalar("check_ramp", "Pa", "pressure rise from cracking to fully open", 2e4).positive(),
+        // Rod-end cushioning: present when rod_plug_diameter is given. The
+        // throttle/valve parameters default to their cap-end values.
+        P::scalar("rod_plug_diameter", "m", "rod-end cushion sleeve diameter (> rod); enables rod-end cushioning")
+            .positive()
+            .optional(),
+        P::scalar("rod_cushion_length", "m", "rod-end cushioning length (engages at x = rod_cushion_length)")
+            .positive()
+            .optional(),
+        P::scalar("rod_dead_volume_cushion", "m3", "rod cushion annulus volume at x = 0").positive().optional(),
+        P::scalar("rod_bore_opening_C", "m3/(s*Pa)", "rod end: bore opening conductance (default bore_opening_C)")
+            .positive()
+            .optional(),
+        P::scalar("rod_bore_opening_b", "1", "rod end: bore opening b (default bore_opening_b)")
+            .range(0, 0.99)
+            .optional(),
+        P::scalar("rod_bore_opening_ramp", "m", "rod end: bore opening ramp (default bore_opening_ramp)")
+            .positive()
+            .optional(),
+        P::table("rod_cushion_C_of_z", {"rev", "m3/(s*Pa)"}, "rod end: throttle C(z) (default cushion_C_of_z)",
+                 false),
+        P::scalar("rod_cushion_b0", "1", "rod end: b0 (default cushion_b0)").range(0, 0.99).optional(),
+        P::scalar("rod_cushion_b_slope", "1", "rod end: b slope (default cushion_b_slope)").range(-1, 1).optional(),
+        P::scalar("z_EC_rod", "rev", "rod end: throttle opening (default z_EC)").non_negative().optional(),
+        P::scalar("rod_check_C", "m3/(s*Pa)", "rod end: check valve C (default check_C)").non_negative().optional(),
+        P::scalar("rod_check_b", "1", "rod end: check valve b (default check_b)").range(0, 0.99).optional(),
+        P::scalar("rod_check_cracking", "Pa", "rod end: cracking pressure (default check_cracking)")
+            .non_negative()
+            .optional(),
+        P::scalar("rod_check_ramp", "Pa", "rod end: check valve ramp (default check_ramp)").positive().optional(),
         P::scalar("stop_stiffness", "N/m", "end stop stiffness", 1e7).positive(),
         P::scalar("stop_damping", "N*s/m", "end stop damping", 3000.0).non_negative(),
-        P::text("friction", friction_preset_names(), "friction coefficient set in the main stroke", "none"),
-        P::text("friction_cushion", friction_preset_names(),
-                "friction coefficient set in the cushioning zone (default: same as main stroke)", std::nullopt)
-            .optional(),
-        P::scalar("friction_scale", "1", "factor on the friction force", 1.0).non_negative(),
-        P::scalar("friction_v_reg", "m/s", "velocity scale of the tanh sign regularisation", 1e-4).positive(),
-        P::scalar("friction_v_eps", "m/s", "velocity below which |v| is rounded (|v|^a stays smooth)", 1e-6)
-            .positive(),
+        P::text("cushion_taps", {"no", "yes"},
+                "yes: ports EC (and EC_rod) tap the cushion volumes (sensors, leakage throttles); closed when "
+                "unconnected, but each adds an algebraic pressure to the step-size control, so they are off by "
+                "default",
+                "no"),
+        P::scalar("wall_alpha", "W/(m2*K)",
+                  "gas-to-wall heat transfer coefficient; 0: heat ports at gas temperature (external convection)", 0.0)
+            .non_negative(),
+    };
+    for (auto& f : FrictionLaw::parameters(true)) i.parameters.push_back(std::move(f));
+    const std::vector<ParameterSpec> initial = {
         P::scalar("x0", "m", "initial position; default: at rest against the stop at x = 0 at force equilibrium",
                   kNaN),
-        P::scalar("p0_A", "Pa", "initial rod-side pressure, absolute", 101325.0).positive(),
+        P::scalar("p0_A", "Pa", "initial rod-side pressure (with rod cushioning also ECr), absolute", 101325.0)
+            .positive(),
         P::scalar("p0_cap", "Pa", "initial cap-side pressure (cushion volume and channel), absolute", 101325.0)
             .positive(),
         P::scalar("T0", "K", "initial gas temperature", 293.15).positive(),
     };
-    i.ports = {{"A", Domain::pneumatic, Causality::acausal, "rod-side chamber port"},
-               {"B", Domain::pneumatic, Causality::acausal, "cap-side outlet (outflow channel)"},
+    i.parameters.insert(i.parameters.end(), initial.begin(), initial.end());
+    i.ports = {{"A", Domain::pneumatic, Causality::acausal, "rod-side chamber port (closed if unconnected)", true},
+               {"B", Domain::pneumatic, Causality::acausal, "cap-side outlet (outflow channel; closed if unconnected)",
+                true},
                {"flange", Domain::translational, Causality::acausal, "rod end; position = x"},
-               {"heat_A", Domain::thermal, Causality::acausal, "wall of the rod-side chamber", true},
-               {"heat_cap", Domain::thermal, Causality::acausal, "wall of the cushion volume", true}};
+               {"heat_A", Domain::thermal, Causality::acausal, "wall of the rod-side chamber (ECr with rod cushioning)",
+                true},
+               {"heat_cap", Domain::thermal, Causality::acausal, "wall of the cushion volume", true},
+               {"EC", Domain::pneumatic, Causality::acausal, "tapping into the cushion volume EC (closed if unconnected)",
+                true},
+               {"EC_rod", Domain::pneumatic, Causality::acausal,
+                "tapping into the rod cushion volume (rod cushioning only; closed if unconnected)", true}};
     i.variables = {{"m_A", "kg", "gas mass, rod side"},        {"U_A", "J", "internal energy, rod side"},
                    {"T_A", "K", "gas temperature, rod side"},   {"m_EC", "kg", "gas mass, cushion volume"},
                    {"U_EC", "J", "internal energy, cushion volume"}, {"T_EC", "K", "gas temperature, cushion volume"},
                    {"m_ch", "kg", "gas mass, channel"},         {"U_ch", "J", "internal energy, channel"},
-                   {"T_ch", "K", "gas temperature, channel"}};
+                   {"T_ch", "K", "gas temperature, channel"},
+                   {"m_EC_rod", "kg", "gas mass, rod cushion volume"},
+                   {"U_EC_rod", "J", "internal energy, rod cushion volume"},
+                   {"T_EC_rod", "K", "gas temperature, rod cushion volume"},
+                   {"z", "m", "LuGre bristle deflection", 1e-5}};
     i.observables = {{"x", "m", "piston position (0 extended, stroke at the cap)"},
                      {"v", "m/s", "piston velocity"},
                      {"p_A", "Pa", "rod-side pressure, absolute"},
@@ -108,21 +195,87 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
                      {"F_friction", "N", "friction force on the piston (+x)"},
                      {"F_stop", "N", "end stop force on the piston (+x)"},
                      {"bore_open", "1", "bore opening fraction"},
-                     {"m_flow_cushion", "kg/s", "flow cushion volume -> channel (bore, throttle, check valve)"}};
+                     {"m_flow_cushion", "kg/s", "flow cushion volume -> channel (bore, throttle, check valve)"},
+                     {"z", "m", "LuGre bristle deflection (0 for other friction models)"},
+                     {"F_pressure", "N", "pressure force on the piston (+x), ambient on the rod included"},
+                     {"H_A", "W", "enthalpy flow into the gas at port A"},
+                     {"H_B", "W", "enthalpy flow into the gas at port B"},
+                     {"H_EC", "W", "enthalpy flow into the gas at the tapping port EC"},
+                     {"P_pdV_A", "W", "p dV/dt of the rod-side chamber (port A's volume)"},
+                     {"P_pdV_EC", "W", "p dV/dt of the cushion volume"},
+                     {"P_pdV_ch", "W", "p dV/dt of the channel"},
+                     {"P_pdV", "W", "sum of p dV/dt over all chambers: power from the gas to the piston"},
+                     {"Q_A", "W", "heat flow into the gas through heat_A"},
+                     {"Q_cap", "W", "heat flow into the gas through heat_cap"},
+                     {"H_cushion", "W", "enthalpy flow cushion volume -> channel"},
+                     {"P_friction", "W", "friction power F_friction v (<= 0)"},
+                     {"P_stop", "W", "end stop power F_stop v"},
+                     {"E_stop", "J", "elastic energy stored in the end stops, k pen^2 / 2"},
+                     {"U_gas", "J", "internal energy of the gas in all chambers"},
+                     {"p_EC_rod", "Pa", "rod cushion volume pressure, absolute"},
+                     {"T_EC_rod", "K", "rod cushion volume gas temperature"},
+                     {"bore_open_rod", "1", "rod-end bore opening fraction"},
+                     {"m_flow_cushion_rod", "kg/s", "flow rod cushion volume -> rod-side channel"},
+                     {"H_EC_rod", "W", "enthalpy flow into the gas at the tapping port EC_rod"},
+                     {"P_pdV_EC_rod", "W", "p dV/dt of the rod cushion volume"},
+                     {"H_cushion_rod", "W", "enthalpy flow rod cushion volume -> rod-side channel"}};
     i.equations = {"mass balance A",       "energy balance A",    "gas law A",           "U_A = m c_v T",
                    "outflow temperature A", "mass balance EC",     "energy balance EC",   "U_EC = m c_v T",
                    "mass balance ch",      "energy balance ch",   "gas law ch",          "U_ch = m c_v T",
-                   "outflow temperature B", "force balance",       "wall temperature A",  "wall temperature cap"};
-    i.roots = 4;
+                   "outflow temperature B", "force balance",       "wall heat A",         "wall heat cap",
+                   "tap EC pressure",      "tap EC temperature",  "mass balance ECr",    "energy balance ECr",
+                   "U_ECr = m c_v T",      "tap EC_rod pressure", "tap EC_rod temperature", "bristle dynamics"};
+    i.roots = 6;
     return i;
   }
 
-  explicit CushionedCylinder(const Construction& c) : ComponentT(c) {
+  // Drops what this instance lacks: rod cushioning (port EC_rod, the ECr
+  // chamber, its observables and roots) and the LuGre state.
+  static ComponentInfo instance_info(ComponentInfo i, const ParameterValues& p) {
+    const bool rod = p.has("rod_plug_diameter");
+    const bool lugre = p.text("friction_model") == "lugre";
+    auto erase_names = [](auto& list, const std::vector<std::string>& names) {
+      std::erase_if(list, [&](const auto& item) {
+        return std::find(names.begin(), names.end(), item.name) != names.end();
+      });
+    };
+    auto erase_strings = [](std::vector<std::string>& list, const std::vector<std::string>& names) {
+      std::erase_if(list, [&](const std::string& s) { return std::find(names.begin(), names.end(), s) != names.end(); });
+    };
+    if (p.text("cushion_taps") != "yes") {
+      erase_names(i.ports, {"EC", "EC_rod"});
+      erase_strings(i.equations,
+                    {"tap EC pressure", "tap EC temperature", "tap EC_rod pressure", "tap EC_rod temperature"});
+    }
+    if (!rod) {
+      erase_names(i.ports, {"EC_rod"});
+      erase_names(i.variables, {"m_EC_rod", "U_EC_rod", "T_EC_rod"});
+      erase_names(i.observables, {"p_EC_rod", "T_EC_rod", "bore_open_rod", "m_flow_cushion_rod", "H_EC_rod",
+                                  "P_pdV_EC_rod", "H_cushion_rod"});
+      erase_strings(i.equations,
+                    {"mass balance ECr", "energy balance ECr", "U_ECr = m c_v T", "tap EC_rod pressure",
+                     "tap EC_rod temperature"});
+      i.roots = 4;
+    }
+    if (!lugre) {
+      erase_names(i.variables, {"z"});
+      erase_strings(i.equations, {"bristle dynamics"});
+    }
+    return i;
+  }
+
+  struct Cushion {
+    double C_bore, b_bore, ramp, C_cushion, b_cushion, C_check, b_check, crack, check_ramp;
+  };
+
+  explicit CushionedCylinder(const Construction& c) : ComponentT(c), friction_(FrictionLaw::from(c.params)) {
     const auto& p = c.params;
     A_B_ = kPi * p["bore"] * p["bore"] / 4;
     A_R_ = kPi * p["rod"] * p["rod"] / 4;
     A_A_ = A_B_ - A_R_;
     A_CP_ = kPi * p["plug_diameter"] * p["plug_diameter"] / 4;
+    bore_ = p["bore"];
+    rod_d_ = p["rod"];
     if (p["rod"] >= p["bore"]) throw ParameterError("rod", "rod diameter must be smaller than the bore");
     if (p["plug_diameter"] >= p["bore"])
       throw ParameterError("plug_diameter", "plug diameter must be smaller than the bore");
@@ -132,40 +285,64 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
     V0_A_ = p["dead_volume_rod_side"];
     V0_EC_ = p["dead_volume_cushion"];
     V0_ch_ = p["dead_volume_channel"];
-    C_bore_ = p["bore_opening_C"];
-    b_bore_ = p["bore_opening_b"];
-    ramp_ = p["bore_opening_ramp"];
-    const Table& t = p.table("cushion_C_of_z");
-    require_increasing(t, "cushion_C_of_z", "opening z");
-    double C_max = 0;
-    for (const auto& row : t) C_max = std::max(C_max, row[1]);
-    C_cushion_ = interpolate(t, p["z_EC"]);
-    b_cushion_ = p["cushion_b0"] + p["cushion_b_slope"] * (C_max > 0 ? C_cushion_ / C_max : 0.0);
-    if (!(b_cushion_ >= 0 && b_cushion_ < 0.999))
-      throw ParameterError("cushion_b_slope", "b of the cushion throttle leaves [0, 0.999) at this opening");
-    C_check_ = p["check_C"];
-    b_check_ = p["check_b"];
-    crack_ = p["check_cracking"];
-    check_ramp_ = p["check_ramp"];
+    cap_ = read_cushion(p, "");
     k_stop_ = p["stop_stiffness"];
     d_stop_ = p["stop_damping"];
-    friction_main_ = friction_presets().at(p.text("friction"));
-    friction_cushion_ = friction_presets().at(p.has("friction_cushion") ? p.text("friction_cushion")
-                                                                        : p.text("friction"));
-    friction_scale_ = p["friction_scale"];
-    v_reg_ = p["friction_v_reg"];
-    v_eps_ = p["friction_v_eps"];
+    wall_alpha_ = p["wall_alpha"];
+    friction_main_ = friction_.main;
+    friction_cushion_ = friction_.cushion;
+    friction_scale_ = friction_.scale;
+    v_reg_ = friction_.v_reg;
+    v_eps_ = friction_.v_eps;
     x0_ = p["x0"];
     p0_A_ = p["p0_A"];
     p0_cap_ = p["p0_cap"];
     T0_ = p["T0"];
+    rod_ = p.has("rod_plug_diameter");
+    taps_ = p.text("cushion_taps") == "yes";
+    A_colr_ = A_A_;
+    if (rod_) {
+      const double d = p["rod_plug_diameter"];
+      if (!(d > p["rod"] && d < p["bore"]))
+        throw ParameterError("rod_plug_diameter", "the rod-end sleeve diameter must lie between rod and bore");
+      for (const char* name : {"rod_cushion_length", "rod_dead_volume_cushion"})
+        if (!p.has(name))
+          throw ParameterError(name, std::string("rod-end cushioning (rod_plug_diameter given) needs ") + name);
+      A_CPr_ = kPi * d * d / 4;
+      A_colr_ = A_CPr_ - A_R_;
+      L_r_ = p["rod_cushion_length"];
+      V0_ECr_ = p["rod_dead_volume_cushion"];
+      rodc_ = read_cushion(p, "rod_");
+      if (L_ + cap_.ramp + L_r_ + rodc_.ramp >= stroke_)
+        throw ParameterError("rod_cushion_length",
+                             "the cushioning zones (with their bore-opening ramps) at both ends overlap");
+    }
+    z_var_ = rod_ ? 12 : 9;
   }
 
   // Everything derived from the local variables, for equations and outputs.
   template <class T>
   struct State {
-    T x, v, p_A, p_EC, p_ch, V_A, V_EC, V_ch, open, m_x, H_x, F_fric, F_stop;
+    T x, v, p_A, p_EC, p_ch, V_A, V_EC, V_ch, open, m_x, H_x, F_fric, F_stop, z;
+    T p_ECr, V_ECr, open_r, m_xr, H_xr;  // rod cushioning only
+    T F_pressure;
   };
+
+  template <class T>
+  T cushion_flow(const Cushion& c, const T& gap, const T& p_EC, const T& p_ch, const T& T_EC, const T& T_ch,
+                 const T& x, const GasModel& gas, T& open) const {
+    // Bore opening fraction: 1 in the main stroke, 0 once the plug engages.
+    const T z = gap / c.ramp;
+    open = min(max(z, T(0.0)), T(1.0));
+    // Bore opening and cushion throttle in parallel, the check valve
+    // (channel -> cushion volume) opening linearly above its cracking pressure.
+    const T m_bore = iso6358_mass_flow(p_EC, p_ch, T_EC, T_ch, T(c.C_bore * open), c.b_bore, 0.999, gas);
+    const T m_throttle =
+        iso6358_mass_flow(p_EC, p_ch, T_EC, T_ch, T(c.C_cushion + 0.0 * x), c.b_cushion, 0.999, gas);
+    const T check_open = min(max(T((p_ch - p_EC - c.crack) / c.check_ramp), T(0.0)), T(1.0));
+    const T m_check = iso6358_mass_flow(p_EC, p_ch, T_EC, T_ch, T(c.C_check * check_open), c.b_check, 0.999, gas);
+    return m_bore + m_throttle + m_check;
+  }
 
   template <class T>
   State<T> state(const Eval<T>& e) const {
@@ -176,35 +353,68 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
     s.x = fl.s;
     s.v = fl.v;
     s.p_A = A.p;
-    s.V_A = V0_A_ + A_A_ * s.x;
+    s.V_A = V0_A_ + A_colr_ * s.x;
     s.V_EC = V0_EC_ + (A_B_ - A_CP_) * (stroke_ - s.x);
     s.V_ch = V0_ch_ + A_CP_ * (stroke_ - s.x);
     const T& T_EC = e.var(kTEC);
     const T& T_ch = e.var(kTch);
     s.p_EC = e.var(kMEC) * gas.R * T_EC / s.V_EC;
     s.p_ch = e.var(kMch) * gas.R * T_ch / s.V_ch;
-    // Bore opening fraction: 1 in the main stroke, 0 once the plug engages.
-    const T z = (stroke_ - L_ - s.x) / ramp_;
-    s.open = min(max(z, T(0.0)), T(1.0));
-    // Flows from EC to ch: bore opening and cushion throttle in parallel, the
-    // check valve (ch -> EC) opening linearly above its cracking pressure.
-    const T m_bore = iso6358_mass_flow(s.p_EC, s.p_ch, T_EC, T_ch, T(C_bore_ * s.open), b_bore_, 0.999, gas);
-    const T m_throttle = iso6358_mass_flow(s.p_EC, s.p_ch, T_EC, T_ch, T(C_cushion_ + 0.0 * s.x), b_cushion_,
-                                           0.999, gas);
-    const T check_open = min(max(T((s.p_ch - s.p_EC - crack_) / check_ramp_), T(0.0)), T(1.0));
-    const T m_check = iso6358_mass_flow(s.p_EC, s.p_ch, T_EC, T_ch, T(C_check_ * check_open), b_check_, 0.999, gas);
-    s.m_x = m_bore + m_throttle + m_check;
-    s.H_x = enthalpy_inflow(s.m_x, T_EC, T_ch, gas);  // EC -> ch
-    // Friction: main-stroke and cushioning-zone sets blended by the opening.
-    const T F_main = friction_force(friction_main_, s.v, s.p_A, s.p_EC, s.p_EC, gas.p_ambient, v_reg_, v_eps_);
-    const T F_cush = friction_force(friction_cushion_, s.v, s.p_A, s.p_EC, s.p_EC, gas.p_ambient, v_reg_, v_eps_);
-    s.F_fric = friction_scale_ * (s.open * F_main + (1.0 - s.open) * F_cush);
+    const T gap = stroke_ - L_ - s.x;
+    s.m_x = cushion_flow(cap_, gap, s.p_EC, s.p_ch, T_EC, T_ch, s.x, gas, s.open);  // EC -> ch
+    s.H_x = enthalpy_inflow(s.m_x, T_EC, T_ch, gas);
+    const T zero = 0.0 * s.x;
+    s.z = friction_.has_state() ? e.var(z_var_) : zero;
+    if (rod_) {
+      const T& T_ECr = e.var(kTECr);
+      s.V_ECr = V0_ECr_ + (A_B_ - A_CPr_) * s.x;
+      s.p_ECr = e.var(kMECr) * gas.R * T_ECr / s.V_ECr;
+      const T gap_r = s.x - L_r_;
+      s.m_xr = cushion_flow(rodc_, gap_r, s.p_ECr, s.p_A, T_ECr, e.var(kTA), s.x, gas, s.open_r);  // ECr -> A
+      s.H_xr = enthalpy_inflow(s.m_xr, T_ECr, e.var(kTA), gas);
+    } else {
+      s.p_ECr = s.V_ECr = s.m_xr = s.H_xr = zero;
+      s.open_r = zero + 1.0;
+    }
+    // Friction.
+    if (friction_.model == FrictionModel::preset) {
+      const T p_rod = rod_ ? s.p_ECr : s.p_A;  // the rod-side pressure at the piston
+      // Main-stroke and cushioning-zone sets blended by the openings.
+      const T F_main = friction_force(friction_main_, s.v, p_rod, s.p_EC, s.p_EC, gas.p_ambient, v_reg_, v_eps_);
+      const T F_cush = friction_force(friction_cushion_, s.v, p_rod, s.p_EC, s.p_EC, gas.p_ambient, v_reg_, v_eps_);
+      if (!rod_) {
+        s.F_fric = friction_scale_ * (s.open * F_main + (1.0 - s.open) * F_cush);
+      } else {
+        const T F_cush_r =
+            friction_force(friction_cushion_, s.v, p_rod, s.p_EC, s.p_ECr, gas.p_ambient, v_reg_, v_eps_);
+        s.F_fric = friction_scale_ *
+                   (s.open * s.open_r * F_main + (1.0 - s.open) * F_cush + (1.0 - s.open_r) * F_cush_r);
+      }
+    } else {
+      s.F_fric = friction_.force(friction_main_, s.v, s.z, zero);
+    }
     // Elastic end stops (never pulling).
     const T pen_rod = -s.x, pen_cap = s.x - stroke_;
     const T F_rod = select(value(pen_rod) > 0, max(T(k_stop_ * pen_rod - d_stop_ * s.v), T(0.0)), T(0.0 * s.x));
     const T F_cap = select(value(pen_cap) > 0, max(T(k_stop_ * pen_cap + d_stop_ * s.v), T(0.0)), T(0.0 * s.x));
     s.F_stop = F_rod - F_cap;
+    if (!rod_)
+      s.F_pressure = s.p_A * A_A_ + gas.p_ambient * A_R_ - s.p_EC * (A_B_ - A_CP_) - s.p_ch * A_CP_;
+    else
+      s.F_pressure = s.p_A * A_colr_ + s.p_ECr * (A_B_ - A_CPr_) + gas.p_ambient * A_R_ - s.p_EC * (A_B_ - A_CP_) -
+                     s.p_ch * A_CP_;
     return s;
+  }
+
+  // Wall areas of the rod-side and cap-side chambers (wall_alpha > 0).
+  template <class T>
+  T wall_area_rod(const T& x) const {
+    const double V0 = V0_A_ + (rod_ ? V0_ECr_ : 0.0);
+    return 2.0 * A_A_ + kPi * (bore_ + rod_d_) * (x + V0 / A_A_);
+  }
+  template <class T>
+  T wall_area_cap(const T& x) const {
+    return 2.0 * A_B_ + kPi * bore_ * ((stroke_ - x) + (V0_EC_ + V0_ch_) / A_B_);
   }
 
   template <class T>
@@ -212,21 +422,35 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
     const GasModel& gas = e.gas();
     const auto A = e.gas_port(kA);
     const auto B = e.gas_port(kB);
+
     const auto fl = e.flange(kFlange);
     const auto hA = e.heat_port(kHeatA);
     const auto hC = e.heat_port(kHeatCap);
     const State<T> s = state(e);
     for (int k : {kMA, kTA, kMEC, kTEC, kMch, kTch}) e.reject_unless_positive(e.var(k));
-    // Rod-side chamber A (volume grows with x).
+    // Rod-side chamber A (volume grows with x); with rod cushioning the
+    // rod-side channel, fed from ECr, adiabatic.
     const T H_A = enthalpy_inflow(A.m_flow, A.T_in, e.var(kTA), gas);
-    r[0] = e.der(kMA) - A.m_flow;
-    r[1] = e.der(kUA) - H_A + A.p * A_A_ * s.v - hA.Q;
+    if (!rod_) {
+      r[0] = e.der(kMA) - A.m_flow;
+      r[1] = e.der(kUA) - H_A + A.p * A_A_ * s.v - hA.Q;
+    } else {
+      r[0] = e.der(kMA) - A.m_flow - s.m_xr;
+      r[1] = e.der(kUA) - H_A - s.H_xr + A.p * A_colr_ * s.v;
+    }
     r[2] = A.p - e.var(kMA) * gas.R * e.var(kTA) / s.V_A;  // solved for p (scaling)
     r[3] = e.var(kTA) - e.var(kUA) / (e.var(kMA) * gas.cv());
     r[4] = A.T_out - e.var(kTA);
-    // Cushion annulus EC (volume shrinks with x).
-    r[5] = e.der(kMEC) + s.m_x;
-    r[6] = e.der(kUEC) + s.H_x - s.p_EC * (A_B_ - A_CP_) * s.v - hC.Q;
+    // Cushion annulus EC (volume shrinks with x), tapped by port EC.
+    if (!taps_) {
+      r[5] = e.der(kMEC) + s.m_x;
+      r[6] = e.der(kUEC) + s.H_x - s.p_EC * (A_B_ - A_CP_) * s.v - hC.Q;
+    } else {
+      const auto tap = e.gas_port(kTapEC);
+      const T H_tap = enthalpy_inflow(tap.m_flow, tap.T_in, e.var(kTEC), gas);
+      r[5] = e.der(kMEC) + s.m_x - tap.m_flow;
+      r[6] = e.der(kUEC) + s.H_x - H_tap - s.p_EC * (A_B_ - A_CP_) * s.v - hC.Q;
+    }
     r[7] = e.var(kTEC) - e.var(kUEC) / (e.var(kMEC) * gas.cv());
     // Channel ch: inflow from EC, outflow through port B.
     const T H_B = enthalpy_inflow(B.m_flow, B.T_in, e.var(kTch), gas);
@@ -236,14 +460,56 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
     r[11] = e.var(kTch) - e.var(kUch) / (e.var(kMch) * gas.cv());
     r[12] = B.T_out - e.var(kTch);
     // Force balance: the flange pulls on the cylinder with f = -F.
-    const T F = s.p_A * A_A_ + gas.p_ambient * A_R_ - s.p_EC * (A_B_ - A_CP_) - s.p_ch * A_CP_ + s.F_fric + s.F_stop;
+    const T F = s.F_pressure + s.F_fric + s.F_stop;
     r[13] = fl.f + F;
-    r[14] = hA.T - e.var(kTA);
-    r[15] = hC.T - e.var(kTEC);
+    // Walls: at the gas temperature, or exchanging heat with the gas.
+    const T& T_gas_A = rod_ ? e.var(kTECr) : e.var(kTA);
+    if (wall_alpha_ > 0) {
+      r[14] = hA.Q - wall_alpha_ * wall_area_rod(s.x) * (hA.T - T_gas_A);
+      r[15] = hC.Q - wall_alpha_ * wall_area_cap(s.x) * (hC.T - e.var(kTEC));
+    } else {
+      r[14] = hA.T - T_gas_A;
+      r[15] = hC.T - e.var(kTEC);
+    }
+    int row = 16;
+    if (taps_) {
+      const auto tap = e.gas_port(kTapEC);
+      r[row++] = tap.p - s.p_EC;
+      r[row++] = tap.T_out - e.var(kTEC);
+    }
+    if (rod_) {
+      e.reject_unless_positive(e.var(kMECr));
+      e.reject_unless_positive(e.var(kTECr));
+      // Rod cushion annulus ECr (volume grows with x), tapped by EC_rod.
+      T m_tap = 0.0 * s.x, H_tap = 0.0 * s.x;
+      if (taps_) {
+        const auto tapr = e.gas_port(kTapECr);
+        m_tap = tapr.m_flow;
+        H_tap = enthalpy_inflow(tapr.m_flow, tapr.T_in, e.var(kTECr), gas);
+      }
+      r[row++] = e.der(kMECr) + s.m_xr - m_tap;
+      r[row++] = e.der(kUECr) + s.H_xr - H_tap + s.p_ECr * (A_B_ - A_CPr_) * s.v - hA.Q;
+      r[row++] = e.var(kTECr) - e.var(kUECr) / (e.var(kMECr) * gas.cv());
+      if (taps_) {
+        const auto tapr = e.gas_port(kTapECr);
+        r[row++] = tapr.p - s.p_ECr;
+        r[row++] = tapr.T_out - e.var(kTECr);
+      }
+    }
+    if (friction_.has_state()) r[row++] = e.der(z_var_) - friction_.lugre_zdot(s.v, e.var(z_var_));
   }
 
   double observe(int k, const Eval<double>& e) const override {
     const State<double> s = state(e);
+    const GasModel& gas = e.gas();
+    auto inflow = [&](int port, int var) {
+      const auto g = e.gas_port(port);
+      return enthalpy_inflow(g.m_flow, g.T_in, e.var(var), gas);
+    };
+    const double pdV_A = s.p_A * A_colr_ * s.v;
+    const double pdV_EC = -s.p_EC * (A_B_ - A_CP_) * s.v;
+    const double pdV_ch = -s.p_ch * A_CP_ * s.v;
+    const double pdV_ECr = rod_ ? s.p_ECr * (A_B_ - A_CPr_) * s.v : 0.0;
     switch (k) {
       case kX: return s.x;
       case kV: return s.v;
@@ -257,16 +523,46 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
       case kFstop: return s.F_stop;
       case kOpen: return s.open;
       case kCushionFlow: return s.m_x;
+      case kZ: return s.z;
+      case kFpressure: return s.F_pressure;
+      case kHA: return inflow(kA, kTA);
+      case kHB: return inflow(kB, kTch);
+      case kHEC: return taps_ ? inflow(kTapEC, kTEC) : 0.0;
+      case kPdVA: return pdV_A;
+      case kPdVEC: return pdV_EC;
+      case kPdVch: return pdV_ch;
+      case kPdV: return pdV_A + pdV_EC + pdV_ch + pdV_ECr;
+      case kQA: return e.heat_port(kHeatA).Q;
+      case kQcap: return e.heat_port(kHeatCap).Q;
+      case kHcushion: return s.H_x;
+      case kPfric: return s.F_fric * s.v;
+      case kPstop: return s.F_stop * s.v;
+      case kEstop: {
+        const double pen = s.x < 0 ? -s.x : s.x > stroke_ ? s.x - stroke_ : 0.0;
+        return 0.5 * k_stop_ * pen * pen;
+      }
+      case kUgas: return e.var(kUA) + e.var(kUEC) + e.var(kUch) + (rod_ ? e.var(kUECr) : 0.0);
+      case kPECr: return s.p_ECr;
+      case kTECro: return e.var(kTECr);
+      case kOpenR: return s.open_r;
+      case kCushionFlowR: return s.m_xr;
+      case kHECr: return taps_ ? inflow(kTapECr, kTECr) : 0.0;
+      case kPdVECr: return pdV_ECr;
+      case kHcushionR: return s.H_xr;
     }
     return 0.0;
   }
 
   void roots(const Eval<double>& e, double* g) const override {
     const double x = e.flange(kFlange).s;
-    g[kRampStart] = x - (stroke_ - L_ - ramp_);
+    g[kRampStart] = x - (stroke_ - L_ - cap_.ramp);
     g[kCushionEntry] = x - (stroke_ - L_);
     g[kStopRod] = x;
     g[kStopCap] = x - stroke_;
+    if (rod_) {
+      g[kRodRampStart] = x - (L_r_ + rodc_.ramp);
+      g[kRodCushionEntry] = x - L_r_;
+    }
   }
 
   // Every root is a kink of the residual (opening ramp ends, stop contact):
@@ -279,6 +575,10 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
       case kCushionEntry: return {true, dir > 0 ? "enters the cushioning zone" + vs : "leaves the cushioning zone" + vs};
       case kStopRod: return {true, dir < 0 ? "contact with the rod-end stop" + vs : "leaves the rod-end stop" + vs};
       case kStopCap: return {true, dir > 0 ? "impact on the cap-end stop" + vs : "leaves the cap-end stop" + vs};
+      case kRodRampStart:
+        return {true, dir < 0 ? "rod-end bore opening starts to close" + vs : "rod-end bore opening fully open" + vs};
+      case kRodCushionEntry:
+        return {true, dir < 0 ? "enters the rod-end cushioning zone" + vs : "leaves the rod-end cushioning zone" + vs};
     }
     return {};
   }
@@ -292,7 +592,7 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
       x = F < 0 ? F / k_stop_ : 0.0;
     }
     sv.fix_position(kFlange, x);
-    const double V_A = V0_A_ + A_A_ * x;
+    const double V_A = V0_A_ + A_colr_ * x;
     const double V_EC = V0_EC_ + (A_B_ - A_CP_) * (stroke_ - x);
     const double V_ch = V0_ch_ + A_CP_ * (stroke_ - x);
     auto gas_state = [&](int m, int U, int Tv, double p, double V) {
@@ -306,19 +606,58 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
     gas_state(kMch, kUch, kTch, p0_cap_, V_ch);
     sv.guess_pressure(kA, p0_A_);
     sv.guess_pressure(kB, p0_cap_);
+    if (taps_) sv.guess_pressure(kTapEC, p0_cap_);
     sv.guess_temperature(kA, T0_);
     sv.guess_temperature(kB, T0_);
+    if (taps_) sv.guess_temperature(kTapEC, T0_);
     sv.guess_temperature(kHeatA, T0_);
     sv.guess_temperature(kHeatCap, T0_);
+    if (rod_) {
+      gas_state(kMECr, kUECr, kTECr, p0_A_, V0_ECr_ + (A_B_ - A_CPr_) * x);
+      if (taps_) {
+        sv.guess_pressure(kTapECr, p0_A_);
+        sv.guess_temperature(kTapECr, T0_);
+      }
+    }
+    if (friction_.has_state()) sv.fix_var(z_var_, 0.0);
   }
 
  private:
-  double A_B_, A_R_, A_A_, A_CP_, stroke_, L_, V0_A_, V0_EC_, V0_ch_;
-  double C_bore_, b_bore_, ramp_, C_cushion_, b_cushion_, C_check_, b_check_, crack_, check_ramp_;
-  double k_stop_, d_stop_;
+  // The throttle/valve parameters of one end; the rod end's default to the
+  // cap end's.
+  static Cushion read_cushion(const ParameterValues& p, const std::string& prefix) {
+    auto get = [&](const std::string& name) { return p.has(prefix + name) ? p[prefix + name] : p[name]; };
+    Cushion c;
+    c.C_bore = get("bore_opening_C");
+    c.b_bore = get("bore_opening_b");
+    c.ramp = get("bore_opening_ramp");
+    const std::string table = p.has(prefix + "cushion_C_of_z") ? prefix + "cushion_C_of_z" : "cushion_C_of_z";
+    const Table& t = p.table(table);
+    require_increasing(t, table, "opening z");
+    double C_max = 0;
+    for (const auto& row : t) C_max = std::max(C_max, row[1]);
+    const std::string z_name = prefix.empty() ? "z_EC" : (p.has("z_EC_rod") ? "z_EC_rod" : "z_EC");
+    c.C_cushion = interpolate(t, p[z_name]);
+    c.b_cushion = get("cushion_b0") + get("cushion_b_slope") * (C_max > 0 ? c.C_cushion / C_max : 0.0);
+    if (!(c.b_cushion >= 0 && c.b_cushion < 0.999))
+      throw ParameterError(prefix + "cushion_b_slope", "b of the cushion throttle leaves [0, 0.999) at this opening");
+    c.C_check = get("check_C");
+    c.b_check = get("check_b");
+    c.crack = get("check_cracking");
+    c.check_ramp = get("check_ramp");
+    return c;
+  }
+
+  double A_B_, A_R_, A_A_, A_CP_, bore_, rod_d_, stroke_, L_, V0_A_, V0_EC_, V0_ch_;
+  Cushion cap_{}, rodc_{};
+  double k_stop_, d_stop_, wall_alpha_;
+  FrictionLaw friction_;
   FrictionCoefficients friction_main_, friction_cushion_;
   double friction_scale_, v_reg_, v_eps_;
   double x0_, p0_A_, p0_cap_, T0_;
+  bool rod_ = false, taps_ = false;
+  double A_CPr_ = 0, A_colr_ = 0, L_r_ = 0, V0_ECr_ = 0;
+  int z_var_ = 9;
 };
 
 void register_cushioned_cylinder(Registry& r) { r.add<CushionedCylinder>(); }

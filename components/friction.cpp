@@ -45,6 +45,60 @@ const std::map<std::string, FrictionCoefficients>& friction_presets() {
   return presets;
 }
 
+std::vector<ParameterSpec> FrictionLaw::parameters(bool with_cushion) {
+  using P = ParameterSpec;
+  std::vector<ParameterSpec> out = {
+      P::text("friction_model", {"preset", "coulomb_viscous", "lugre"},
+              "friction law: preset (seed 000 eq. 4/7/8 set named by 'friction'), coulomb_viscous "
+              "(F_C tanh(v/v_reg) + d v), lugre (seed 002 eq. 8, bristle state z)",
+              "preset"),
+      P::text("friction", friction_preset_names(), "coefficient set of seed 000 (friction_model preset)", "none"),
+  };
+  if (with_cushion)
+    out.push_back(P::text("friction_cushion", friction_preset_names(),
+                          "preset set in the cushioning zone (default: same as main stroke)", std::nullopt)
+                      .optional());
+  const std::vector<ParameterSpec> rest = {
+      P::scalar("friction_scale", "1", "factor on the friction force", 1.0).non_negative(),
+      P::scalar("friction_v_reg", "m/s", "velocity scale of the tanh sign regularisation", 1e-4).positive(),
+      P::scalar("friction_v_eps", "m/s", "velocity below which |v| is rounded (|v|^a stays smooth)", 1e-6)
+          .positive(),
+      P::scalar("friction_FC", "N", "Coulomb force F_C (coulomb_viscous, lugre)", 0.0).non_negative(),
+      P::scalar("friction_FS", "N", "static (break-away) force F_S (lugre); default F_C").non_negative().optional(),
+      P::scalar("friction_vS", "m/s", "Stribeck velocity v_S (lugre)", 1e-3).positive(),
+      P::scalar("friction_sigma0", "N/m", "bristle stiffness sigma0 (lugre)", 1e5).positive(),
+      P::scalar("friction_sigma1", "N*s/m", "bristle damping sigma1 (lugre)", 300.0).non_negative(),
+      P::scalar("friction_viscous", "N*s/m", "viscous coefficient: d (coulomb_viscous), sigma2 (lugre)", 0.0)
+          .non_negative(),
+  };
+  out.insert(out.end(), rest.begin(), rest.end());
+  return out;
+}
+
+FrictionLaw FrictionLaw::from(const ParameterValues& p) {
+  FrictionLaw f;
+  const std::string& m = p.text("friction_model");
+  f.model = m == "lugre" ? FrictionModel::lugre
+            : m == "coulomb_viscous" ? FrictionModel::coulomb_viscous
+                                     : FrictionModel::preset;
+  f.main = friction_presets().at(p.text("friction"));
+  f.cushion = friction_presets().at(p.has("friction_cushion") ? p.text("friction_cushion") : p.text("friction"));
+  if (f.model != FrictionModel::preset && p.has("friction_cushion"))
+    throw ParameterError("friction_cushion", "friction_cushion selects a preset; it needs friction_model: preset");
+  f.scale = p["friction_scale"];
+  f.v_reg = p["friction_v_reg"];
+  f.v_eps = p["friction_v_eps"];
+  f.FC = p["friction_FC"];
+  f.FS = p.has("friction_FS") ? p["friction_FS"] : f.FC;
+  f.vS = p["friction_vS"];
+  f.sigma0 = p["friction_sigma0"];
+  f.sigma1 = p["friction_sigma1"];
+  f.viscous = p["friction_viscous"];
+  if (f.model == FrictionModel::lugre && !(f.FC > 0))
+    throw ParameterError("friction_FC", "LuGre friction needs a Coulomb force friction_FC > 0 (g(v) > 0)");
+  return f;
+}
+
 std::vector<std::string> friction_preset_names() {
   std::vector<std::string> names;
   for (const auto& [k, v] : friction_presets()) names.push_back(k);

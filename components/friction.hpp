@@ -13,6 +13,21 @@
 // The force opposes the motion: F = -sign(v) |F|, with sign regularised as
 // tanh(v / v_reg) and |v| as sqrt(v^2 + v_eps^2) so that |v|^a (a < 1) has a
 // finite slope at rest. Both scales are parameters of the cylinder.
+//
+// FrictionLaw (below) selects one of three models per component
+// (`friction_model`), with the same parameters wherever it is used (the
+// cylinder, friction_element):
+//   preset:          the eq. 4/7/8 coefficient set named by `friction`;
+//   coulomb_viscous: F = -(F_C tanh(v / v_reg) + d v), no sticking (a creep
+//                    of speed ~ F v_reg / F_C under a force F < F_C);
+//   lugre:           seed 002 eq. 8 (Canudas de Wit et al. 1995), with the
+//                    bristle deflection z as an internal state:
+//                      dz/dt = v - sigma0 |v| z / g(v),
+//                      g(v) = F_C + (F_S - F_C) exp(-(v / v_S)^2),
+//                      F = -(sigma0 z + sigma1 dz/dt + sigma2 v).
+//                    Below the break-away force the body sticks: z deflects
+//                    elastically (stiffness sigma0) and v decays to ~0.
+//                    (The paper prints "F_s - F" in g; F_s - F_c is meant.)
 #pragma once
 
 #include <map>
@@ -20,6 +35,7 @@
 #include <vector>
 
 #include "framework/core/smooth.hpp"
+#include "framework/model/component.hpp"
 
 namespace pneumo::components {
 
@@ -61,5 +77,51 @@ T friction_force(const FrictionCoefficients& c, const T& v, const T& p_A, const 
   const T abs_v = smooth_abs(v, v_eps);
   return -smooth_sign(v, v_reg) * friction_magnitude(c, abs_v, p_bar);
 }
+
+enum class FrictionModel { preset, coulomb_viscous, lugre };
+
+// One friction law with its parameters, read from the `friction_*`
+// parameters of a component (FrictionLaw::parameters() lists them).
+struct FrictionLaw {
+  FrictionModel model = FrictionModel::preset;
+  FrictionCoefficients main, cushion;  // preset: main stroke and cushioning zone
+  double scale = 1.0;                  // factor on the force
+  double v_reg = 1e-4, v_eps = 1e-6;   // m/s: tanh sign scale, |v| rounding
+  double FC = 0, FS = 0, vS = 1e-3;    // N, N, m/s (coulomb_viscous, lugre)
+  double sigma0 = 1e5, sigma1 = 300;   // N/m, N*s/m (lugre)
+  double viscous = 0;                  // N*s/m: d (coulomb_viscous), sigma2 (lugre)
+
+  // The friction_* parameter specs. `with_cushion` adds friction_cushion
+  // (cylinders).
+  static std::vector<ParameterSpec> parameters(bool with_cushion);
+  // Throws ParameterError for inconsistent values.
+  static FrictionLaw from(const ParameterValues& p);
+
+  bool has_state() const { return model == FrictionModel::lugre; }
+
+  // LuGre bristle dynamics dz/dt at speed v and deflection z.
+  template <class T>
+  T lugre_zdot(const T& v, const T& z) const {
+    const T r = v / vS;
+    const T g = FC + (FS - FC) * exp(-(r * r));
+    return v - sigma0 * smooth_abs(v, v_eps) * z / g;
+  }
+
+  // Friction force (on the moving body, opposing v) of the models without
+  // pressure dependence; for `preset` p_bar is the pressure of the set's
+  // FrictionPressure kind (bar, gauge or difference) and `c` the set.
+  template <class T>
+  T force(const FrictionCoefficients& c, const T& v, const T& z, const T& p_bar) const {
+    switch (model) {
+      case FrictionModel::preset:
+        return -scale * smooth_sign(v, v_reg) * friction_magnitude(c, smooth_abs(v, v_eps), p_bar);
+      case FrictionModel::coulomb_viscous:
+        return -scale * (FC * smooth_sign(v, v_reg) + viscous * v);
+      case FrictionModel::lugre:
+        return -scale * (sigma0 * z + sigma1 * lugre_zdot(v, z) + viscous * v);
+    }
+    return 0.0 * v;
+  }
+};
 
 }  // namespace pneumo::components

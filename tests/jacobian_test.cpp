@@ -156,6 +156,98 @@ connections:
        read_file(std::string(PNEUMO_SOURCE_DIR) + "/netlists/cushion_rig.yaml"),
        0.05,
        {"cushioned_cylinder"}},
+      {"friction_laws",
+       // A signal-driven velocity source pulling a LuGre body through a
+       // spring-damper (stick-slip under way at the second point), a body on
+       // Coulomb + viscous friction and a pressure-dependent eq. 8 preset.
+       R"(
+components:
+  speed:  {type: signal_source, kind: ramp, value: 0.05, height: 0.1, t_start: 0, duration: 0.5}
+  drive:  {type: velocity_source, s0: 0.01 m}
+  spring: {type: spring_damper, k: 200 N/m, d: 0.5 N*s/m, L0: 0.01 m}
+  body:   {type: translational_mass, m: 0.5 kg, s0: 0, v0: 0}
+  lugre:  {type: friction_element, friction_model: lugre, friction_FC: 1 N, friction_FS: 1.5 N,
+           friction_vS: 0.01 m/s, friction_sigma0: 1e4 N/m, friction_sigma1: 50 N*s/m, friction_viscous: 0.4 N*s/m}
+  push:   {type: force_source, F: 3 N}
+  slider: {type: translational_mass, m: 0.2 kg, s0: 0, v0: 0.1 m/s}
+  visc:   {type: friction_element, friction_model: coulomb_viscous, friction_FC: 1 N, friction_viscous: 5 N*s/m,
+           friction_v_reg: 1e-3 m/s}
+  drag:   {type: force_source, F: 30 N}
+  sled:   {type: translational_mass, m: 1 kg, s0: 0, v0: 0.05 m/s}
+  eq8:    {type: friction_element, friction: annexC_pAB+, friction_pressure: 4 bar}
+connections:
+  - [speed.y, drive.v_in]
+  - [drive.flange, spring.b]
+  - [spring.a, body.flange, lugre.flange]
+  - [push.flange, slider.flange, visc.flange]
+  - [drag.flange, sled.flange, eq8.flange]
+)",
+       0.3,
+       {"friction_element", "spring_damper", "velocity_source"}},
+      {"cylinder_rod_cushion_lugre",
+       // The rig mirrored: an extending stroke into the rod-end cushion
+       // (second point inside it), LuGre friction, gas-to-wall heat with
+       // wall masses, and a leakage throttle on the cap-side cushion tap.
+       R"(
+components:
+  supply:    {type: pressure_source, p: 5 bar, T: 293.15 K}
+  valve_cmd: {type: signal_source, kind: step, value: 0, height: 1, t_start: 10 ms}
+  valve_PB:  {type: iso6358_throttle, C: 1.0 dm3/(s*bar), b: 0.30}
+  valve_AR:  {type: iso6358_throttle, C: 1.0 dm3/(s*bar), b: 0.30}
+  meter_out: {type: iso6358_throttle, C: 0.35 dm3/(s*bar), b: 0.45}
+  line_A:    {type: volume, V: 1.0e-6 m3, p0: 5 bar, T0: 293.15 K}
+  exhaust:   {type: atmosphere}
+  leak:      {type: iso6358_throttle, C: 0.002 dm3/(s*bar), b: 0.3}
+  leak_out:  {type: atmosphere}
+  load:      {type: translational_mass, m: 3.7 kg}
+  wall_A:    {type: thermal_mass, C: 30 J/K, T0: 300 K}
+  wall_cap:  {type: thermal_mass, C: 30 J/K, T0: 300 K}
+  cylinder:
+    type: cushioned_cylinder
+    bore: 32 mm
+    rod: 12 mm
+    stroke: 100 mm
+    plug_diameter: 16 mm
+    cushion_length: 20 mm
+    dead_volume_rod_side: 1.0e-6 m3
+    dead_volume_cushion: 2.0e-6 m3
+    dead_volume_channel: 1.0e-6 m3
+    bore_opening_C: 5.0 dm3/(s*bar)
+    cushion_C_of_z: [[0, 0], [1.5, 0.12 dm3/(s*bar)], [6, 0.4 dm3/(s*bar)]]
+    cushion_b_slope: 0.45
+    z_EC: 1.5
+    rod_plug_diameter: 18 mm
+    rod_cushion_length: 20 mm
+    rod_dead_volume_cushion: 2.0e-6 m3
+    z_EC_rod: 2
+    cushion_taps: yes
+    wall_alpha: 200 W/(m2*K)
+    friction_model: lugre
+    friction_FC: 20 N
+    friction_FS: 30 N
+    friction_vS: 0.004 m/s
+    friction_sigma0: 1e6 N/m
+    friction_sigma1: 1000 N*s/m
+    friction_viscous: 100 N*s/m
+    x0: 99.5 mm
+    p0_A: 5 bar
+    p0_cap: 101325 Pa
+connections:
+  - [supply.port, valve_PB.a]
+  - [valve_PB.b, cylinder.B]
+  - [cylinder.A, meter_out.a]
+  - [meter_out.b, line_A.port]
+  - [line_A.port, valve_AR.a]
+  - [valve_AR.b, exhaust.port]
+  - [valve_cmd.y, valve_PB.opening, valve_AR.opening]
+  - [cylinder.flange, load.flange]
+  - [cylinder.EC, leak.a]
+  - [leak.b, leak_out.port]
+  - [cylinder.heat_A, wall_A.port]
+  - [cylinder.heat_cap, wall_cap.port]
+)",
+       0.25,
+       {"cushioned_cylinder"}},
   };
   return list;
 }

@@ -4,11 +4,11 @@
 
 namespace pneumo {
 
-void Registry::add(ComponentInfo info, Factory make) {
+void Registry::add(ComponentInfo info, Factory make, Refine refine) {
   const std::string type = info.type;
   if (entries_.count(type))
     throw std::invalid_argument("component type '" + type + "' is already registered");
-  entries_.emplace(type, Entry{std::make_shared<const ComponentInfo>(std::move(info)), std::move(make)});
+  entries_.emplace(type, Entry{std::make_shared<const ComponentInfo>(std::move(info)), std::move(make), std::move(refine)});
 }
 
 const Registry::Entry* Registry::find(const std::string& type) const {

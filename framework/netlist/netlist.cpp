@@ -593,6 +593,7 @@ Circuit elaborate(const Netlist& nl, const Registry& registry) {
       }
     }
     try {
+      k.info = entry->instance_info(k.params);
       circuit.components.push_back(entry->make(k));
     } catch (const ParameterError& e) {
       SourceLocation w = c.where;
