@@ -237,7 +237,7 @@ connections:
   - [valve_PB.b, cylinder.B]
   - [cylinder.A, meter_out.a]
   - [meter_out.b, line_A.port]
-  - [line_A.port, valve_AR.a]
+  - [line_A.port_b, valve_AR.a]
   - [valve_AR.b, exhaust.port]
   - [valve_cmd.y, valve_PB.opening, valve_AR.opening]
   - [cylinder.flange, load.flange]

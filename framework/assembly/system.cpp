@@ -50,10 +50,10 @@ class FlowSumBlock final : public Block {
 };
 
 // inStream for a node of three or more pneumatic ports: the temperature of
-// the gas arriving at any port is the mix of what the ports deliver,
+// the gas arriving at port i is the mix of what the other ports deliver,
 // weighted by their smoothed outflows into the node (Modelica's stream
 // connector rule, regularised so that it stays defined at zero flow).
-// vars: [T_mix, (m_flow_j, T_out_j) for every port j]
+// vars: [T_in_i, (m_flow_j, T_out_j) for j != i]
 class StreamMixBlock final : public Block {
  public:
   template <class T>
@@ -329,28 +329,24 @@ void System::build_nodes() {
       t_in_slot(ports[0]) = port_vars[{ports[1].component, ports[1].port}].t_out;
       t_in_slot(ports[1]) = port_vars[{ports[0].component, ports[0].port}].t_out;
     } else {
-      // Ideal mixing at a node of three or more ports: one mixed temperature,
-      // the flow-weighted mean of what every port delivers, is what each
-      // port receives. The supplying ports are included in their own mix (the
-      // value only matters to a port while it receives, and then its own
-      // weight is negligible); excluding them left the inStream of a
-      // supplying port as the ratio of two vanishing weights, which made the
-      // Newton iteration fail when a third port's flow hovered near zero.
-      auto mix = std::make_unique<StreamMixBlock>();
-      const int t_mix = new_var("T_mix at " + node_text(c, ports), c.gas.T_ambient, 0, 300.0);
-      mix->vars.push_back(t_mix);
-      for (const auto& port : ports) {
-        t_in_slot(port) = t_mix;
-        const auto& pv = port_vars[{port.component, port.port}];
-        mix->vars.push_back(pv.flow);
-        mix->vars.push_back(pv.t_out);
+      for (std::size_t i = 0; i < ports.size(); ++i) {
+        auto mix = std::make_unique<StreamMixBlock>();
+        const int t_in = new_var(c.port_name(ports[i]) + ".T_in", c.gas.T_ambient, 0, 300.0);
+        t_in_slot(ports[i]) = t_in;
+        mix->vars.push_back(t_in);
+        for (std::size_t j = 0; j < ports.size(); ++j) {
+          if (j == i) continue;
+          const auto& pv = port_vars[{ports[j].component, ports[j].port}];
+          mix->vars.push_back(pv.flow);
+          mix->vars.push_back(pv.t_out);
+        }
+        mix->label = "stream mixing at " + node_text(c, ports);
+        mix->where = node_where[ni];
+        mix->row0 = row++;
+        mix->n_rows = 1;
+        mix->row_names.push_back("inStream(T) of " + c.port_name(ports[i]) + " at " + node_text(c, ports));
+        blocks_.push_back(std::move(mix));
       }
-      mix->label = "stream mixing at " + node_text(c, ports);
-      mix->where = node_where[ni];
-      mix->row0 = row++;
-      mix->n_rows = 1;
-      mix->row_names.push_back("mixed temperature at " + node_text(c, ports));
-      blocks_.push_back(std::move(mix));
     }
   }
   // Node balances and signal defaults.
