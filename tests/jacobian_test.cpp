@@ -1,7 +1,8 @@
 // The AD Jacobian against finite differences, for every built-in component.
 //
-// What is checked, per circuit, at the consistent initial point and at a
-// point after a short simulation (flows, heat and motion under way):
+// What is checked (testkit::check_jacobian), per circuit, at the consistent
+// initial point and at a point after a short simulation (flows, heat and
+// motion under way):
 //  * System::jacobian_parts (forward-mode AD: dF/dy and dF/dy') equals
 //    central finite differences of System::residual;
 //  * System::jacobian(cj), the matrix IDA factorises, equals
@@ -34,6 +35,7 @@
 #include "components/builtin.hpp"
 #include "framework/netlist/netlist.hpp"
 #include "framework/run/run.hpp"
+#include "framework/testkit/testkit.hpp"
 
 namespace pneumo {
 namespace {
@@ -260,116 +262,10 @@ TEST(Jacobian, RegistryIsCovered) {
                                      << "' has no Jacobian test circuit; add a snippet to tests/jacobian_test.cpp";
 }
 
-struct Point {
-  double t;
-  std::vector<double> y, yp, modes;
-};
-
-// Central-difference check of jacobian_parts at one point. Returns the worst
-// relative error (in the scaled sense of the header) and counts skipped kinks.
-struct Comparison {
-  double worst = 0.0;
-  std::string worst_where;
-  int compared = 0;
-  int kinks = 0;
-};
-
-void compare_part(const System& sys, const Point& pt, bool wrt_yp, const std::vector<double>& J_ad, Comparison& out) {
-  const int n = sys.size();
-  std::vector<double> scale(n);
-  const auto& base = wrt_yp ? pt.yp : pt.y;
-  for (int j = 0; j < n; ++j) scale[j] = std::max(std::abs(base[j]), sys.nominal()[j]);
-
-  // J_fd column by column, plus the one-sided differences for the kink test.
-  std::vector<double> Jc(static_cast<std::size_t>(n) * n), Jf(Jc.size()), Jb(Jc.size());
-  std::vector<double> F0(n), Fp(n), Fm(n);
-  sys.residual(pt.t, pt.y.data(), pt.yp.data(), F0.data());
-  for (int j = 0; j < n; ++j) {
-    const double h = 1e-6 * scale[j];
-    std::vector<double> y = pt.y, yp = pt.yp;
-    auto& v = wrt_yp ? yp : y;
-    v[j] = base[j] + h;
-    sys.residual(pt.t, y.data(), yp.data(), Fp.data());
-    v[j] = base[j] - h;
-    sys.residual(pt.t, y.data(), yp.data(), Fm.data());
-    for (int i = 0; i < n; ++i) {
-      const std::size_t k = static_cast<std::size_t>(i) * n + j;
-      Jc[k] = (Fp[i] - Fm[i]) / (2 * h);
-      Jf[k] = (Fp[i] - F0[i]) / h;
-      Jb[k] = (F0[i] - Fm[i]) / h;
-    }
-  }
-  for (int i = 0; i < n; ++i) {
-    double row = 0.0;
-    for (int j = 0; j < n; ++j) {
-      const std::size_t k = static_cast<std::size_t>(i) * n + j;
-      row = std::max({row, std::abs(J_ad[k]) * scale[j], std::abs(Jc[k]) * scale[j]});
-    }
-    if (row == 0.0) continue;
-    for (int j = 0; j < n; ++j) {
-      const std::size_t k = static_cast<std::size_t>(i) * n + j;
-      const double ad = J_ad[k] * scale[j], fd = Jc[k] * scale[j];
-      if (ad == 0.0 && fd == 0.0) continue;
-      const double denom = std::max(std::abs(ad), 1e-3 * row);
-      // Forward and backward differences disagree by much more than their
-      // O(h) truncation error: a kink lies inside the stencil.
-      if (std::abs(Jf[k] - Jb[k]) * scale[j] > 1e-4 * denom) {
-        ++out.kinks;
-        continue;
-      }
-      ++out.compared;
-      const double err = std::abs(ad - fd) / denom;
-      if (err > out.worst) {
-        out.worst = err;
-        std::ostringstream w;
-        w << (wrt_yp ? "dF/dy'" : "dF/dy") << " row " << i << ", " << (wrt_yp ? "der(" : "")
-          << sys.variable_names()[j] << (wrt_yp ? ")" : "") << ": AD " << J_ad[k] << ", FD " << Jc[k];
-        out.worst_where = w.str();
-      }
-    }
-  }
-}
-
-// jacobian(cj) against the two parts on the pattern; zero outside it.
-void check_assembled(System& sys, const Point& pt, const std::vector<double>& dFdy, const std::vector<double>& dFdyp) {
-  const int n = sys.size();
-  const double cj = 1e3;  // 1/h for a 1 ms step
-  std::vector<double> values(sys.nnz());
-  sys.jacobian(pt.t, pt.y.data(), pt.yp.data(), cj, values.data());
-  EXPECT_EQ(sys.pattern_misses(), 0) << "AD found dependencies outside the structural pattern";
-  std::vector<char> in_pattern(static_cast<std::size_t>(n) * n, 0);
-  std::vector<double> row_max(n, 0.0);
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < n; ++j) {
-      const std::size_t k = static_cast<std::size_t>(i) * n + j;
-      row_max[i] = std::max(row_max[i], std::abs(dFdy[k] + cj * dFdyp[k]));
-    }
-  int mismatches = 0;
-  for (int c = 0; c < n; ++c)
-    for (long p = sys.col_ptr()[c]; p < sys.col_ptr()[c + 1]; ++p) {
-      const int r = static_cast<int>(sys.row_idx()[p]);
-      const std::size_t k = static_cast<std::size_t>(r) * n + c;
-      in_pattern[k] = 1;
-      const double expected = dFdy[k] + cj * dFdyp[k];
-      if (std::abs(values[p] - expected) > 1e-12 * std::max(row_max[r], 1e-300) && mismatches++ < 5)
-        ADD_FAILURE() << "jacobian(cj) at (" << r << ", " << sys.variable_names()[c] << ") = " << values[p]
-                      << ", dF/dy + cj dF/dy' = " << expected;
-    }
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < n; ++j) {
-      const std::size_t k = static_cast<std::size_t>(i) * n + j;
-      if (!in_pattern[k] && (dFdy[k] != 0.0 || dFdyp[k] != 0.0) && mismatches++ < 5)
-        ADD_FAILURE() << "nonzero derivative outside the sparsity pattern: row " << i << ", "
-                      << sys.variable_names()[j];
-      // A variable whose derivative appears must be flagged differential for IDASetId.
-      if (dFdyp[k] != 0.0) {
-        EXPECT_EQ(sys.differential()[j], 1.0) << sys.variable_names()[j] << " appears differentiated";
-      }
-    }
-}
-
 class JacobianOf : public ::testing::TestWithParam<Snippet> {};
 
+// The comparison itself is the component authors' test kit
+// (framework/testkit), so that out-of-tree components get the same check.
 TEST_P(JacobianOf, MatchesFiniteDifferencesAndPattern) {
   const Snippet& snippet = GetParam();
   const Netlist netlist = parse_netlist(snippet.netlist, snippet.name + ".yaml");
@@ -380,33 +276,8 @@ TEST_P(JacobianOf, MatchesFiniteDifferencesAndPattern) {
     EXPECT_TRUE(present) << "snippet " << snippet.name << " claims to cover '" << type << "' but has none";
   }
   System sys(std::move(circuit));
-
-  std::vector<Point> points;
-  SolverOptions opt = solver_options(netlist.simulation);  // the netlist's tolerances
-  opt.t_end = opt.t_start + snippet.t_short;
-  opt.output_interval = snippet.t_short;
-  const SolverResult res = simulate(sys, opt, [&](double t, const double* y, const double* yp) {
-    points.push_back({t, std::vector<double>(y, y + sys.size()), std::vector<double>(yp, yp + sys.size()),
-                      sys.modes()});
-  });
-  ASSERT_TRUE(res.ok) << res.message;
-  ASSERT_GE(points.size(), 2u);
-  const Point* checks[] = {&points.front(), &points.back()};
-
-  for (const Point* pt : checks) {
-    SCOPED_TRACE("t = " + std::to_string(pt->t));
-    sys.modes() = pt->modes;
-    std::vector<double> dFdy, dFdyp;
-    sys.jacobian_parts(pt->t, pt->y.data(), pt->yp.data(), dFdy, dFdyp);
-    Comparison cmp;
-    compare_part(sys, *pt, false, dFdy, cmp);
-    compare_part(sys, *pt, true, dFdyp, cmp);
-    EXPECT_LT(cmp.worst, 1e-5) << "worst: " << cmp.worst_where;
-    EXPECT_GT(cmp.compared, sys.size()) << "too few entries compared";
-    EXPECT_LE(cmp.kinks, std::max(2, cmp.compared / 50)) << cmp.kinks << " entries at kinks, " << cmp.compared
-                                                         << " compared";
-    check_assembled(sys, *pt, dFdy, dFdyp);
-  }
+  for (const auto& check : testkit::check_jacobian(sys, solver_options(netlist.simulation), snippet.t_short))
+    EXPECT_TRUE(check.passed(1e-5)) << check.report();
 }
 
 INSTANTIATE_TEST_SUITE_P(Builtin, JacobianOf, ::testing::ValuesIn(snippets()),

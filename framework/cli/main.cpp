@@ -13,14 +13,16 @@
 
 #include "components/builtin.hpp"
 #include "framework/core/units.hpp"
+#include "framework/core/version.hpp"
 #include "framework/io/plot.hpp"
+#include "framework/plugin/plugin.hpp"
 #include "framework/run/run.hpp"
 
 namespace {
 
 using namespace pneumo;
 
-const char* kVersion = "0.1.0";
+const char* kVersion = PNEUMO_VERSION_STRING;
 
 void print_component(const ComponentInfo& info, std::ostream& out) {
   out << info.type << "\n  " << info.description << "\n";
@@ -92,7 +94,8 @@ int simulate_command(const std::string& netlist_path, const std::vector<std::str
     std::filesystem::create_directories(parent);
 
   const auto t0 = std::chrono::steady_clock::now();
-  System system(elaborate(nl, builtin_registry()));  // all input errors surface here
+  const Registry registry = registry_with_plugins(builtin_registry(), nl);  // the netlist's `plugins:`
+  System system(elaborate(nl, registry));  // all input errors surface here
   if (nl.outputs.empty())
     throw InputError(SourceLocation{nl.file, 1, 1}, "", "",
                      "the netlist has no 'outputs:' (name: component.variable); nothing would be written");
@@ -164,6 +167,9 @@ int main(int argc, char** argv) {
   auto* comps = app.add_subcommand("components", "list component types, or show one");
   std::string type;
   comps->add_option("type", type, "component type to describe");
+  std::vector<std::string> comp_plugins;
+  comps->add_option("--plugin", comp_plugins, "also list the types of this component plugin (shared library)")
+      ->allow_extra_args(false);
 
   try {
     app.parse(argc, argv);
@@ -181,7 +187,9 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (*comps) {
-      const Registry& reg = builtin_registry();
+      Registry reg = builtin_registry();
+      TypeOrigins origins;
+      for (const auto& p : comp_plugins) load_plugin(p, SourceLocation{"--plugin", 0, 0}, reg, origins);
       if (!type.empty()) {
         const auto* entry = reg.find(type);
         if (!entry) {

@@ -46,6 +46,9 @@ class Registry {
   }
   // Throws std::invalid_argument if the type name is taken.
   void add(ComponentInfo info, Factory make, Refine refine = {});
+  // Adds an entry of another registry as it is (plugins register into a
+  // staging registry first). Throws std::invalid_argument if the type is taken.
+  void add_entry(const Entry& entry);
 
   const Entry* find(const std::string& type) const;
   std::vector<std::string> types() const;

@@ -276,7 +276,7 @@ Netlist parse_netlist(const std::string& text, const std::string& file_name) {
   nl.parameters_where = SourceLocation{file_name, 1, 1};
   static const std::vector<std::string> kTopKeys{"title",      "description", "gas",     "ambient",
                                                  "parameters", "components",  "connections", "outputs",
-                                                 "simulation"};
+                                                 "simulation", "plugins"};
   std::map<std::string, YAML::Node> top;
   std::map<std::string, YAML::Node> top_key;
   for (const auto& e : r.mapping(root, "the netlist")) {
@@ -401,6 +401,19 @@ Netlist parse_netlist(const std::string& text, const std::string& file_name) {
       for (const auto& item : os) add(r.scalar_text(item, "", "", "an output"), item, item);
     } else {
       r.fail(os, "", "", "outputs must be a mapping name: component.variable");
+    }
+  }
+  if (top.count("plugins") && !top["plugins"].IsNull()) {
+    const auto& ps = top["plugins"];
+    if (!ps.IsSequence()) r.fail(ps, "", "", "plugins must be a list of shared libraries, e.g. [build/my_components.so]");
+    for (const auto& item : ps) {
+      PluginDecl d;
+      d.path = r.scalar_text(item, "", "", "a plugin path");
+      if (d.path.empty()) r.fail(item, "", "", "a plugin path must not be empty");
+      const std::filesystem::path p(d.path);
+      d.resolved = (p.is_absolute() ? p : std::filesystem::path(file_name).parent_path() / p).lexically_normal().string();
+      d.where = r.at(item);
+      nl.plugins.push_back(std::move(d));
     }
   }
   if (top.count("simulation") && !top["simulation"].IsNull()) {

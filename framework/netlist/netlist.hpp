@@ -12,6 +12,7 @@
 //     - [source.port, valve.a]
 //   outputs:    {p: tank.p, T: tank.T}
 //   simulation: {t_end: 2 s, rtol: 1e-6, atol: 1e-6, output_interval: 1 ms}
+//   plugins:    [build/my_components.so]  # relative to the netlist's directory
 #pragma once
 
 #include <yaml-cpp/yaml.h>
@@ -65,6 +66,13 @@ struct OutputDecl {
   SourceLocation where;
 };
 
+// A component plugin the netlist loads (framework/plugin/plugin.hpp).
+struct PluginDecl {
+  std::string path;      // as written
+  std::string resolved;  // relative paths taken from the netlist's directory
+  SourceLocation where;
+};
+
 struct SimulationSettings {
   double t_start = 0.0;
   double t_end = 1.0;
@@ -85,6 +93,7 @@ struct Netlist {
   std::vector<OutputDecl> outputs;
   SimulationSettings simulation;
   SourceLocation parameters_where;  // of the 'parameters:' key; file:1:1 if there is none
+  std::vector<PluginDecl> plugins;
 
   const TopParameter* parameter(const std::string& name) const;
 };
