@@ -16,6 +16,15 @@ void register_builtin_components(Registry& r) {
   register_force_source(r);
   register_signal_source(r);
   register_cushioned_cylinder(r);
+  register_nozzle(r);
+  register_hose(r);
+  register_check_valve(r);
+  register_one_way_flow_control(r);
+  register_directional_valve_32(r);
+  register_directional_valve_52(r);
+  register_pressure_sensor(r);
+  register_temperature_sensor(r);
+  register_position_sensor(r);
 }
 
 const Registry& builtin_registry() {

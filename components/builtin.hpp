@@ -18,6 +18,15 @@ void register_fixed_position(Registry& r);
 void register_force_source(Registry& r);
 void register_signal_source(Registry& r);
 void register_cushioned_cylinder(Registry& r);
+void register_nozzle(Registry& r);
+void register_hose(Registry& r);
+void register_check_valve(Registry& r);
+void register_one_way_flow_control(Registry& r);
+void register_directional_valve_32(Registry& r);
+void register_directional_valve_52(Registry& r);
+void register_pressure_sensor(Registry& r);
+void register_temperature_sensor(Registry& r);
+void register_position_sensor(Registry& r);
 
 }  // namespace pneumo::components
 

@@ -38,6 +38,7 @@ void print_component(const ComponentInfo& info, std::ostream& out) {
     if (p.kind == ParameterKind::scalar) {
       out << " [" << p.unit << "]";
       if (p.default_value) out << " default " << *p.default_value;
+      else if (p.is_optional) out << " optional";
       else out << " required";
       out << ", " << p.range_text();
     } else if (p.kind == ParameterKind::table) {
