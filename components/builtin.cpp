@@ -19,6 +19,15 @@ void register_builtin_components(Registry& r) {
   register_friction_element(r);
   register_spring_damper(r);
   register_velocity_source(r);
+  register_nozzle(r);
+  register_hose(r);
+  register_check_valve(r);
+  register_one_way_flow_control(r);
+  register_directional_valve_32(r);
+  register_directional_valve_52(r);
+  register_pressure_sensor(r);
+  register_temperature_sensor(r);
+  register_position_sensor(r);
 }
 
 const Registry& builtin_registry() {

@@ -21,6 +21,15 @@ void register_cushioned_cylinder(Registry& r);
 void register_friction_element(Registry& r);
 void register_spring_damper(Registry& r);
 void register_velocity_source(Registry& r);
+void register_nozzle(Registry& r);
+void register_hose(Registry& r);
+void register_check_valve(Registry& r);
+void register_one_way_flow_control(Registry& r);
+void register_directional_valve_32(Registry& r);
+void register_directional_valve_52(Registry& r);
+void register_pressure_sensor(Registry& r);
+void register_temperature_sensor(Registry& r);
+void register_position_sensor(Registry& r);
 
 }  // namespace pneumo::components
 

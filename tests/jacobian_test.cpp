@@ -250,6 +250,90 @@ connections:
 )",
        0.25,
        {"cushioned_cylinder"}},
+      {"orifices",
+       // A nozzle opening by a ramp fills a tank that a check valve relieves
+       // (partly open: the smoothstep) and that exchanges gas with a second
+       // tank through a one-way flow control (throttled, later free through
+       // its check valve).
+       R"(
+components:
+  source: {type: pressure_source, p: 6 bar, T: 300 K}
+  open:   {type: signal_source, kind: ramp, value: 0.5, height: 0.5, t_start: 0, duration: 0.1}
+  jet:    {type: nozzle, d: 0.5 mm, Cd: 0.9}
+  tank:   {type: volume, V: 0.2 L, p0: 2 bar}
+  relief: {type: check_valve, C: 0.2 dm3/(s*bar), cracking: 0.5 bar, ramp: 1 bar}
+  air:    {type: atmosphere}
+  owfc:   {type: one_way_flow_control, C: 0.05 dm3/(s*bar), check_C: 0.5 dm3/(s*bar)}
+  tank2:  {type: volume, V: 0.1 L, p0: 4 bar, T0: 320 K}
+connections:
+  - [source.port, jet.a]
+  - [open.y, jet.opening]
+  - [jet.b, tank.port, relief.in, owfc.b]
+  - [relief.out, air.port]
+  - [owfc.a, tank2.port]
+)",
+       0.05,
+       {"nozzle", "check_valve", "one_way_flow_control"}},
+      {"directional_valves",
+       // A 5/2 valve on a schedule, checked mid-stroke (all four paths partly
+       // open), a 3/2 valve driven by a command signal, and a position sensor.
+       R"(
+components:
+  supply: {type: pressure_source, p: 6 bar}
+  v52:    {type: directional_valve_52, C: 0.3 dm3/(s*bar), t_switch_time: 20 ms, schedule: [[0.01, 1]]}
+  ca:     {type: volume, V: 0.1 L, p0: 1.5 bar}
+  cb:     {type: volume, V: 0.1 L, p0: 3 bar}
+  air:    {type: atmosphere}
+  cmd:    {type: signal_source, kind: step, value: 0, height: 1, t_start: 0.005}
+  v32:    {type: directional_valve_32, C: 0.2 dm3/(s*bar), t_switch_time: 10 ms}
+  air2:   {type: atmosphere}
+  cc:     {type: volume, V: 0.1 L, p0: 2 bar}
+  body:   {type: translational_mass, m: 1 kg, s0: 0 m, v0: 0.5 m/s}
+  push:   {type: force_source, F: 2 N}
+  pos:    {type: position_sensor, tau: 10 ms}
+connections:
+  - [supply.port, v52.P, v32.P]
+  - [v52.A, ca.port]
+  - [v52.B, cb.port]
+  - [v52.R, air.port]
+  - [v32.R, air2.port]
+  - [cmd.y, v32.command]
+  - [v32.A, cc.port]
+  - [body.flange, push.flange, pos.flange]
+)",
+       0.02,
+       {"directional_valve_52", "directional_valve_32", "position_sensor"}},
+      {"hoses",
+       // A hose with inertia (4 segments) filling a tank that vents through a
+       // hose without inertia; dead-end stubs, each fed by its own source,
+       // with a temperature and a pressure sensor at their closed ends (all
+       // two-port nodes: the framework's stream mixing at a port with nearly
+       // zero flow has a curvature on the scale m_flow_small that central
+       // differences cannot follow, and the stubs' flows die out).
+       R"(
+components:
+  source: {type: pressure_source, p: 3 bar}
+  feed1:  {type: pressure_source, p: 2 bar, T: 320 K}
+  feed2:  {type: pressure_source, p: 4 bar, T: 300 K}
+  stub:   {type: hose, D: 4 mm, L: 0.5 m, segments: 2}
+  ts:     {type: temperature_sensor, tau: 15 ms, T0: 293.15 K}
+  stub2:  {type: hose, D: 3 mm, L: 0.3 m, segments: 1}
+  ps:     {type: pressure_sensor, tau: 5 ms, p0: 1 bar}
+  line:   {type: hose, D: 4 mm, L: 3 m, segments: 4, inertia: true}
+  tank:   {type: volume, V: 0.1 L}
+  vent:   {type: hose, D: 2 mm, L: 1 m, segments: 2}
+  air:    {type: atmosphere}
+connections:
+  - [source.port, line.a]
+  - [feed1.port, stub.a]
+  - [feed2.port, stub2.a]
+  - [stub.b, ts.port]
+  - [stub2.b, ps.port]
+  - [line.b, tank.port, vent.a]
+  - [vent.b, air.port]
+)",
+       0.02,
+       {"hose", "temperature_sensor", "pressure_sensor"}},
   };
   return list;
 }

@@ -677,6 +677,15 @@ Circuit elaborate(const Netlist& nl, const Registry& registry) {
           probe.unit = unit_names[i];
         }
     }
+    // A signal port by its name alone (source.y for the value of port y).
+    if (probe.index < 0) {
+      const int port = comp.info().port_index(o.quantity);
+      if (port >= 0 && comp.info().ports[port].domain == Domain::signal) {
+        probe.kind = Probe::Kind::local;
+        probe.index = comp.port_offset(port);
+        probe.unit = local_variable_units(comp)[probe.index];
+      }
+    }
     if (probe.index < 0) {
       std::vector<std::string> valid;
       for (const auto& ob : obs) valid.push_back(ob.name);

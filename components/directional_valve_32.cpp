@@ -1,0 +1,67 @@
+// 3/2 directional valve: actuated (state 1) P -> A, at rest (state 0)
+// A -> R; each path an ISO 6358 resistance; the spool follows a schedule or
+// a command signal with a linear ramp (valve_command.hpp).
+#include "components/builtin.hpp"
+#include "components/valve_command.hpp"
+
+namespace pneumo::components {
+
+class DirectionalValve32 final : public ComponentT<DirectionalValve32> {
+ public:
+  enum Port { kP, kA, kR, kCommand };
+  enum Var { kX };
+
+  static ComponentInfo describe() {
+    ComponentInfo i;
+    i.type = "directional_valve_32";
+    i.description =
+        "3/2 directional valve: state 1 P -> A, state 0 A -> R; each path ISO 6358 (C, b); the spool ramps linearly "
+        "over t_switch_time after each command from 'schedule' (time events) or the signal 'command'.";
+    i.parameters = ValvePath::parameters({"PA", "AR"});
+    for (auto& p : SpoolDrive::parameters()) i.parameters.push_back(std::move(p));
+    i.ports = {{"P", Domain::pneumatic, Causality::acausal, "supply"},
+               {"A", Domain::pneumatic, Causality::acausal, "working port"},
+               {"R", Domain::pneumatic, Causality::acausal, "exhaust"},
+               {"command", Domain::signal, Causality::input, "commanded state 0/1 (overrides 'schedule')", true, 0.0}};
+    i.variables = {{"x", "1", "spool position: 0 rest (A -> R open), 1 actuated (P -> A open)", 1.0}};
+    i.modes = 1;  // schedule events passed
+    i.equations = {
+        "flow at P",   "flow at A", "flow at R", "temperature out of P", "temperature out of A", "temperature out of R",
+        "spool motion"};
+    return i;
+  }
+
+  explicit DirectionalValve32(const Construction& c)
+      : ComponentT(c), PA_(c.params, "PA"), AR_(c.params, "AR"), spool_(c.params, "P->A", "A->R") {}
+
+  template <class T>
+  void equations(const Eval<T>& e, T* r) const {
+    const auto P = e.gas_port(kP), A = e.gas_port(kA), R = e.gas_port(kR);
+    const GasModel& gas = e.gas();
+    const T x = SpoolDrive::actuated_fraction(e, kX);
+    const T m_PA = PA_.mass_flow(P, A, x, gas);
+    const T m_AR = AR_.mass_flow(A, R, T(1.0 - x), gas);
+    r[0] = P.m_flow - m_PA;
+    r[1] = A.m_flow - (m_AR - m_PA);
+    r[2] = R.m_flow + m_AR;
+    r[3] = P.T_out - A.T_in;
+    r[4] = A.T_out - mix_temperature(m_PA, P.T_in, T(-m_AR), R.T_in, gas);
+    r[5] = R.T_out - A.T_in;
+    r[6] = spool_.equation(e, kCommand, kX);
+  }
+
+  void start(StartValues& s, const GasModel&) const override { s.fix_var(kX, spool_.x0()); }
+  void initial_modes(double* modes) const override { modes[0] = 0.0; }
+  std::vector<double> time_events() const override { return spool_.time_events(); }
+  EventResult on_event(const Eval<double>& e, double* modes, EventKind, int, int) const override {
+    return spool_.on_event(e, modes, kCommand);
+  }
+
+ private:
+  ValvePath PA_, AR_;
+  SpoolDrive spool_;
+};
+
+void register_directional_valve_32(Registry& r) { r.add<DirectionalValve32>(); }
+
+}  // namespace pneumo::components

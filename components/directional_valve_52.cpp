@@ -1,0 +1,85 @@
+// 5/2 directional valve: actuated (state 1) P -> A and B -> R, at rest
+// (state 0) P -> B and A -> R (both exhausts joined in R); each path an
+// ISO 6358 resistance; the spool follows a schedule or a command signal with
+// a linear ramp (valve_command.hpp).
+#include "components/builtin.hpp"
+#include "components/valve_command.hpp"
+
+namespace pneumo::components {
+
+class DirectionalValve52 final : public ComponentT<DirectionalValve52> {
+ public:
+  enum Port { kP, kA, kB, kR, kCommand };
+  enum Var { kX };
+
+  static ComponentInfo describe() {
+    ComponentInfo i;
+    i.type = "directional_valve_52";
+    i.description =
+        "5/2 directional valve: state 1 P -> A and B -> R, state 0 P -> B and A -> R (exhausts joined in R); each "
+        "path ISO 6358 (C, b); the spool ramps linearly over t_switch_time after each command from 'schedule' (time "
+        "events) or the signal 'command'.";
+    i.parameters = ValvePath::parameters({"PA", "PB", "AR", "BR"});
+    for (auto& p : SpoolDrive::parameters()) i.parameters.push_back(std::move(p));
+    i.ports = {{"P", Domain::pneumatic, Causality::acausal, "supply"},
+               {"A", Domain::pneumatic, Causality::acausal, "working port A"},
+               {"B", Domain::pneumatic, Causality::acausal, "working port B"},
+               {"R", Domain::pneumatic, Causality::acausal, "exhaust (of A and B)"},
+               {"command", Domain::signal, Causality::input, "commanded state 0/1 (overrides 'schedule')", true, 0.0}};
+    i.variables = {{"x", "1", "spool position: 0 rest (P -> B, A -> R), 1 actuated (P -> A, B -> R)", 1.0}};
+    i.modes = 1;  // schedule events passed
+    i.equations = {"flow at P",
+                   "flow at A",
+                   "flow at B",
+                   "flow at R",
+                   "temperature out of P",
+                   "temperature out of A",
+                   "temperature out of B",
+                   "temperature out of R",
+                   "spool motion"};
+    return i;
+  }
+
+  explicit DirectionalValve52(const Construction& c)
+      : ComponentT(c),
+        PA_(c.params, "PA"),
+        PB_(c.params, "PB"),
+        AR_(c.params, "AR"),
+        BR_(c.params, "BR"),
+        spool_(c.params, "P->A, B->R", "P->B, A->R") {}
+
+  template <class T>
+  void equations(const Eval<T>& e, T* r) const {
+    const auto P = e.gas_port(kP), A = e.gas_port(kA), B = e.gas_port(kB), R = e.gas_port(kR);
+    const GasModel& gas = e.gas();
+    const T x = SpoolDrive::actuated_fraction(e, kX);
+    const T m_PA = PA_.mass_flow(P, A, x, gas);
+    const T m_BR = BR_.mass_flow(B, R, x, gas);
+    const T m_PB = PB_.mass_flow(P, B, T(1.0 - x), gas);
+    const T m_AR = AR_.mass_flow(A, R, T(1.0 - x), gas);
+    r[0] = P.m_flow - (m_PA + m_PB);
+    r[1] = A.m_flow - (m_AR - m_PA);
+    r[2] = B.m_flow - (m_BR - m_PB);
+    r[3] = R.m_flow + m_AR + m_BR;
+    r[4] = P.T_out - mix_temperature(T(-m_PA), A.T_in, T(-m_PB), B.T_in, gas);
+    r[5] = A.T_out - mix_temperature(m_PA, P.T_in, T(-m_AR), R.T_in, gas);
+    r[6] = B.T_out - mix_temperature(m_PB, P.T_in, T(-m_BR), R.T_in, gas);
+    r[7] = R.T_out - mix_temperature(m_AR, A.T_in, m_BR, B.T_in, gas);
+    r[8] = spool_.equation(e, kCommand, kX);
+  }
+
+  void start(StartValues& s, const GasModel&) const override { s.fix_var(kX, spool_.x0()); }
+  void initial_modes(double* modes) const override { modes[0] = 0.0; }
+  std::vector<double> time_events() const override { return spool_.time_events(); }
+  EventResult on_event(const Eval<double>& e, double* modes, EventKind, int, int) const override {
+    return spool_.on_event(e, modes, kCommand);
+  }
+
+ private:
+  ValvePath PA_, PB_, AR_, BR_;
+  SpoolDrive spool_;
+};
+
+void register_directional_valve_52(Registry& r) { r.add<DirectionalValve52>(); }
+
+}  // namespace pneumo::components

@@ -1,0 +1,165 @@
+// Spool drive shared by the directional valves (directional_valve_32,
+// directional_valve_52): the spool position x (0 = rest, 1 = actuated) is a
+// differential state moving toward the commanded state at the constant rate
+// 1/t_switch_time, i.e. a LINEAR opening ramp lasting t_switch_time for a
+// full stroke (a command arriving mid-ramp turns the spool around at once).
+//
+// The command comes from either
+//  * the netlist: `schedule: [[t0, state], [t1, state], ...]` (states 0/1).
+//    The whole spool trajectory is then known in advance: every command
+//    instant and every end of a ramp (a kink of x) is a time event, the
+//    discrete mode counts the events passed and fixes dx/dt between them, so
+//    no integration step straddles a switch and the event log shows each one;
+//  * a signal input `command` (0/1, e.g. from a controller): then
+//    t_switch_time dx/dt = tanh((u - x)/0.01), the same ramp rate, ending in an
+//    exponential approach over 1 % of the stroke so the right-hand side stays
+//    smooth (switching instants are then not known in advance and are not
+//    events). A connected `command` port overrides the schedule.
+// The paths are ISO 6358 resistances whose conductance is scaled by the open
+// fraction of the path, x for the paths open when actuated and 1 - x for the
+// others (linear crossover, so at mid-stroke all paths are half open).
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "components/iso6358_flow.hpp"
+#include "framework/model/component.hpp"
+
+namespace pneumo::components {
+
+class SpoolDrive {
+ public:
+  static std::vector<ParameterSpec> parameters() {
+    return {
+        ParameterSpec::scalar("t_switch_time", "s", "duration of a full spool stroke (linear opening ramp)", 0.01)
+            .positive(),
+        ParameterSpec::scalar("initial", "1", "spool state before the first command: 0 rest, 1 actuated", 0.0)
+            .range(0.0, 1.0),
+        ParameterSpec::table("schedule", {"s", "1"},
+                             "[[t, state], ...]: at time t the spool is commanded to state 0 or 1 (increasing t)",
+                             false),
+    };
+  }
+
+  SpoolDrive(const ParameterValues& p, std::string actuated, std::string rest)
+      : t_switch_(p["t_switch_time"]), x0_(p["initial"]) {
+    if (x0_ != 0.0 && x0_ != 1.0) throw ParameterError("initial", "initial must be 0 or 1");
+    if (!p.has("schedule")) return;
+    const Table& rows = p.table("schedule");
+    require_increasing(rows, "schedule", "times");
+    double x = x0_;
+    for (std::size_t i = 0; i < rows.size(); ++i) {
+      const double t = rows[i][0], s = rows[i][1];
+      if (s != 0.0 && s != 1.0) {
+        std::ostringstream msg;
+        msg << "schedule states must be 0 or 1, row " << i + 1 << " has " << s;
+        throw ParameterError("schedule", msg.str());
+      }
+      const double t_next = i + 1 < rows.size() ? rows[i + 1][0] : std::numeric_limits<double>::infinity();
+      const double rate = s == x ? 0.0 : (s > x ? 1.0 : -1.0) / t_switch_;
+      add(t, rate, "command " + std::to_string(static_cast<int>(s)) + " (" + (s == 1.0 ? actuated : rest) + ")");
+      const double t_end = t + std::abs(s - x) * t_switch_;
+      if (s != x && t_end <= t_next) {
+        add(t_end, 0.0,
+            "spool at " + std::to_string(static_cast<int>(s)) + ": " + (s == 1.0 ? actuated : rest) + " fully open");
+        x = s;
+      } else if (s != x) {
+        x += rate * (t_next - t);  // turned around by the next command
+      }
+    }
+  }
+
+  // The spool equation (residual row) for the internal variable `k_x`.
+  template <class T>
+  T equation(const Eval<T>& e, int command_port, int k_x) const {
+    if (e.connected(command_port)) {
+      return t_switch_ * e.der(k_x) - tanh((e.signal(command_port) - e.var(k_x)) / 0.01);
+    }
+    const auto k = static_cast<std::size_t>(e.mode(0));
+    return e.der(k_x) - (k == 0 ? 0.0 : rates_[k - 1]);
+  }
+  // Open fraction of the paths open when actuated; 1 - it for the others.
+  // Not clamped: x stays in [0, 1] by construction (piecewise-linear
+  // trajectory integrated exactly; the tanh drive approaches u without
+  // overshoot), and a clamp would put kinks exactly at the rest positions.
+  template <class T>
+  static T actuated_fraction(const Eval<T>& e, int k_x) {
+    return e.var(k_x);
+  }
+
+  double x0() const { return x0_; }
+  std::vector<double> time_events() const { return times_; }
+
+  EventResult on_event(const Eval<double>& e, double* modes, int command_port) const {
+    if (e.connected(command_port)) return {};
+    auto k = static_cast<std::size_t>(modes[0]);
+    EventResult res;
+    const double tol = 1e-12 * std::max(1.0, std::abs(e.t()));
+    while (k < times_.size() && times_[k] <= e.t() + tol) {
+      if (!res.message.empty()) res.message += "; ";
+      res.message += messages_[k];
+      ++k;
+      res.changed = true;
+    }
+    modes[0] = static_cast<double>(k);
+    return res;
+  }
+
+ private:
+  void add(double t, double rate_after, std::string message) {
+    times_.push_back(t);
+    rates_.push_back(rate_after);
+    messages_.push_back(std::move(message));
+  }
+
+  double t_switch_, x0_;
+  std::vector<double> times_, rates_;  // event k at times_[k]; dx/dt = rates_[k] after it
+  std::vector<std::string> messages_;
+};
+
+// One flow path of a valve: an ISO 6358 resistance. Parameters C and b are
+// common to all paths; C_XY and b_XY override them for path X -> Y.
+struct ValvePath {
+  double C, b;
+
+  static std::vector<ParameterSpec> parameters(const std::vector<std::string>& paths) {
+    std::vector<ParameterSpec> out{
+        ParameterSpec::scalar("C", "m3/(s*Pa)", "sonic conductance of each path, e.g. 0.5 dm3/(s*bar)").positive(),
+        ParameterSpec::scalar("b", "1", "critical pressure ratio of each path", 0.3).range(0.0, 0.99),
+    };
+    for (const auto& p : paths) {
+      const std::string name = std::string(1, p[0]) + " -> " + p[1];
+      out.push_back(ParameterSpec::scalar("C_" + p, "m3/(s*Pa)", "conductance of path " + name + " (default C)")
+                        .positive()
+                        .optional());
+      out.push_back(ParameterSpec::scalar("b_" + p, "1", "critical pressure ratio of path " + name + " (default b)")
+                        .range(0.0, 0.99)
+                        .optional());
+    }
+    return out;
+  }
+  ValvePath(const ParameterValues& v, const std::string& path)
+      : C(v.has("C_" + path) ? v["C_" + path] : v["C"]), b(v.has("b_" + path) ? v["b_" + path] : v["b"]) {}
+
+  // Mass flow from `from` to `to` with the fraction `open` of C open.
+  template <class T>
+  T mass_flow(const GasPortView<T>& from, const GasPortView<T>& to, const T& open, const GasModel& gas) const {
+    return iso6358_mass_flow(from.p, to.p, from.T_in, to.T_in, T(C * open), b, 0.999, gas);
+  }
+};
+
+// Temperature of gas leaving a valve port that two paths feed: the mix of
+// what arrives through each, weighted by the (smoothly upwinded) flow toward
+// the port. Never 0/0: smooth_pos is positive at zero flow.
+template <class T>
+T mix_temperature(const T& m1_toward, const T& T1, const T& m2_toward, const T& T2, const GasModel& gas) {
+  const T w1 = smooth_pos(m1_toward, gas.m_flow_small), w2 = smooth_pos(m2_toward, gas.m_flow_small);
+  return (w1 * T1 + w2 * T2) / (w1 + w2);
+}
+
+}  // namespace pneumo::components
