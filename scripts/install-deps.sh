@@ -11,6 +11,7 @@ PACKAGES=(
   libeigen3-dev
   libyaml-cpp-dev
   libcli11-dev
+  libceres-dev           # pneumo fit: nonlinear least squares (2.1)
   libgtest-dev googletest
   gnuplot-nox            # pneumo plot
 )

@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "components/builtin.hpp"
+#include "framework/cli/fit.hpp"
 #include "framework/core/units.hpp"
 #include "framework/core/version.hpp"
 #include "framework/io/plot.hpp"
@@ -170,6 +171,7 @@ int main(int argc, char** argv) {
   std::vector<std::string> comp_plugins;
   comps->add_option("--plugin", comp_plugins, "also list the types of this component plugin (shared library)")
       ->allow_extra_args(false);
+  auto fit_cmd = pneumo::cli::add_fit_command(app);
 
   try {
     app.parse(argc, argv);
@@ -178,6 +180,7 @@ int main(int argc, char** argv) {
   }
 
   try {
+    if (fit_cmd->selected()) return fit_cmd->run();
     if (*sim) return simulate_command(netlist, sets, output, stats, quiet, plot_prefix, plot_columns);
     if (*plot) {
       if (plot_out.empty()) plot_out = (std::filesystem::path(plot_csv).parent_path() /

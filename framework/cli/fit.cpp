@@ -1,0 +1,182 @@
+// pneumo fit friction DATA.csv --model eq4|eq7|eq8 [--pressure pAB-|pAB+|pEC] [-o preset.yaml]
+// pneumo fit throttle DATA.csv [-o throttle.yaml]
+#include "framework/cli/fit.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <sstream>
+
+#include "framework/fit/friction_fit.hpp"
+#include "framework/fit/throttle_fit.hpp"
+
+namespace pneumo::cli {
+
+namespace {
+
+using namespace pneumo::fit;
+
+void write_text(const std::string& path, const std::string& text) {
+  if (const auto parent = std::filesystem::path(path).parent_path(); !parent.empty())
+    std::filesystem::create_directories(parent);
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream f(tmp);
+    if (!f) throw std::runtime_error("cannot write " + path);
+    f << text;
+    if (!f.flush()) throw std::runtime_error("cannot write " + path);
+  }
+  std::filesystem::rename(tmp, path);
+}
+
+std::string bar_rel(double p_abs, double p_amb) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.4g", (p_abs - p_amb) / 1e5);
+  return buf;
+}
+
+class FitCommandImpl final : public FitCommand {
+ public:
+  explicit FitCommandImpl(CLI::App& app) {
+    fit_ = app.add_subcommand("fit", "identify friction or throttle coefficients from measured data (Ceres)");
+    fit_->require_subcommand(1);
+    fric_ = fit_->add_subcommand(
+        "friction", "fit seed 000 eq. 4/7/8 to (v, p_A, p_B, F) or (v, p_EC, F) or (v, [p0,] F) points");
+    fric_->add_option("data", data_, "CSV with a header; columns v, F, p_A, p_B / p_EC / p0; units in brackets")
+        ->required();
+    fric_->add_option("--model", model_, "eq4, eq7 or eq8")->required()->check(CLI::IsMember({"eq4", "eq7", "eq8"}));
+    fric_->add_option("--pressure", pressure_, "pressure of eq. 4/8: pAB- (default), pAB+ or pEC")
+        ->check(CLI::IsMember({"pAB-", "pAB+", "pEC"}));
+    fric_->add_option("--init", init_, "initial value NAME=VALUE (paper units)")->take_all();
+    fric_->add_option("--lower", lower_, "lower bound NAME=VALUE")->take_all();
+    fric_->add_option("--upper", upper_, "upper bound NAME=VALUE")->take_all();
+    fric_->add_option("--fix", fix_, "hold NAME at VALUE")->take_all();
+    fric_->add_option("-o,--output", output_, "write the netlist-ready friction preset (YAML) here");
+
+    thr_ = fit_->add_subcommand("throttle",
+                                "fit ISO 6358 C and b to (p1, p2, T1, m_flow) points; with a column z, C(z) and b(C)");
+    thr_->add_option("data", tdata_, "CSV with a header; columns p1, p2, m_flow, optional T1 [K] and z [rev]")
+        ->required();
+    thr_->add_option("-o,--output", toutput_, "write the netlist-ready parameters (YAML) here");
+  }
+
+  bool selected() const override { return fit_->parsed(); }
+
+  int run() override { return fric_->parsed() ? run_friction() : run_throttle(); }
+
+ private:
+  InputError data_error(const std::string& file, const std::string& msg) const {
+    return InputError(SourceLocation{file, 0, 0}, "", "", msg);
+  }
+
+  int run_friction() {
+    const FrictionModel m = parse_friction_model(model_);
+    const auto pressure = m == FrictionModel::eq7 ? components::FrictionPressure::none
+                                                  : parse_friction_pressure(pressure_.empty() ? "pAB-" : pressure_);
+    if (m == FrictionModel::eq7 && !pressure_.empty())
+      throw data_error(data_, "--pressure: eq. 7 has no pressure term (it is fitted per supply pressure p0)");
+    auto params = default_friction_parameters(m);
+    try {
+      for (const auto& s : init_) set_parameter(params, s, ParameterField::initial);
+      for (const auto& s : lower_) set_parameter(params, s, ParameterField::lower);
+      for (const auto& s : upper_) set_parameter(params, s, ParameterField::upper);
+      for (const auto& s : fix_) set_parameter(params, s, ParameterField::fixed);
+      check_parameters(params);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(std::string("fit friction: ") + e.what());
+    }
+    const DataTable d = read_data_table(data_);
+    const auto points = friction_points(d, pressure);
+    const std::string cmd = "pneumo fit friction " + data_ + " --model " + model_ +
+                            (pressure == components::FrictionPressure::none ? "" : " --pressure " +
+                                                                                      friction_pressure_name(pressure));
+    // Eq. 7 with a p0 column: one fit per supply pressure, as Annex B.
+    std::vector<std::pair<double, std::vector<FrictionPoint>>> groups;  // p0 (NaN: all points)
+    const int cp0 = d.column("p0");
+    if (m == FrictionModel::eq7 && cp0 >= 0) {
+      std::map<double, std::vector<FrictionPoint>> by_p0;
+      for (std::size_t i = 0; i < points.size(); ++i) by_p0[d.rows[i][cp0]].push_back(points[i]);
+      groups.assign(by_p0.begin(), by_p0.end());
+    } else {
+      groups.emplace_back(NAN, points);
+    }
+    std::ostringstream yaml;
+    bool all_converged = true;
+    for (const auto& [p0, pts] : groups) {
+      FitReport r;
+      try {
+        r = fit_friction(m, pts, params);
+      } catch (const std::invalid_argument& e) {
+        throw data_error(data_, std::string(e.what()) + (std::isnan(p0) ? "" : " at p0 = " + bar_rel(p0, 101325) +
+                                                                                   " bar_rel"));
+      }
+      all_converged = all_converged && r.converged;
+      std::cout << "friction " << model_ << (std::isnan(p0) ? "" : " at p0 = " + bar_rel(p0, 101325) + " bar_rel")
+                << (pressure == components::FrictionPressure::none
+                        ? ""
+                        : ", p = " + friction_pressure_name(pressure) + " in bar")
+                << ":\n"
+                << format_report(r, "N^2");
+      const auto c = friction_coefficients(m, r, pressure);
+      std::string header = cmd;
+      if (!std::isnan(p0)) {
+        header += "\nsupply pressure p0 = " + bar_rel(p0, 101325) + " bar_rel";
+        yaml << (yaml.tellp() > 0 ? "---\n" : "");
+      }
+      yaml << friction_preset_yaml(c, r, m, pressure == components::FrictionPressure::ec, header);
+    }
+    if (!output_.empty()) {
+      write_text(output_, yaml.str());
+      std::cout << "wrote the friction preset to " << output_ << "\n";
+    }
+    if (!all_converged) std::cerr << "pneumo: the fit did not converge (see above)\n";
+    return all_converged ? 0 : 1;
+  }
+
+  int run_throttle() {
+    const DataTable d = read_data_table(tdata_);
+    bool has_z = false;
+    const auto pts = throttle_points(d, &has_z);
+    const std::string header = "pneumo fit throttle " + tdata_;
+    std::string yaml;
+    bool ok = true;
+    try {
+      if (has_z) {
+        const NeedleFit f = fit_needle_throttle(pts);
+        for (std::size_t i = 0; i < f.z.size(); ++i) {
+          std::cout << "opening z = " << f.z[i] << " rev:\n" << format_report(f.per_opening[i], "(kg/s)^2");
+          ok = ok && f.per_opening[i].converged;
+        }
+        std::cout << "b(C) = " << f.b0 << " + " << f.b_slope << " C/C_max, C_max = " << f.C_max
+                  << " dm3/(s*bar), R2 of the line " << f.b_line_r2 << "\n";
+        yaml = needle_throttle_yaml(f, header);
+      } else {
+        const FitReport r = fit_throttle(pts);
+        std::cout << "ISO 6358 throttle:\n" << format_report(r, "(kg/s)^2");
+        ok = r.converged;
+        yaml = throttle_yaml(r, header);
+      }
+    } catch (const std::invalid_argument& e) {
+      throw data_error(tdata_, e.what());
+    }
+    if (!toutput_.empty()) {
+      write_text(toutput_, yaml);
+      std::cout << "wrote the throttle parameters to " << toutput_ << "\n";
+    }
+    if (!ok) std::cerr << "pneumo: the fit did not converge (see above)\n";
+    return ok ? 0 : 1;
+  }
+
+  CLI::App *fit_ = nullptr, *fric_ = nullptr, *thr_ = nullptr;
+  std::string data_, model_, pressure_, output_, tdata_, toutput_;
+  std::vector<std::string> init_, lower_, upper_, fix_;
+};
+
+}  // namespace
+
+std::unique_ptr<FitCommand> add_fit_command(CLI::App& app) { return std::make_unique<FitCommandImpl>(app); }
+
+}  // namespace pneumo::cli

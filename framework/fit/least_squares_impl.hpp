@@ -1,0 +1,110 @@
+// Ceres driver shared by the fitting tools (implementation header: include
+// only from framework/fit/*.cpp). Each coefficient is its own parameter
+// block, so that bounds and fixing are per coefficient.
+#pragma once
+
+#include <ceres/ceres.h>
+
+#include <Eigen/Dense>
+
+#include <cmath>
+#include <memory>
+#include <stdexcept>
+
+#include "framework/fit/least_squares.hpp"
+
+namespace pneumo::fit::detail {
+
+// Functor: template <class T> bool operator()(T const* const* p, T* r) const
+// with one residual = (model - observed) / scale; observed() and scale given.
+template <class Functor>
+FitReport solve(std::vector<FitParameter> params, const std::vector<Functor>& residuals,
+                const std::vector<double>& observed, double scale) {
+  check_parameters(params);
+  FitReport rep;
+  const int k = static_cast<int>(params.size());
+  std::vector<double> x(k);
+  for (int i = 0; i < k; ++i) x[i] = params[i].initial;
+
+  ceres::Problem problem;
+  std::vector<double*> blocks;
+  for (int i = 0; i < k; ++i) blocks.push_back(&x[i]);
+  for (const auto& f : residuals) {
+    auto* cost = new ceres::DynamicAutoDiffCostFunction<Functor, 4>(new Functor(f));
+    for (int i = 0; i < k; ++i) cost->AddParameterBlock(1);
+    cost->SetNumResiduals(1);
+    problem.AddResidualBlock(cost, nullptr, blocks);
+  }
+  int free = 0;
+  for (int i = 0; i < k; ++i) {
+    if (params[i].fixed) {
+      problem.SetParameterBlockConstant(&x[i]);
+      continue;
+    }
+    ++free;
+    if (std::isfinite(params[i].lower)) problem.SetParameterLowerBound(&x[i], 0, params[i].lower);
+    if (std::isfinite(params[i].upper)) problem.SetParameterUpperBound(&x[i], 0, params[i].upper);
+  }
+  const int n = static_cast<int>(residuals.size());
+  if (n <= free)
+    throw std::invalid_argument("too few points: " + std::to_string(n) + " data points for " +
+                                std::to_string(free) + " free coefficients (need more points than coefficients)");
+
+  ceres::Solver::Options opt;
+  opt.linear_solver_type = ceres::DENSE_QR;
+  opt.max_num_iterations = 500;
+  opt.function_tolerance = 1e-12;
+  opt.gradient_tolerance = 1e-14;
+  opt.parameter_tolerance = 1e-12;
+  opt.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(opt, &problem, &summary);
+
+  rep.points = n;
+  rep.free_parameters = free;
+  rep.converged = summary.termination_type == ceres::CONVERGENCE;
+  rep.iterations = static_cast<int>(summary.iterations.size());
+  rep.solver_message = summary.message;
+  rep.rss = 2.0 * summary.final_cost * scale * scale;  // Ceres' cost is 1/2 sum r^2
+  double mean = 0;
+  for (double o : observed) mean += o;
+  mean /= n;
+  for (double o : observed) rep.tss += (o - mean) * (o - mean);
+  rep.r2 = rep.tss > 0 ? 1.0 - rep.rss / rep.tss : std::numeric_limits<double>::quiet_NaN();
+
+  // Standard errors: (J^T J)^-1 sigma^2 with sigma^2 = RSS/(n - k), from the
+  // Jacobian at the solution (columns scaled to unit norm for the rank test).
+  // A singular problem (a coefficient the data do not determine, e.g. FS when
+  // vS sits so low that exp(-|v|/vS) vanishes at every point) gives NaN.
+  std::vector<double*> free_blocks;
+  std::vector<int> free_index;
+  for (int i = 0; i < k; ++i)
+    if (!params[i].fixed) free_blocks.push_back(&x[i]), free_index.push_back(i);
+  ceres::Problem::EvaluateOptions eo;
+  eo.parameter_blocks = free_blocks;
+  ceres::CRSMatrix crs;
+  if (!free_blocks.empty() && problem.Evaluate(eo, nullptr, nullptr, nullptr, &crs)) {
+    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(crs.num_rows, crs.num_cols);
+    for (int r = 0; r < crs.num_rows; ++r)
+      for (int q = crs.rows[r]; q < crs.rows[r + 1]; ++q) J(r, crs.cols[q]) = crs.values[q];
+    Eigen::VectorXd norms = J.colwise().norm();
+    bool ok = norms.minCoeff() > 0;
+    if (ok) {
+      const Eigen::MatrixXd Js = J * norms.cwiseInverse().asDiagonal();
+      Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(Js.transpose() * Js);
+      const auto ev = es.eigenvalues();
+      ok = ev.minCoeff() > 1e-12 * ev.maxCoeff();
+      if (ok) {
+        const Eigen::MatrixXd inv_s = es.eigenvectors() * ev.cwiseInverse().asDiagonal() * es.eigenvectors().transpose();
+        const double sigma2 = rep.rss / (scale * scale) / (n - free);
+        for (std::size_t j = 0; j < free_index.size(); ++j)
+          params[free_index[j]].std_error = std::sqrt(inv_s(j, j) * sigma2) / norms(j);
+      }
+    }
+  }
+  for (int i = 0; i < k; ++i) params[i].value = x[i];
+  rep.parameters = std::move(params);
+  return rep;
+}
+
+}  // namespace pneumo::fit::detail
