@@ -50,9 +50,19 @@ struct SolverResult {
 // Called at t_start, at every output time, and after every event.
 using OutputFn = std::function<void(double t, const double* y, const double* yp)>;
 
+// Outputs integrated over time by the solver (IDAS quadratures): the
+// integral from t_start of each integrand, updated in *values before each
+// OutputFn call.
+struct Quadratures {
+  std::vector<Probe> integrands;
+  double atol = 1e-9;  // absolute tolerance, in the integral's unit
+  std::vector<double>* values = nullptr;
+};
+
 // Integrate from the system's start values. Never throws on solver failure:
 // the result says what happened and where (t_reached); throws only for
 // programming errors in components (exceptions from residuals).
-SolverResult simulate(System& system, const SolverOptions& options, const OutputFn& output);
+SolverResult simulate(System& system, const SolverOptions& options, const OutputFn& output,
+                      const Quadratures* quadratures = nullptr);
 
 }  // namespace pneumo
