@@ -13,6 +13,7 @@ PACKAGES=(
   libcli11-dev
   libgtest-dev googletest
   gnuplot-nox            # pneumo plot
+  libopenmpi-dev openmpi-bin   # pneumo sweep under mpirun (optional at build time)
 )
 missing=()
 for p in "${PACKAGES[@]}"; do
