@@ -14,6 +14,7 @@ PACKAGES=(
   libceres-dev           # pneumo fit: nonlinear least squares (2.1)
   libgtest-dev googletest
   gnuplot-nox            # pneumo plot
+  libopenmpi-dev openmpi-bin   # pneumo sweep under mpirun (optional at build time)
 )
 missing=()
 for p in "${PACKAGES[@]}"; do

@@ -111,8 +111,9 @@ struct PortVars {
 // Copy a block's local variables (and their derivatives) out of the global vectors.
 void gather(const Block& b, const double* y, const double* yp, double* ly, double* lyp) {
   for (std::size_t i = 0; i < b.vars.size(); ++i) {
-    ly[i] = y[b.vars[i]];
-    lyp[i] = yp[b.vars[i]];
+    const int g = b.vars[i];
+    ly[i] = g >= 0 ? b.scale[i] * y[g] : b.offset[i];
+    lyp[i] = g >= 0 ? b.scale[i] * yp[g] : 0.0;
   }
 }
 
@@ -126,10 +127,22 @@ std::string node_text(const Circuit& c, const std::vector<PortId>& ports) {
 
 // ---------------------------------------------------------------------------
 
-System::System(Circuit circuit) : circuit_(std::move(circuit)) {
+System::System(Circuit circuit, const AssemblyOptions& options) : circuit_(std::move(circuit)) {
   build_nodes();
   build_pattern();
   check_structure();
+  if (options.eliminate_aliases) {
+    eliminate_aliases();
+  } else {
+    n_full_ = n_;
+    row_of_.resize(n_);
+    std::iota(row_of_.begin(), row_of_.end(), 0);
+    F_full_.assign(n_, 0.0);
+    for (auto& b : blocks_) {
+      b->scale.assign(b->vars.size(), 1.0);
+      b->offset.assign(b->vars.size(), 0.0);
+    }
+  }
 }
 
 System::~System() = default;
@@ -551,6 +564,225 @@ void System::check_structure() const {
   throw StructureError(msg);
 }
 
+// Alias elimination. Connection equations (two-port flow balances, stream
+// temperature routing) and component rows like T_out = T make about half the
+// unknowns of a typical circuit copies of others: y_b = +-y_a. IDA's cost per
+// step grows with the number of unknowns (vector operations, interpolation,
+// root finding), so these are substituted once here instead of being solved
+// at every Newton iteration. A row qualifies if it has no y' and depends on
+// two unknowns with coefficients exactly +-1 and no offset (checked with AD at
+// three points), or is a framework row on one unknown (a port alone at its
+// node: flow = 0; an unconnected input: its default). Rows of components with
+// discrete modes never qualify (an event could change them). Every
+// eliminated row is still evaluated and must stay satisfied (residual()).
+// Opt-in (AssemblyOptions): see there for why it is not the default.
+void System::eliminate_aliases() {
+  const int n = n_;
+  n_full_ = n;
+  struct Candidate {
+    const Block* block;
+    int k;                          // local row
+    std::vector<int> cols;          // 1 or 2 global columns
+    std::vector<double> coef;       // dF/dy per column (first point)
+    double offset = 0.0;            // F - sum coef y (first point)
+    bool ok = true;
+  };
+  std::vector<Candidate> cand;
+  for (const auto& b : blocks_)
+    for (int k = 0; k < b->n_rows; ++k) {
+      const int r = b->row0 + k;
+      const auto& cols = dep_y_[r];
+      if (!dep_yp_[r].empty() || cols.empty() || cols.size() > 2) continue;
+      if (b->component && (cols.size() == 1 || b->component->info().modes > 0)) continue;
+      cand.push_back({b.get(), k, cols, {}, 0.0, true});
+    }
+
+  // Check linearity at the start point and two perturbed points.
+  std::mt19937 rng(54321);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  bool invalid = false;
+  EvalContext ctx{&circuit_.gas, modes_.data(), &invalid};
+  std::vector<Dual> ly(kMaxLocal), lyp(kMaxLocal), res(kMaxLocal * 2);
+  for (int pass = 0; pass < 3 && !cand.empty(); ++pass) {
+    std::vector<double> y0, yp0;
+    start_values(y0, yp0);
+    if (pass > 0)
+      for (int i = 0; i < n; ++i) {
+        y0[i] += 0.05 * nominal_[i] * u(rng) + 0.01 * y0[i] * u(rng);
+        yp0[i] = 0.1 * nominal_[i] * u(rng);
+      }
+    const Block* evaluated = nullptr;
+    for (auto& c : cand) {
+      const Block& b = *c.block;
+      const int nl = static_cast<int>(b.vars.size());
+      if (evaluated != &b) {
+        for (int i = 0; i < nl; ++i) {
+          ly[i] = Dual::variable(y0[b.vars[i]], i, 1.0, nl);
+          lyp[i] = Dual(yp0[b.vars[i]]);
+        }
+        if (static_cast<int>(res.size()) < b.n_rows) res.resize(b.n_rows);
+        b.residual(0.0, ly.data(), lyp.data(), res.data(), ctx);
+        evaluated = &b;
+      }
+      std::vector<double> coef(c.cols.size(), 0.0);
+      for (int i = 0; i < nl; ++i)
+        for (std::size_t j = 0; j < c.cols.size(); ++j)
+          if (b.vars[i] == c.cols[j]) coef[j] += res[c.k].deriv(i);
+      double offset = res[c.k].v, magnitude = std::abs(res[c.k].v);
+      for (std::size_t j = 0; j < c.cols.size(); ++j) {
+        offset -= coef[j] * y0[c.cols[j]];
+        magnitude += std::abs(coef[j] * y0[c.cols[j]]);
+      }
+      if (pass == 0) {
+        c.coef = coef;
+        c.offset = offset;
+      }
+      for (std::size_t j = 0; j < coef.size(); ++j) c.ok &= coef[j] == c.coef[j] && std::abs(coef[j]) == 1.0;
+      if (c.cols.size() == 2) c.ok &= std::abs(offset) <= 1e-12 * magnitude;
+      else c.ok &= std::abs(offset - c.offset) <= 1e-12 * std::max(std::abs(c.offset), magnitude);
+      if (!std::isfinite(offset)) c.ok = false;
+    }
+  }
+
+  // Union-find with signs: y_v = sign[v] * y_parent[v]; a root may be a constant.
+  std::vector<int> parent(n);
+  std::iota(parent.begin(), parent.end(), 0);
+  std::vector<double> sign(n, 1.0), value(n, 0.0);
+  std::vector<char> constant(n, 0), differential(n, 0);
+  for (int r = 0; r < n; ++r)
+    for (int c : dep_yp_[r]) differential[c] = 1;
+  std::function<std::pair<int, double>(int)> find = [&](int v) -> std::pair<int, double> {
+    if (parent[v] == v) return {v, 1.0};
+    auto [root, s] = find(parent[v]);
+    parent[v] = root;
+    sign[v] *= s;
+    return {root, sign[v]};
+  };
+  std::vector<char> eliminated(n, 0);
+  for (const auto& c : cand) {
+    if (!c.ok) continue;
+    const int row = c.block->row0 + c.k;
+    if (c.cols.size() == 1) {
+      const auto [ra, sa] = find(c.cols[0]);
+      if (constant[ra] || differential[ra]) continue;
+      constant[ra] = 1;
+      value[ra] = sa * (-c.offset / c.coef[0]);
+      eliminated[row] = 1;
+      continue;
+    }
+    const auto [ra, sa] = find(c.cols[0]);
+    const auto [rb, sb] = find(c.cols[1]);
+    if (ra == rb || (constant[ra] && constant[rb]) || (differential[ra] && differential[rb])) continue;
+    if ((constant[ra] && differential[rb]) || (constant[rb] && differential[ra])) continue;
+    // coef_a sa y_ra + coef_b sb y_rb = 0  =>  y_rb = q y_ra, q = +-1
+    const double q = -(c.coef[0] * sa) / (c.coef[1] * sb);
+    const bool keep_a = constant[ra] || (!constant[rb] && (differential[ra] || !differential[rb]));
+    const int root = keep_a ? ra : rb, child = keep_a ? rb : ra;
+    parent[child] = root;
+    sign[child] = q;
+    differential[root] |= differential[child];
+    eliminated[row] = 1;
+  }
+
+  // Reduced numbering.
+  std::vector<int> reduced(n, -1);
+  std::vector<std::string> names;
+  std::vector<double> start, nominal;
+  std::vector<unsigned char> kind;
+  int m = 0;
+  for (int v = 0; v < n; ++v) {
+    const auto [root, s] = find(v);
+    if (root != v || constant[v]) continue;
+    reduced[v] = m++;
+    names.push_back(var_names_[v]);
+    start.push_back(start_value_[v]);
+    kind.push_back(start_kind_[v]);
+    nominal.push_back(nominal_[v]);
+  }
+  for (int v = 0; v < n; ++v) {
+    const auto [root, s] = find(v);
+    if (constant[root]) continue;
+    const int g = reduced[root];
+    if (start_kind_[v] > kind[g]) {  // fixed beats guess beats none
+      start[g] = s * start_value_[v];
+      kind[g] = start_kind_[v];
+    }
+    nominal[g] = std::min(nominal[g], nominal_[v]);
+  }
+  row_of_.assign(n, -1);
+  eliminated_.clear();
+  int kept = 0;
+  for (int r = 0; r < n; ++r) {
+    if (eliminated[r]) eliminated_.push_back(r);
+    else row_of_[r] = kept++;
+  }
+  if (kept != m)
+    throw StructureError("internal error: alias elimination left " + std::to_string(kept) + " equations for " +
+                         std::to_string(m) + " unknowns");
+
+  // Pattern and differential flags of the reduced system.
+  std::vector<std::set<int>> cols(m);
+  std::vector<double> id(m, 0.0);
+  for (int r = 0; r < n; ++r) {
+    if (row_of_[r] < 0) continue;
+    for (int c : dep_y_[r]) {
+      const auto [root, s] = find(c);
+      if (!constant[root]) cols[reduced[root]].insert(row_of_[r]);
+    }
+    for (int c : dep_yp_[r]) {
+      const auto [root, s] = find(c);
+      if (constant[root]) continue;
+      cols[reduced[root]].insert(row_of_[r]);
+      id[reduced[root]] = 1.0;
+    }
+  }
+  col_ptr_.assign(m + 1, 0);
+  row_idx_.clear();
+  std::map<std::pair<int, int>, int> pos;
+  for (int c = 0; c < m; ++c) {
+    col_ptr_[c] = static_cast<long>(row_idx_.size());
+    for (int r : cols[c]) {
+      pos[{r, c}] = static_cast<int>(row_idx_.size());
+      row_idx_.push_back(r);
+    }
+  }
+  col_ptr_[m] = static_cast<long>(row_idx_.size());
+  for (auto& b : blocks_) {
+    const int nl = static_cast<int>(b->vars.size());
+    b->scale.assign(nl, 1.0);
+    b->offset.assign(nl, 0.0);
+    for (int i = 0; i < nl; ++i) {
+      const auto [root, s] = find(b->vars[i]);
+      if (constant[root]) {
+        b->offset[i] = s * value[root];
+        b->vars[i] = -1;
+      } else {
+        b->scale[i] = s;
+        b->vars[i] = reduced[root];
+      }
+    }
+    b->jac_pos.assign(static_cast<std::size_t>(b->n_rows) * nl, -1);
+    for (int k = 0; k < b->n_rows; ++k) {
+      const int r = row_of_[b->row0 + k];
+      if (r < 0) continue;
+      for (int i = 0; i < nl; ++i) {
+        if (b->vars[i] < 0) continue;
+        auto it = pos.find({r, b->vars[i]});
+        if (it != pos.end()) b->jac_pos[static_cast<std::size_t>(k) * nl + i] = it->second;
+      }
+    }
+  }
+  eliminated_nominal_.clear();
+  for (int r : eliminated_) eliminated_nominal_.push_back(nominal_[dep_y_[r][0]]);
+  var_names_ = std::move(names);
+  start_value_ = std::move(start);
+  start_kind_ = std::move(kind);
+  nominal_ = std::move(nominal);
+  id_ = std::move(id);
+  n_ = m;
+  F_full_.assign(n_full_, 0.0);
+}
+
 void System::start_values(std::vector<double>& y0, std::vector<double>& yp0) const {
   y0 = start_value_;
   yp0.assign(n_, 0.0);
@@ -567,9 +799,25 @@ int System::residual(double t, const double* y, const double* yp, double* F) con
   bool invalid = false;
   EvalContext ctx{&circuit_.gas, modes_.data(), &invalid};
   double ly[kMaxLocal], lyp[kMaxLocal];
+  const bool reduced = n_full_ != n_;
+  double* Ff = reduced ? F_full_.data() : F;
   for (const auto& b : blocks_) {
     gather(*b, y, yp, ly, lyp);
-    b->residual(t, ly, lyp, F + b->row0, ctx);
+    b->residual(t, ly, lyp, Ff + b->row0, ctx);
+  }
+  if (reduced)
+    for (int r = 0; r < n_full_; ++r)
+      if (row_of_[r] >= 0) F[row_of_[r]] = Ff[r];
+  for (std::size_t e = 0; e < eliminated_.size(); ++e) {
+    const int r = eliminated_[e];
+    if (std::abs(Ff[r]) > 1e-10 * eliminated_nominal_[e] && std::isfinite(Ff[r])) {
+      std::string name = "?";
+      for (const auto& b : blocks_)
+        if (r >= b->row0 && r < b->row0 + b->n_rows) name = b->row_names[r - b->row0] + " [" + b->where.to_string() + "]";
+      throw std::runtime_error("equation '" + name + "', substituted as an alias at assembly, no longer holds at t = " +
+                               std::to_string(t) + " (residual " + std::to_string(Ff[r]) +
+                               "); a component must not change such an equation at an event");
+    }
   }
   if (invalid) return 1;
   for (int i = 0; i < n_; ++i)
@@ -585,13 +833,17 @@ int System::jacobian(double t, const double* y, const double* yp, double cj, dou
   for (const auto& b : blocks_) {
     const int nl = static_cast<int>(b->vars.size());
     for (int i = 0; i < nl; ++i) {
-      // One pass gives dF/dy + cj dF/dy': y_i seeded with 1, y'_i with cj.
-      ly[i] = Dual::variable(y[b->vars[i]], i, 1.0, nl);
-      lyp[i] = Dual::variable(yp[b->vars[i]], i, cj, nl);
+      // One pass gives dF/dy + cj dF/dy': y_i seeded with 1, y'_i with cj
+      // (times the alias sign: local i is scale_i * y_g).
+      const int g = b->vars[i];
+      const double s = b->scale[i];
+      ly[i] = Dual::variable(g >= 0 ? s * y[g] : b->offset[i], i, g >= 0 ? s : 0.0, nl);
+      lyp[i] = Dual::variable(g >= 0 ? s * yp[g] : 0.0, i, g >= 0 ? cj * s : 0.0, nl);
     }
     if (static_cast<int>(r.size()) < b->n_rows) r.resize(b->n_rows);
     b->residual(t, ly.data(), lyp.data(), r.data(), ctx);
     for (int k = 0; k < b->n_rows; ++k) {
+      if (row_of_[b->row0 + k] < 0) continue;
       const Dual& f = r[k];
       for (int i = 0; i < f.n; ++i) {
         const double d = f.d[i];
@@ -616,15 +868,20 @@ void System::jacobian_parts(double t, const double* y, const double* yp, std::ve
     for (const auto& b : blocks_) {
       const int nl = static_cast<int>(b->vars.size());
       for (int i = 0; i < nl; ++i) {
-        ly[i] = Dual::variable(y[b->vars[i]], i, part == 0 ? 1.0 : 0.0, nl);
-        lyp[i] = Dual::variable(yp[b->vars[i]], i, part == 1 ? 1.0 : 0.0, nl);
+        const int g = b->vars[i];
+        const double s = g >= 0 ? b->scale[i] : 0.0;
+        ly[i] = Dual::variable(g >= 0 ? s * y[g] : b->offset[i], i, part == 0 ? s : 0.0, nl);
+        lyp[i] = Dual::variable(g >= 0 ? s * yp[g] : 0.0, i, part == 1 ? s : 0.0, nl);
       }
       if (static_cast<int>(r.size()) < b->n_rows) r.resize(b->n_rows);
       b->residual(t, ly.data(), lyp.data(), r.data(), ctx);
       auto& out = part == 0 ? dFdy : dFdyp;
-      for (int k = 0; k < b->n_rows; ++k)
+      for (int k = 0; k < b->n_rows; ++k) {
+        const int row = row_of_[b->row0 + k];
+        if (row < 0) continue;
         for (int i = 0; i < nl; ++i)
-          out[static_cast<std::size_t>(b->row0 + k) * n_ + b->vars[i]] += r[k].deriv(i);
+          if (b->vars[i] >= 0) out[static_cast<std::size_t>(row) * n_ + b->vars[i]] += r[k].deriv(i);
+      }
     }
 }
 
@@ -692,7 +949,10 @@ bool System::handle_roots(double t, const double* y, const double* yp, const int
 
 double System::probe(const Probe& p, double t, const double* y, const double* yp) const {
   const Block& b = *blocks_[p.component];  // component blocks come first, in order
-  if (p.kind == Probe::Kind::local) return y[b.vars[p.index]];
+  if (p.kind == Probe::Kind::local) {
+    const int g = b.vars[p.index];
+    return g >= 0 ? b.scale[p.index] * y[g] : b.offset[p.index];
+  }
   double ly[kMaxLocal], lyp[kMaxLocal];
   gather(b, y, yp, ly, lyp);
   bool invalid = false;

@@ -17,6 +17,7 @@
 #include "framework/core/version.hpp"
 #include "framework/io/plot.hpp"
 #include "framework/plugin/plugin.hpp"
+#include "framework/cli/study_commands.hpp"
 #include "framework/run/run.hpp"
 
 namespace {
@@ -165,6 +166,9 @@ int main(int argc, char** argv) {
   plot->add_option("-o,--output", plot_out, "output prefix (default: the CSV path without .csv)");
   plot->add_option("--columns", plot_columns, "columns to plot, comma separated (default: all)");
 
+  int study_status = -1;  // set by `sweep` / `sensitivity` (framework/cli/study_commands.cpp)
+  pneumo::cli::add_study_commands(app, study_status);
+
   auto* comps = app.add_subcommand("components", "list component types, or show one");
   std::string type;
   comps->add_option("type", type, "component type to describe");
@@ -178,6 +182,7 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;
   }
+  if (study_status >= 0) return study_status;
 
   try {
     if (fit_cmd->selected()) return fit_cmd->run();

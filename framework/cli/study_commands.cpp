@@ -1,0 +1,243 @@
+#include "framework/cli/study_commands.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <sstream>
+
+#include "components/builtin.hpp"
+#include "framework/study/sensitivity.hpp"
+#include "framework/study/sweep.hpp"
+
+namespace pneumo::cli {
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace pneumo::study;
+
+std::vector<std::string> split_list(const std::string& s) {
+  std::vector<std::string> out;
+  std::stringstream ss(s);
+  std::string item;
+  while (std::getline(ss, item, ','))
+    if (!item.empty()) out.push_back(item);
+  return out;
+}
+
+std::string default_output(const std::string& netlist, const char* suffix) {
+  return fs::path(netlist).stem().string() + suffix;
+}
+
+// Under mpirun an error on one rank must stop the others, which would
+// otherwise wait for it in a collective call.
+int stop_ranks(int status) {
+  try {
+    if (launched_by_mpi() && process_communicator().size() > 1) process_communicator().abort(status);
+  } catch (const std::exception&) {
+  }
+  return status;
+}
+
+// Runs `body`, mapping errors to exit statuses like `pneumo simulate`.
+int guarded(const std::string& netlist, const std::function<int()>& body) {
+  try {
+    return body();
+  } catch (const InputError& e) {
+    std::cerr << e.what() << "\n";
+  } catch (const StructureError& e) {
+    std::cerr << "pneumo: " << netlist << ": " << e.what() << "\n";
+  } catch (const std::exception& e) {
+    std::cerr << "pneumo: error: " << e.what() << "\n";
+  }
+  return stop_ranks(2);
+}
+
+void report(const SweepSummary& s, const std::string& output, bool quiet) {
+  if (quiet) return;
+  const double rate = s.seconds > 0 ? s.computed / s.seconds : 0.0;
+  std::cout << "sweep: " << s.runs << " runs";
+  if (s.ranks > 1) std::cout << " on " << s.ranks << " MPI ranks";
+  if (s.done_before > 0) std::cout << " (" << s.done_before << " done before, resumed)";
+  std::cout << ", " << s.computed << " run now in " << s.seconds << " s (" << rate << " runs/s on rank 0), "
+            << s.failed << " failed\n";
+  if (s.complete) std::cout << "wrote " << output << "\n";
+}
+
+struct SweepArgs {
+  std::string netlist, output, samples, metrics;
+  std::vector<std::string> grid;
+  int threads = 1;
+  bool quiet = false, eliminate = false;
+};
+
+int sweep_command(const SweepArgs& a) {
+  Communicator& comm = process_communicator();
+  const Netlist nl = load_netlist(a.netlist);
+  if ((a.grid.empty()) == (a.samples.empty()))
+    throw InputError(SourceLocation{a.netlist, 1, 1}, "", "", "pneumo sweep: give either --grid NAME=FROM:TO:COUNT ... or --samples FILE");
+  const Design d = a.grid.empty() ? samples_design(nl, builtin_registry(), a.samples)
+                                  : grid_design(nl, builtin_registry(), a.grid);
+  const std::string output = a.output.empty() ? default_output(a.netlist, ".sweep.csv") : a.output;
+  SweepOptions opt;
+  opt.threads = a.threads;
+  opt.progress = !a.quiet;
+  opt.metrics = split_list(a.metrics);
+  opt.assembly.eliminate_aliases = a.eliminate;
+  const SweepSummary s = run_sweep(a.netlist, d, output, opt, comm);
+  if (comm.rank() == 0) {
+    report(s, output, a.quiet);
+    if (s.failed > 0)
+      std::cerr << "pneumo sweep: " << s.failed << " of " << s.runs << " runs failed (status 'failed' and the reason in "
+                << output << ")\n";
+  }
+  return s.complete || comm.rank() != 0 ? 0 : 1;
+}
+
+struct SensitivityArgs {
+  std::string netlist, output, method = "morris", metrics;
+  std::vector<std::string> params;
+  int trajectories = 20, levels = 4, base = 256, threads = 1;
+  long seed = 1;
+  bool quiet = false, eliminate = false;
+};
+
+void write_atomic(const std::string& path, const std::string& text) {
+  const std::string tmp = path + ".writing";
+  {
+    std::ofstream out(tmp);
+    out << text;
+    out.flush();
+    if (!out) throw std::runtime_error("cannot write '" + path + "'");
+  }
+  fs::rename(tmp, path);
+}
+
+std::string num(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.6g", v);
+  return buf;
+}
+
+int sensitivity_command(const SensitivityArgs& a) {
+  Communicator& comm = process_communicator();
+  const Netlist nl = load_netlist(a.netlist);
+  if (a.params.empty())
+    throw InputError(SourceLocation{a.netlist, 1, 1}, "", "", "pneumo sensitivity: give the ranges with --param NAME=LOW:HIGH ...");
+  const auto ranges = parse_ranges(nl, builtin_registry(), a.params);
+  const int k = static_cast<int>(ranges.size());
+  const auto metrics = select_metrics(nl, split_list(a.metrics));
+  if (a.method != "morris" && a.method != "sobol")
+    throw InputError(SourceLocation{a.netlist, 1, 1}, "", "", "--method must be morris or sobol, not '" + a.method + "'");
+
+  std::vector<UnitPoint> unit;
+  MorrisPlan morris;
+  SobolPlan sobol;
+  if (a.method == "morris") {
+    morris = morris_plan(k, a.trajectories, a.levels, static_cast<std::uint64_t>(a.seed));
+    unit = morris.points;
+  } else {
+    sobol = sobol_plan(k, a.base, static_cast<std::uint64_t>(a.seed));
+    unit = sobol.points;
+  }
+  Design d;
+  for (const auto& r : ranges) d.parameters.push_back(r.parameter);
+  for (const auto& u : unit) {
+    Sample s;
+    for (int j = 0; j < k; ++j) s.push_back(ranges[j].lo + u[j] * (ranges[j].hi - ranges[j].lo));
+    d.samples.push_back(std::move(s));
+  }
+  const std::string output = a.output.empty() ? default_output(a.netlist, ".sensitivity.csv") : a.output;
+  const std::string runs_path = (fs::path(output).parent_path() / fs::path(output).stem()).string() + ".runs.csv";
+  SweepOptions opt;
+  opt.threads = a.threads;
+  opt.progress = !a.quiet;
+  opt.assembly.eliminate_aliases = a.eliminate;
+  for (const auto* m : metrics) opt.metrics.push_back(m->name);
+  if (comm.rank() == 0 && !a.quiet)
+    std::cout << a.method << ": " << k << " parameters, " << d.samples.size() << " runs -> " << runs_path << "\n";
+  const SweepSummary s = run_sweep(a.netlist, d, runs_path, opt, comm);
+  if (comm.rank() != 0) return 0;
+  report(s, runs_path, a.quiet);
+  if (!s.complete) return 1;
+
+  std::ostringstream csv;
+  std::ostringstream table;
+  if (a.method == "morris") {
+    csv << "metric,parameter,mu_star,mu,sigma,effects\n";
+    table << "Morris screening (" << a.trajectories << " trajectories, " << a.levels
+          << " levels; effects per full parameter range)\n";
+  } else {
+    csv << "metric,parameter,S1,S1_lo,S1_hi,ST,ST_lo,ST_hi,rows\n";
+    table << "Sobol indices (" << a.base << " base samples, 95 % bootstrap intervals)\n";
+  }
+  for (std::size_t m = 0; m < metrics.size(); ++m) {
+    std::vector<double> f;
+    for (const auto& r : s.records) f.push_back(r.ok ? r.metrics[m] : NAN);
+    table << "  " << metrics[m]->name << " [" << metrics[m]->unit << "]\n";
+    if (a.method == "morris") {
+      const MorrisIndices ix = morris_indices(morris, f);
+      for (int j = 0; j < k; ++j) {
+        csv << metrics[m]->name << "," << ranges[j].parameter.name << "," << num(ix.mu_star[j]) << ","
+            << num(ix.mu[j]) << "," << num(ix.sigma[j]) << "," << ix.effects[j] << "\n";
+        table << "    " << ranges[j].parameter.name << ": mu* " << num(ix.mu_star[j]) << ", mu " << num(ix.mu[j])
+              << ", sigma " << num(ix.sigma[j]) << " (" << ix.effects[j] << " effects)\n";
+      }
+    } else {
+      const SobolIndices ix = sobol_indices(sobol, f);
+      for (int j = 0; j < k; ++j) {
+        csv << metrics[m]->name << "," << ranges[j].parameter.name << "," << num(ix.first[j]) << ","
+            << num(ix.first_lo[j]) << "," << num(ix.first_hi[j]) << "," << num(ix.total[j]) << ","
+            << num(ix.total_lo[j]) << "," << num(ix.total_hi[j]) << "," << ix.rows_used << "\n";
+        table << "    " << ranges[j].parameter.name << ": S1 " << num(ix.first[j]) << " [" << num(ix.first_lo[j])
+              << ", " << num(ix.first_hi[j]) << "], ST " << num(ix.total[j]) << " [" << num(ix.total_lo[j]) << ", "
+              << num(ix.total_hi[j]) << "] (" << ix.rows_used << " rows)\n";
+      }
+    }
+  }
+  write_atomic(output, csv.str());
+  if (!a.quiet) std::cout << table.str() << "wrote " << output << "\n";
+  return 0;
+}
+
+}  // namespace
+
+void add_study_commands(CLI::App& app, int& status) {
+  auto sweep_args = std::make_shared<SweepArgs>();
+  auto* sw = app.add_subcommand("sweep", "run a netlist over a parameter grid or sample list; metrics per run to CSV");
+  sw->add_option("netlist", sweep_args->netlist, "netlist file (YAML)")->required();
+  sw->add_option("--grid", sweep_args->grid,
+                 "NAME=FROM:TO:COUNT (repeatable; full factorial). NAME: top-level parameter or COMPONENT.PARAMETER")
+      ->take_all();
+  sw->add_option("--samples", sweep_args->samples, "CSV of runs: header of parameter names, one row per run");
+  sw->add_option("-j,--threads", sweep_args->threads, "threads (per MPI rank)")->check(CLI::PositiveNumber);
+  sw->add_option("-o,--output", sweep_args->output, "results CSV (default: NETLIST_STEM.sweep.csv)");
+  sw->add_option("--metrics", sweep_args->metrics, "metrics, comma separated (default: all the netlist provides)");
+  sw->add_flag("-q,--quiet", sweep_args->quiet, "no progress bar or summary");
+  sw->add_flag("--eliminate-aliases", sweep_args->eliminate,
+               "substitute alias equations before solving (faster; experimental, see README)");
+  sw->callback([sweep_args, &status]() { status = guarded(sweep_args->netlist, [&] { return sweep_command(*sweep_args); }); });
+
+  auto sa = std::make_shared<SensitivityArgs>();
+  auto* se = app.add_subcommand("sensitivity", "Morris screening or Sobol indices of the run metrics over parameter ranges");
+  se->add_option("netlist", sa->netlist, "netlist file (YAML)")->required();
+  se->add_option("--param", sa->params, "NAME=LOW:HIGH (repeatable)")->take_all();
+  se->add_option("--method", sa->method, "morris (screening) or sobol (variance-based indices)");
+  se->add_option("--trajectories", sa->trajectories, "Morris: trajectories (runs = trajectories * (k + 1))");
+  se->add_option("--levels", sa->levels, "Morris: grid levels (even)");
+  se->add_option("--base-samples", sa->base, "Sobol: base samples N (runs = N * (k + 2))");
+  se->add_option("--seed", sa->seed, "random seed of the design");
+  se->add_option("-j,--threads", sa->threads, "threads (per MPI rank)")->check(CLI::PositiveNumber);
+  se->add_option("--metrics", sa->metrics, "metrics, comma separated (default: all the netlist provides)");
+  se->add_option("-o,--output", sa->output,
+                 "indices CSV (default: NETLIST_STEM.sensitivity.csv); the runs go to OUTPUT_STEM.runs.csv");
+  se->add_flag("-q,--quiet", sa->quiet, "no progress bar or tables");
+  se->add_flag("--eliminate-aliases", sa->eliminate,
+               "substitute alias equations before solving (faster; experimental, see README)");
+  se->callback([sa, &status]() { status = guarded(sa->netlist, [&] { return sensitivity_command(*sa); }); });
+}
+
+}  // namespace pneumo::cli

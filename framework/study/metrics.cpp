@@ -1,0 +1,114 @@
+#include "framework/study/metrics.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <mutex>
+
+namespace pneumo::study {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr const char* kEntryEvent = "enters the cushioning zone";
+constexpr const char* kImpactEvent = "impact on the cap-end stop";
+
+// Time of the first logged event whose message contains `text`; NaN if none.
+double event_time(const RunResult& r, const char* text) {
+  for (const auto& e : r.solver.events)
+    if (e.message.find(text) != std::string::npos) return e.t;
+  return kNaN;
+}
+
+// Value of column `name` at time t: the first row at or after t (event rows
+// are emitted exactly at the event time), interpolated otherwise.
+double value_at(const RunResult& r, const std::string& name, double t) {
+  const int c = r.table.column(name);
+  const auto& rows = r.table.rows;
+  if (c < 0 || rows.empty() || std::isnan(t)) return kNaN;
+  for (std::size_t k = 0; k < rows.size(); ++k) {
+    if (rows[k][0] < t) continue;
+    if (rows[k][0] == t || k == 0) return rows[k][c];
+    const double w = (t - rows[k - 1][0]) / (rows[k][0] - rows[k - 1][0]);
+    return rows[k - 1][c] + w * (rows[k][c] - rows[k - 1][c]);
+  }
+  return kNaN;
+}
+
+double extreme(const RunResult& r, const std::string& name, double from, bool highest) {
+  const int c = r.table.column(name);
+  if (c < 0 || std::isnan(from)) return kNaN;
+  double best = highest ? -std::numeric_limits<double>::infinity() : std::numeric_limits<double>::infinity();
+  bool any = false;
+  for (const auto& row : r.table.rows) {
+    if (row[0] < from) continue;
+    best = highest ? std::max(best, row[c]) : std::min(best, row[c]);
+    any = true;
+  }
+  return any ? best : kNaN;
+}
+
+std::vector<Metric>& catalogue() {
+  static std::vector<Metric> m = {
+      {"t_cushion", "s", "time in the cushioning zone: cushion entry event to the first cap-end impact", {"x"},
+       [](const RunResult& r) { return event_time(r, kImpactEvent) - event_time(r, kEntryEvent); }},
+      {"v_impact", "m/s", "piston velocity at the first cap-end impact", {"v"},
+       [](const RunResult& r) { return value_at(r, "v", event_time(r, kImpactEvent)); }},
+      {"p_EC_peak", "Pa", "highest cushion pressure from the cushion entry on", {"p_EC"},
+       [](const RunResult& r) { return extreme(r, "p_EC", event_time(r, kEntryEvent), true); }},
+      {"T_EC_min", "K", "lowest cushion-volume temperature over the run", {"T_EC"},
+       [](const RunResult& r) { return extreme(r, "T_EC", -std::numeric_limits<double>::infinity(), false); }},
+      {"T_EC_max", "K", "highest cushion-volume temperature over the run", {"T_EC"},
+       [](const RunResult& r) { return extreme(r, "T_EC", -std::numeric_limits<double>::infinity(), true); }},
+      {"t_move", "s", "total movement time: first logged event (valve command) to the first cap-end impact", {"x"},
+       [](const RunResult& r) {
+         return r.solver.events.empty() ? kNaN : event_time(r, kImpactEvent) - r.solver.events.front().t;
+       }},
+  };
+  return m;
+}
+
+std::mutex& catalogue_mutex() {
+  static std::mutex m;
+  return m;
+}
+
+}  // namespace
+
+const std::vector<Metric>& metric_catalogue() { return catalogue(); }
+
+void register_metric(Metric m) {
+  std::lock_guard<std::mutex> lock(catalogue_mutex());
+  catalogue().push_back(std::move(m));
+}
+
+std::vector<const Metric*> available_metrics(const Netlist& nl) {
+  std::vector<const Metric*> out;
+  for (const auto& m : metric_catalogue()) {
+    bool ok = true;
+    for (const auto& need : m.needs)
+      ok &= std::any_of(nl.outputs.begin(), nl.outputs.end(), [&](const OutputDecl& o) { return o.name == need; });
+    if (ok) out.push_back(&m);
+  }
+  return out;
+}
+
+std::vector<const Metric*> select_metrics(const Netlist& nl, const std::vector<std::string>& names) {
+  const auto avail = available_metrics(nl);
+  if (names.empty()) return avail;
+  std::vector<const Metric*> out;
+  for (const auto& n : names) {
+    const auto it = std::find_if(avail.begin(), avail.end(), [&](const Metric* m) { return m->name == n; });
+    if (it == avail.end()) {
+      std::string list;
+      for (const auto* m : avail) list += (list.empty() ? "" : ", ") + m->name;
+      throw InputError(SourceLocation{nl.file, 1, 1}, "", "",
+                       "metric '" + n + "' is not available for this netlist (available: " +
+                           (list.empty() ? "none - the metrics need outputs named x, v, p_EC, T_EC" : list) + ")");
+    }
+    out.push_back(*it);
+  }
+  return out;
+}
+
+}  // namespace pneumo::study

@@ -1,0 +1,50 @@
+// Scalar metrics of one run, computed from its outputs (the netlist's
+// `outputs:` columns) and its event log. Each metric says which outputs it
+// needs; a study asks only for metrics the netlist can provide.
+//
+// Cushioning metrics (netlists/cushion_rig.yaml: outputs x, v, p_EC, T_EC of
+// the cushioned cylinder; its events "enters the cushioning zone" and
+// "impact on the cap-end stop"):
+//   t_cushion  [s]    time in the cushioning zone: from the cushion entry event
+//                     to the first cap-end impact event
+//   v_impact   [m/s]  piston velocity at the first cap-end impact
+//   p_EC_peak  [Pa]   highest cushion pressure from the cushion entry on
+//   T_EC_min   [K]    lowest cushion-volume temperature over the run
+//   T_EC_max   [K]    highest cushion-volume temperature over the run
+//   t_move     [s]    total movement time: from the first logged event (the
+//                     valve command step) to the first cap-end impact
+// A metric whose event never happens (e.g. the piston never reaches the cap
+// by t_end) is NaN ("nan" in the results), not an error.
+//
+// Extension point: the energy audit (another issue) adds its metrics with
+// register_metric() - names, units and a function of the run - and they then
+// appear in sweeps and sensitivity studies like the others. None is defined
+// here yet.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "framework/run/run.hpp"
+
+namespace pneumo::study {
+
+struct Metric {
+  std::string name;
+  std::string unit;
+  std::string description;
+  std::vector<std::string> needs;  // output columns used
+  std::function<double(const RunResult&)> compute;
+};
+
+// All metrics known (built-in cushioning metrics plus registered ones).
+const std::vector<Metric>& metric_catalogue();
+void register_metric(Metric m);
+
+// The metrics whose needed outputs the netlist provides, in catalogue order.
+std::vector<const Metric*> available_metrics(const Netlist& netlist);
+// Look up by name; throws InputError listing the available names.
+std::vector<const Metric*> select_metrics(const Netlist& netlist, const std::vector<std::string>& names);
+
+}  // namespace pneumo::study

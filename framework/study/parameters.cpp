@@ -1,0 +1,226 @@
+#include "framework/study/parameters.hpp"
+
+#include <fstream>
+#include <sstream>
+
+#include "framework/core/units.hpp"
+
+namespace pneumo::study {
+
+namespace {
+
+SourceLocation netlist_where(const Netlist& nl) {
+  return nl.parameters_where.known() ? nl.parameters_where : SourceLocation{nl.file, 1, 1};
+}
+
+const ComponentDecl* find_component(const Netlist& nl, const std::string& name) {
+  for (const auto& c : nl.components)
+    if (c.name == name) return &c;
+  return nullptr;
+}
+
+std::string trim(const std::string& s) {
+  const auto a = s.find_first_not_of(" \t\r");
+  if (a == std::string::npos) return "";
+  const auto b = s.find_last_not_of(" \t\r");
+  return s.substr(a, b - a + 1);
+}
+
+std::vector<std::string> split(const std::string& s, char sep) {
+  std::vector<std::string> out;
+  std::string item;
+  std::stringstream ss(s);
+  while (std::getline(ss, item, sep)) out.push_back(trim(item));
+  if (!s.empty() && s.back() == sep) out.push_back("");
+  return out;
+}
+
+}  // namespace
+
+StudyParameter resolve_parameter(const Netlist& nl, const Registry& registry, const std::string& name) {
+  StudyParameter p;
+  p.name = name;
+  const auto dot = name.find('.');
+  if (dot == std::string::npos) {
+    const TopParameter* tp = nl.parameter(name);
+    if (!tp) {
+      std::string names;
+      for (const auto& t : nl.parameters) names += (names.empty() ? "" : ", ") + t.name;
+      throw InputError(netlist_where(nl), "", name,
+                       "no top-level parameter '" + name + "' in " + nl.file + " (top-level parameters: " +
+                           (names.empty() ? "none" : names) +
+                           "); a component's parameter is named COMPONENT.PARAMETER, e.g. cylinder.friction_scale");
+    }
+    p.parameter = name;
+    p.unit = units::si_unit_name(tp->dim);
+    return p;
+  }
+  p.component = name.substr(0, dot);
+  p.parameter = name.substr(dot + 1);
+  const ComponentDecl* decl = find_component(nl, p.component);
+  if (!decl) throw InputError(netlist_where(nl), p.component, "", "no component '" + p.component + "' in " + nl.file);
+  const auto* entry = registry.find(decl->type);
+  const ParameterSpec* spec = entry ? entry->info->parameter(p.parameter) : nullptr;
+  if (!spec || spec->kind != ParameterKind::scalar)
+    throw InputError(decl->where, p.component, p.parameter,
+                     "component type '" + decl->type + "' has no scalar parameter '" + p.parameter +
+                         "' (see 'pneumo components " + decl->type + "')");
+  p.unit = spec->unit;
+  return p;
+}
+
+double parse_value(const Netlist& nl, const Registry& registry, const StudyParameter& p, const std::string& text,
+                   const std::string& option) {
+  (void)registry;
+  units::Quantity q{};
+  try {
+    q = units::parse_quantity(trim(text), nl.gas.p_ambient);
+  } catch (const units::ParseError& e) {
+    throw InputError(netlist_where(nl), p.component, p.parameter, option + ": cannot read '" + text + "': " + e.what());
+  }
+  if (q.had_unit && !(q.dim == units::dimension_of(p.unit)))
+    throw InputError(netlist_where(nl), p.component, p.parameter,
+                     option + ": '" + text + "' has dimension " + q.dim.to_string() + " but " + p.name + " is in " +
+                         p.unit);
+  return q.si_value;
+}
+
+void assign(Netlist& nl, const StudyParameter& p, double value) {
+  if (p.component.empty()) {
+    for (auto& tp : nl.parameters)
+      if (tp.name == p.parameter) {
+        tp.si_value = value;
+        return;
+      }
+    throw InputError(netlist_where(nl), "", p.parameter, "no top-level parameter '" + p.parameter + "'");
+  }
+  for (auto& c : nl.components) {
+    if (c.name != p.component) continue;
+    std::ostringstream text;
+    text.precision(17);
+    text << value;  // a plain number is read as SI
+    for (auto& [key, node] : c.parameters)
+      if (key == p.parameter) {
+        node = YAML::Node(text.str());
+        return;
+      }
+    c.parameters.emplace_back(p.parameter, YAML::Node(text.str()));
+    if (!c.parameter_where.empty()) c.parameter_where.push_back(c.where);
+    return;
+  }
+  throw InputError(netlist_where(nl), p.component, "", "no component '" + p.component + "'");
+}
+
+Design grid_design(const Netlist& nl, const Registry& registry, const std::vector<std::string>& specs) {
+  Design d;
+  std::vector<std::vector<double>> axes;
+  for (const auto& spec : specs) {
+    const std::string option = "--grid " + spec;
+    const auto eq = spec.find('=');
+    const auto parts = eq == std::string::npos ? std::vector<std::string>{} : split(spec.substr(eq + 1), ':');
+    if (eq == std::string::npos || eq == 0 || parts.size() != 3)
+      throw InputError(netlist_where(nl), "", "", option + ": expected NAME=FROM:TO:COUNT, e.g. p_supply=5bar:8bar:4");
+    const StudyParameter p = resolve_parameter(nl, registry, trim(spec.substr(0, eq)));
+    const double a = parse_value(nl, registry, p, parts[0], option);
+    const double b = parse_value(nl, registry, p, parts[1], option);
+    int n = 0;
+    try {
+      std::size_t used = 0;
+      n = std::stoi(parts[2], &used);
+      if (used != parts[2].size()) n = 0;
+    } catch (const std::exception&) {
+      n = 0;
+    }
+    if (n < 1) throw InputError(netlist_where(nl), p.component, p.parameter, option + ": COUNT must be an integer >= 1");
+    std::vector<double> axis(n);
+    for (int i = 0; i < n; ++i) axis[i] = n == 1 ? a : a + (b - a) * i / (n - 1);
+    if (n > 1) axis[n - 1] = b;
+    d.parameters.push_back(p);
+    axes.push_back(std::move(axis));
+  }
+  std::size_t total = axes.empty() ? 0 : 1;
+  for (const auto& a : axes) total *= a.size();
+  d.samples.reserve(total);
+  for (std::size_t k = 0; k < total; ++k) {
+    Sample s(axes.size());
+    std::size_t rest = k;
+    for (std::size_t j = axes.size(); j-- > 0;) {
+      s[j] = axes[j][rest % axes[j].size()];
+      rest /= axes[j].size();
+    }
+    d.samples.push_back(std::move(s));
+  }
+  return d;
+}
+
+Design samples_design(const Netlist& nl, const Registry& registry, const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(SourceLocation{path, 0, 0}, "", "", "cannot open the samples file");
+  Design d;
+  std::vector<double> scale;
+  std::vector<std::string> unit_text;
+  std::string line;
+  int line_no = 0;
+  bool header = false;
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (trim(line).empty() || trim(line)[0] == '#') continue;
+    const auto cells = split(line, ',');
+    const SourceLocation where{path, line_no, 1};
+    if (!header) {
+      for (const auto& cell : cells) {
+        std::string name = cell, unit;
+        const auto open = cell.find('[');
+        if (open != std::string::npos && cell.back() == ']') {
+          name = trim(cell.substr(0, open));
+          unit = trim(cell.substr(open + 1, cell.size() - open - 2));
+        }
+        try {
+          d.parameters.push_back(resolve_parameter(nl, registry, name));
+        } catch (const InputError& e) {
+          throw InputError(where, "", name, "column '" + cell + "': " + e.message());
+        }
+        unit_text.push_back(unit);
+      }
+      header = true;
+      continue;
+    }
+    if (cells.size() != d.parameters.size())
+      throw InputError(where, "", "", "expected " + std::to_string(d.parameters.size()) + " values, found " +
+                                          std::to_string(cells.size()));
+    Sample s;
+    for (std::size_t j = 0; j < cells.size(); ++j) {
+      const std::string text = unit_text[j].empty() ? cells[j] : cells[j] + " " + unit_text[j];
+      try {
+        s.push_back(parse_value(nl, registry, d.parameters[j], text, "samples"));
+      } catch (const InputError& e) {
+        throw InputError(where, d.parameters[j].component, d.parameters[j].parameter, e.message());
+      }
+    }
+    d.samples.push_back(std::move(s));
+  }
+  if (!header) throw InputError(SourceLocation{path, 1, 1}, "", "", "no header line naming the parameters");
+  return d;
+}
+
+std::vector<Range> parse_ranges(const Netlist& nl, const Registry& registry, const std::vector<std::string>& specs) {
+  std::vector<Range> out;
+  for (const auto& spec : specs) {
+    const std::string option = "--param " + spec;
+    const auto eq = spec.find('=');
+    const auto parts = eq == std::string::npos ? std::vector<std::string>{} : split(spec.substr(eq + 1), ':');
+    if (eq == std::string::npos || eq == 0 || parts.size() != 2)
+      throw InputError(netlist_where(nl), "", "", option + ": expected NAME=LOW:HIGH, e.g. m_load=2kg:6kg");
+    Range r;
+    r.parameter = resolve_parameter(nl, registry, trim(spec.substr(0, eq)));
+    r.lo = parse_value(nl, registry, r.parameter, parts[0], option);
+    r.hi = parse_value(nl, registry, r.parameter, parts[1], option);
+    if (!(r.hi > r.lo))
+      throw InputError(netlist_where(nl), r.parameter.component, r.parameter.parameter,
+                       option + ": HIGH must be greater than LOW");
+    out.push_back(r);
+  }
+  return out;
+}
+
+}  // namespace pneumo::study

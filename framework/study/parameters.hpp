@@ -1,0 +1,65 @@
+// Study parameters: which netlist values a sweep or a sensitivity analysis
+// varies, and how a run's values are put into the netlist.
+//
+// A parameter is named either as a top-level netlist parameter (`p_supply`,
+// as with `pneumo simulate --set`) or as `component.parameter`
+// (`cylinder.friction_scale`), which replaces that component's value in the
+// netlist - so that any scalar parameter can be studied without editing the
+// netlist. Values are SI numbers inside; on the command line they may carry
+// units (`5 bar`, `2 cm3`).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "framework/model/registry.hpp"
+#include "framework/netlist/netlist.hpp"
+
+namespace pneumo::study {
+
+struct StudyParameter {
+  std::string name;       // as written: "p_supply" or "cylinder.friction_scale"
+  std::string component;  // empty for a top-level parameter
+  std::string parameter;  // the top-level or component parameter name
+  std::string unit;       // SI unit of the value
+};
+
+// Resolve NAME against the netlist (and the registry for component
+// parameters); throws InputError naming the netlist and what exists.
+StudyParameter resolve_parameter(const Netlist& netlist, const Registry& registry, const std::string& name);
+
+// Parse a value for `p`: an SI number or a quantity with a unit of the right
+// dimension. `option` names the command-line text for error messages.
+double parse_value(const Netlist& netlist, const Registry& registry, const StudyParameter& p,
+                   const std::string& text, const std::string& option);
+
+// Put `value` (SI) into the netlist: the top-level parameter's value, or the
+// component's parameter (added if the netlist left it at its default).
+void assign(Netlist& netlist, const StudyParameter& p, double value);
+
+// One run's parameter values, in the order of the study's parameters.
+using Sample = std::vector<double>;
+
+struct Design {
+  std::vector<StudyParameter> parameters;
+  std::vector<Sample> samples;
+};
+
+// --grid NAME=a:b:n ...: the full factorial grid, n values from a to b
+// (inclusive, evenly spaced; n = 1 takes a). The last parameter varies fastest.
+Design grid_design(const Netlist& netlist, const Registry& registry, const std::vector<std::string>& specs);
+
+// --samples FILE: a CSV whose header names the parameters (optionally
+// "name [unit]", values then in that unit) and whose rows are the runs.
+// '#' lines are comments. Errors name FILE:line.
+Design samples_design(const Netlist& netlist, const Registry& registry, const std::string& path);
+
+// NAME=lo:hi ranges (for sensitivity analysis).
+struct Range {
+  StudyParameter parameter;
+  double lo = 0.0, hi = 0.0;
+};
+std::vector<Range> parse_ranges(const Netlist& netlist, const Registry& registry,
+                                const std::vector<std::string>& specs);
+
+}  // namespace pneumo::study

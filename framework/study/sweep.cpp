@@ -1,0 +1,425 @@
+#include "framework/study/sweep.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <mutex>
+#include <set>
+#include <sstream>
+#include <thread>
+#include <unistd.h>
+
+#include "components/builtin.hpp"
+
+namespace pneumo::study {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+std::string number(double v) {
+  if (std::isnan(v)) return "nan";
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
+
+std::string quoted(const std::string& s) {
+  std::string out = "\"";
+  for (char c : s) {
+    if (c == '"') out += "\"\"";
+    else if (c == '\n' || c == '\r') out += ' ';
+    else out += c;
+  }
+  return out + "\"";
+}
+
+// CSV cells of one line (quotes with "" escapes).
+std::vector<std::string> split_csv(const std::string& line) {
+  std::vector<std::string> cells;
+  std::string cell;
+  bool in_quotes = false;
+  for (std::size_t i = 0; i < line.size(); ++i) {
+    const char c = line[i];
+    if (in_quotes) {
+      if (c == '"' && i + 1 < line.size() && line[i + 1] == '"') cell += '"', ++i;
+      else if (c == '"') in_quotes = false;
+      else cell += c;
+    } else if (c == '"') {
+      in_quotes = true;
+    } else if (c == ',') {
+      cells.push_back(cell);
+      cell.clear();
+    } else {
+      cell += c;
+    }
+  }
+  cells.push_back(cell);
+  return cells;
+}
+
+std::string journal_line(const RunRecord& r, std::size_t n_metrics) {
+  std::string s = std::to_string(r.index) + (r.ok ? ",ok" : ",failed");
+  for (std::size_t k = 0; k < n_metrics; ++k) {
+    s += ',';
+    if (r.ok) s += number(r.metrics[k]);
+  }
+  s += ',';
+  s += std::to_string(r.steps);
+  s += ',';
+  s += quoted(r.reason);
+  s += '\n';
+  return s;
+}
+
+bool parse_journal_line(const std::string& line, std::size_t n_metrics, RunRecord& r) {
+  const auto cells = split_csv(line);
+  if (cells.size() != n_metrics + 4) return false;
+  try {
+    r.index = std::stol(cells[0]);
+    r.ok = cells[1] == "ok";
+    if (!r.ok && cells[1] != "failed") return false;
+    r.metrics.clear();
+    if (r.ok)
+      for (std::size_t k = 0; k < n_metrics; ++k) r.metrics.push_back(std::stod(cells[2 + k]));
+    r.steps = std::stol(cells[2 + n_metrics]);
+    r.reason = cells[3 + n_metrics];
+  } catch (const std::exception&) {
+    return false;
+  }
+  return true;
+}
+
+std::uint64_t fnv1a(std::uint64_t h, const std::string& s) {
+  for (unsigned char c : s) h = (h ^ c) * 1099511628211ull;
+  return h;
+}
+
+std::string sweep_identity(const std::string& netlist_text, const Design& d,
+                           const std::vector<const Metric*>& metrics, bool eliminate) {
+  std::uint64_t h = 14695981039346656037ull;
+  h = fnv1a(h, netlist_text);
+  for (const auto& p : d.parameters) h = fnv1a(fnv1a(h, "|"), p.name);
+  for (const auto& s : d.samples)
+    for (double v : s) h = fnv1a(fnv1a(h, ","), number(v));
+  for (const auto* m : metrics) h = fnv1a(fnv1a(h, "|"), m->name);
+  if (eliminate) h = fnv1a(h, "|eliminate_aliases");
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "# pneumo sweep journal %016llx runs %zu", static_cast<unsigned long long>(h),
+                d.samples.size());
+  return buf;
+}
+
+std::vector<fs::path> journal_files(const std::string& output) {
+  std::vector<fs::path> out;
+  const fs::path target = fs::absolute(output);
+  const std::string prefix = target.filename().string() + ".journal";
+  std::error_code ec;
+  const fs::path dir = target.parent_path();
+  for (const auto& e : fs::directory_iterator(dir, ec)) {
+    const std::string name = e.path().filename().string();
+    if (name == prefix || name.rfind(prefix + ".rank", 0) == 0) out.push_back(e.path());
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+// Records found in the journals of an earlier, interrupted run of the same sweep.
+std::vector<RunRecord> read_journals(const std::string& output, const std::string& identity, std::size_t n_metrics,
+                                     long n_runs) {
+  std::vector<RunRecord> out;
+  std::set<long> seen;
+  for (const auto& path : journal_files(output)) {
+    std::ifstream in(path, std::ios::binary);
+    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (text.empty()) continue;
+    const auto first_end = text.find('\n');
+    if (first_end == std::string::npos || text.substr(0, first_end) != identity)
+      throw InputError(SourceLocation{path.string(), 1, 1}, "", "",
+                       "this journal belongs to a different sweep (other netlist, parameters, samples or metrics); "
+                       "delete it to start afresh, or write the results elsewhere (-o)");
+    std::size_t pos = first_end + 1;
+    while (pos < text.size()) {
+      const auto end = text.find('\n', pos);
+      if (end == std::string::npos) break;  // cut short by a kill: run it again
+      RunRecord r;
+      if (parse_journal_line(text.substr(pos, end - pos), n_metrics, r) && r.index >= 0 && r.index < n_runs &&
+          seen.insert(r.index).second)
+        out.push_back(std::move(r));
+      pos = end + 1;
+    }
+  }
+  return out;
+}
+
+// Appends finished runs to this process's journal, one flushed write each.
+class Journal {
+ public:
+  Journal(const fs::path& path, const std::string& identity) : path_(path) {
+    // Drop a trailing partial line from an earlier kill before appending.
+    std::error_code ec;
+    if (fs::exists(path, ec)) {
+      std::ifstream in(path, std::ios::binary);
+      std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+      const auto last = text.rfind('\n');
+      fs::resize_file(path, last == std::string::npos ? 0 : last + 1, ec);
+    }
+    const bool fresh = !fs::exists(path, ec) || fs::file_size(path, ec) == 0;
+    file_ = std::fopen(path.string().c_str(), "ab");
+    if (!file_) throw std::runtime_error("cannot write the sweep journal '" + path.string() + "'");
+    if (fresh) write(identity + "\n");
+  }
+  ~Journal() {
+    if (file_) std::fclose(file_);
+  }
+  Journal(const Journal&) = delete;
+  Journal& operator=(const Journal&) = delete;
+  void write(const std::string& line) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (std::fwrite(line.data(), 1, line.size(), file_) != line.size() || std::fflush(file_) != 0)
+      throw std::runtime_error("cannot write the sweep journal '" + path_.string() + "'");
+  }
+
+ private:
+  fs::path path_;
+  std::FILE* file_ = nullptr;
+  std::mutex mutex_;
+};
+
+class Progress {
+ public:
+  Progress(long total, bool enabled) : total_(total), enabled_(enabled), tty_(isatty(2)), t0_(Clock::now()) {}
+  void update(long done, long failed, bool final = false) {
+    if (!enabled_ || total_ <= 0) return;
+    const auto now = Clock::now();
+    const int decile = static_cast<int>(10 * done / total_);
+    if (final && done == last_done_) return;
+    if (!final) {
+      if (tty_ && now - last_ < std::chrono::milliseconds(200)) return;
+      if (!tty_ && decile == last_decile_) return;
+    }
+    last_ = now;
+    last_decile_ = decile;
+    last_done_ = done;
+    const double s = std::chrono::duration<double>(now - t0_).count();
+    const double rate = s > 0 ? done / s : 0.0;
+    const int width = 30;
+    const int filled = static_cast<int>(width * done / total_);
+    std::string bar(filled, '#');
+    bar.resize(width, '.');
+    char line[200];
+    std::snprintf(line, sizeof line, "[%s] %ld/%ld runs, %ld failed, %.1f runs/s, ETA %.0f s", bar.c_str(), done,
+                  total_, failed, rate, rate > 0 ? (total_ - done) / rate : 0.0);
+    std::cerr << (tty_ ? "\r" : "") << line << (tty_ && !final ? "" : "\n") << std::flush;
+  }
+
+ private:
+  long total_;
+  bool enabled_, tty_;
+  Clock::time_point t0_, last_{};
+  int last_decile_ = -1;
+  long last_done_ = -1;
+};
+
+void write_results(const std::string& output, const Design& d, const std::vector<const Metric*>& metrics,
+                   const std::vector<RunRecord>& records) {
+  const fs::path target(output);
+  const fs::path tmp = target.string() + ".writing";
+  {
+    std::ofstream out(tmp);
+    if (!out) throw std::runtime_error("cannot write results file '" + output + "'");
+    out << "run,status";
+    for (const auto& p : d.parameters) out << "," << p.name << " [" << p.unit << "]";
+    for (const auto* m : metrics) out << "," << m->name << " [" << m->unit << "]";
+    out << ",steps,reason\n";
+    for (const auto& r : records) {
+      out << r.index << (r.ok ? ",ok" : ",failed");
+      for (double v : d.samples[r.index]) out << "," << number(v);
+      for (std::size_t k = 0; k < metrics.size(); ++k) out << "," << (r.ok ? number(r.metrics[k]) : "");
+      out << "," << r.steps << "," << quoted(r.reason) << "\n";
+    }
+    out.flush();
+    if (!out) {
+      std::error_code ec;
+      fs::remove(tmp, ec);
+      throw std::runtime_error("error while writing results file '" + output + "'");
+    }
+  }
+  std::error_code ec;
+  fs::rename(tmp, target, ec);
+  if (ec) throw std::runtime_error("cannot move results into '" + output + "': " + ec.message());
+}
+
+}  // namespace
+
+RunRecord run_one(Netlist& nl, const Registry& registry, const std::vector<StudyParameter>& parameters,
+                  const Sample& sample, const std::vector<const Metric*>& metrics,
+                  const AssemblyOptions& assembly) {
+  RunRecord rec;
+  try {
+    for (std::size_t j = 0; j < parameters.size(); ++j) assign(nl, parameters[j], sample[j]);
+    System system(elaborate(nl, registry), assembly);
+    const RunResult run = run_system(system, solver_options(nl.simulation));
+    rec.steps = run.solver.stats.steps;
+    if (!run.solver.ok) {
+      rec.reason = run.solver.message;
+      return rec;
+    }
+    for (const auto* m : metrics) rec.metrics.push_back(m->compute(run));
+    rec.ok = true;
+  } catch (const InputError& e) {
+    rec.reason = e.what();
+  } catch (const std::exception& e) {
+    rec.reason = e.what();
+  }
+  return rec;
+}
+
+SweepSummary run_sweep(const std::string& netlist_path, const Design& design, const std::string& output,
+                       const SweepOptions& opt, Communicator& comm) {
+  const auto t0 = Clock::now();
+  std::string text;
+  {
+    std::ifstream in(netlist_path, std::ios::binary);
+    if (!in) throw InputError(SourceLocation{netlist_path, 0, 0}, "", "", "cannot open the netlist");
+    text.assign((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  }
+  const Netlist base = parse_netlist(text, netlist_path);
+  const auto metrics = select_metrics(base, opt.metrics);
+  const long n = static_cast<long>(design.samples.size());
+  const std::string identity = sweep_identity(text, design, metrics, opt.assembly.eliminate_aliases);
+  if (const auto parent = fs::path(output).parent_path(); !parent.empty()) fs::create_directories(parent);
+
+  // Which runs are done already: rank 0 reads the journals and tells the others.
+  std::vector<RunRecord> previous;
+  std::string done_list;
+  if (comm.rank() == 0) {
+    previous = read_journals(output, identity, metrics.size(), n);
+    for (const auto& r : previous) {
+      done_list += std::to_string(r.index);
+      done_list += ' ';
+    }
+  }
+  comm.broadcast(done_list);
+  std::set<long> done;
+  {
+    std::istringstream ss(done_list);
+    long i;
+    while (ss >> i) done.insert(i);
+  }
+  std::vector<long> mine;  // pending runs of this rank: every size-th pending index
+  long pending_count = 0;
+  for (long i = 0; i < n; ++i) {
+    if (done.count(i)) continue;
+    if (pending_count++ % comm.size() == comm.rank()) mine.push_back(i);
+  }
+
+  SweepSummary summary;
+  summary.runs = n;
+  summary.ranks = comm.size();
+  summary.done_before = static_cast<long>(done.size());
+  const fs::path journal_path =
+      comm.size() > 1 ? fs::path(output + ".journal.rank" + std::to_string(comm.rank())) : fs::path(output + ".journal");
+  std::vector<RunRecord> fresh;
+  {
+    Journal journal(journal_path, identity);
+    std::mutex mutex;
+    std::atomic<long> next{0}, finished{0}, failed{0};
+    std::atomic<bool> stop{false};
+    std::exception_ptr error;
+    Progress progress(static_cast<long>(mine.size()), opt.progress && comm.rank() == 0);
+    auto worker = [&]() {
+      try {
+        Netlist nl = parse_netlist(text, netlist_path);  // own copy: YAML nodes are not shared across threads
+        const Registry& registry = builtin_registry();
+        for (;;) {
+          if (stop) return;
+          const long k = next++;
+          if (k >= static_cast<long>(mine.size())) return;
+          if (opt.stop_after >= 0 && k >= opt.stop_after) {
+            stop = true;
+            return;
+          }
+          RunRecord rec = run_one(nl, registry, design.parameters, design.samples[mine[k]], metrics, opt.assembly);
+          rec.index = mine[k];
+          journal.write(journal_line(rec, metrics.size()));
+          const long f = failed += rec.ok ? 0 : 1;
+          const long d = ++finished;
+          std::lock_guard<std::mutex> lock(mutex);
+          fresh.push_back(std::move(rec));
+          progress.update(d, f);
+        }
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(mutex);
+        if (!error) error = std::current_exception();
+        stop = true;
+      }
+    };
+    const int threads = std::max(1, std::min<int>(opt.threads, static_cast<int>(std::max<std::size_t>(1, mine.size()))));
+    std::vector<std::thread> pool;
+    for (int t = 1; t < threads; ++t) pool.emplace_back(worker);
+    worker();
+    for (auto& th : pool) th.join();
+    if (error) std::rethrow_exception(error);
+    progress.update(finished, failed, true);
+  }
+  summary.computed = static_cast<long>(fresh.size());
+  const bool my_part_complete = summary.computed == static_cast<long>(mine.size());
+
+  // Collect on rank 0: every rank's new records as journal lines.
+  std::string lines = my_part_complete ? "complete\n" : "incomplete\n";
+  for (const auto& r : fresh) lines += journal_line(r, metrics.size());
+  const auto gathered = comm.gather(lines);
+  if (comm.rank() == 0) {
+    bool complete = true;
+    std::vector<RunRecord> all = std::move(previous);
+    for (const auto& g : gathered) {
+      std::istringstream ss(g);
+      std::string line;
+      std::getline(ss, line);
+      complete &= line == "complete";
+      while (std::getline(ss, line)) {
+        RunRecord r;
+        if (parse_journal_line(line, metrics.size(), r)) all.push_back(std::move(r));
+      }
+    }
+    std::sort(all.begin(), all.end(), [](const RunRecord& a, const RunRecord& b) { return a.index < b.index; });
+    all.erase(std::unique(all.begin(), all.end(), [](const RunRecord& a, const RunRecord& b) { return a.index == b.index; }),
+              all.end());
+    complete &= static_cast<long>(all.size()) == n;
+    summary.complete = complete;
+    for (const auto& r : all) summary.failed += r.ok ? 0 : 1;
+    if (complete) {
+      write_results(output, design, metrics, all);
+      if (!opt.keep_journal) {
+        std::error_code ec;
+        for (const auto& p : journal_files(output)) fs::remove(p, ec);
+      }
+      summary.records = std::move(all);
+    }
+  }
+  comm.barrier();
+  summary.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+  return summary;
+}
+
+SweepTable read_sweep_csv(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("cannot open '" + path + "'");
+  SweepTable t;
+  std::string line;
+  if (!std::getline(in, line)) throw std::runtime_error(path + ": empty");
+  t.columns = split_csv(line);
+  while (std::getline(in, line))
+    if (!line.empty()) t.rows.push_back(split_csv(line));
+  return t;
+}
+
+}  // namespace pneumo::study
