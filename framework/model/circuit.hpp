@@ -34,6 +34,7 @@ struct Probe {
   Kind kind = Kind::local;
   int index = -1;
   std::string unit;
+  bool integral = false;  // the output is the time integral of this quantity
 };
 
 // The local variable names of a component, in layout order ("port.p",

@@ -386,14 +386,24 @@ Netlist parse_netlist(const std::string& text, const std::string& file_name) {
   }
   if (top.count("outputs") && !top["outputs"].IsNull()) {
     const auto& os = top["outputs"];
-    auto add = [&](const std::string& name, const YAML::Node& where, const YAML::Node& ref) {
+    auto add = [&](const std::string& name, const YAML::Node& where, const YAML::Node& ref_node) {
+      // name: comp.var, or name: {integral: comp.var} for its time integral
+      // (energy from a power, mass from a mass flow), integrated by the solver.
+      YAML::Node ref = ref_node;
+      bool integral = false;
+      if (ref_node.IsMap()) {
+        if (ref_node.size() != 1 || !ref_node["integral"])
+          r.fail(ref_node, "", "", "output '" + name + "': a mapping output must be {integral: component.variable}");
+        ref = ref_node["integral"];
+        integral = true;
+      }
       const std::string s = r.scalar_text(ref, "", "", "an output reference");
       const auto dot = s.find('.');
       if (dot == std::string::npos || dot == 0 || dot + 1 == s.size())
         r.fail(ref, "", "", "output '" + s + "' must be component.variable");
       for (const auto& o : nl.outputs)
         if (o.name == name) r.fail(where, "", "", "duplicate output name '" + name + "'");
-      nl.outputs.push_back({name, s.substr(0, dot), s.substr(dot + 1), r.at(ref)});
+      nl.outputs.push_back({name, s.substr(0, dot), s.substr(dot + 1), r.at(ref), integral});
     };
     if (os.IsMap()) {
       for (const auto& e : r.mapping(os, "outputs")) add(e.key, e.key_node, e.value);
@@ -693,6 +703,10 @@ Circuit elaborate(const Netlist& nl, const Registry& registry) {
       throw InputError(o.where, o.component, "", "output '" + o.name + "': type '" + comp.info().type +
                                                      "' has no variable '" + o.quantity + "'; " +
                                                      choices_hint(o.quantity, valid));
+    }
+    if (o.integral) {
+      probe.integral = true;
+      probe.unit = probe.unit == "W" ? "J" : probe.unit == "kg/s" ? "kg" : probe.unit + "*s";
     }
     circuit.probes.push_back(probe);
   }

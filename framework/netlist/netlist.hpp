@@ -64,6 +64,7 @@ struct OutputDecl {
   std::string component;  // instance
   std::string quantity;   // variable, observable or port variable ("port.p")
   SourceLocation where;
+  bool integral = false;  // {integral: comp.var}: its time integral from t_start
 };
 
 // A component plugin the netlist loads (framework/plugin/plugin.hpp).
