@@ -90,7 +90,7 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
     using P = ParameterSpec;
     i.parameters = {
         P::scalar("bore", "m", "piston diameter").positive(),
-        P::scalar("rod", "m", "rod diameter").positive(),
+        P::scalar("rod", "m", "rod diameter; 0: rodless (both sides full bore area, seed 001's MY3B)").non_negative(),
         P::scalar("stroke", "m", "stroke").positive(),
         P::scalar("plug_diameter", "m", "cushioning plug diameter").positive(),
         P::scalar("cushion_length", "m", "cushioning length (plug engages at x = stroke - cushion_length)")
