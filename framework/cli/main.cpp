@@ -8,11 +8,13 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <sstream>
 
 #include "components/builtin.hpp"
 #include "framework/cli/fit.hpp"
+#include "framework/analysis/energy_audit.hpp"
 #include "framework/core/units.hpp"
 #include "framework/core/version.hpp"
 #include "framework/io/plot.hpp"
@@ -88,9 +90,14 @@ std::vector<std::string> split_list(const std::string& s) {
 }
 
 int simulate_command(const std::string& netlist_path, const std::vector<std::string>& sets, std::string output,
-                     bool stats, bool quiet, const std::string& plot_prefix, const std::string& plot_columns) {
+                     bool stats, bool quiet, const std::string& plot_prefix, const std::string& plot_columns,
+                     const std::string& audit_path) {
   Netlist nl = load_netlist(netlist_path);
   for (const auto& s : sets) apply_override(nl, s);
+  const bool user_outputs = !nl.outputs.empty();
+  if (!audit_path.empty() && prepare_energy_audit(nl).empty())
+    throw InputError(SourceLocation{nl.file, 1, 1}, "", "",
+                     "--energy-audit: the netlist has no cushioned_cylinder to audit");
   if (output.empty()) output = std::filesystem::path(netlist_path).stem().string() + ".csv";
   if (const auto parent = std::filesystem::path(output).parent_path(); !parent.empty())
     std::filesystem::create_directories(parent);
@@ -98,11 +105,16 @@ int simulate_command(const std::string& netlist_path, const std::vector<std::str
   const auto t0 = std::chrono::steady_clock::now();
   const Registry registry = registry_with_plugins(builtin_registry(), nl);  // the netlist's `plugins:`
   System system(elaborate(nl, registry));  // all input errors surface here
-  if (nl.outputs.empty())
+  if (!user_outputs)
     throw InputError(SourceLocation{nl.file, 1, 1}, "", "",
                      "the netlist has no 'outputs:' (name: component.variable); nothing would be written");
   RunResult run = run_system(system, solver_options(nl.simulation));
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::vector<CushionAudit> audits;
+  if (!audit_path.empty()) {
+    if (run.solver.ok) audits = energy_audit(nl, run);
+    drop_audit_columns(run.table);
+  }
 
   if (!quiet)
     for (const auto& ev : run.solver.events)
@@ -117,6 +129,21 @@ int simulate_command(const std::string& netlist_path, const std::vector<std::str
     return 1;
   }
   write_csv_atomic(output, run.table);
+  if (!audit_path.empty()) {
+    if (const auto parent = std::filesystem::path(audit_path).parent_path(); !parent.empty())
+      std::filesystem::create_directories(parent);
+    const std::string tmp = audit_path + ".writing";
+    {
+      std::ofstream f(tmp);
+      write_audit_yaml(audits, f);
+      if (!f) throw std::runtime_error("cannot write the energy audit to " + audit_path);
+    }
+    std::filesystem::rename(tmp, audit_path);
+    if (!quiet) {
+      for (const auto& a : audits) print_audit(a, std::cout);
+      std::cout << "wrote the energy audit to " << audit_path << "\n";
+    }
+  }
   if (!quiet) {
     std::cout << "wrote " << run.table.rows.size() << " rows x " << run.table.names.size() << " columns to "
               << output << "\n";
@@ -159,6 +186,9 @@ int main(int argc, char** argv) {
   std::string plot_prefix, plot_columns;
   sim->add_option("--plot", plot_prefix, "also plot the results to PREFIX.png and PREFIX.svg (gnuplot)");
   sim->add_option("--columns", plot_columns, "columns to plot, comma separated (default: all)");
+  std::string audit_path;
+  sim->add_option("--energy-audit", audit_path,
+                  "cushioning energy audit of every cushioned_cylinder: print it and write it (YAML) to FILE");
 
   auto* plot = app.add_subcommand("plot", "plot a results CSV to PNG and SVG through gnuplot");
   std::string plot_csv, plot_out;
@@ -186,7 +216,7 @@ int main(int argc, char** argv) {
 
   try {
     if (fit_cmd->selected()) return fit_cmd->run();
-    if (*sim) return simulate_command(netlist, sets, output, stats, quiet, plot_prefix, plot_columns);
+    if (*sim) return simulate_command(netlist, sets, output, stats, quiet, plot_prefix, plot_columns, audit_path);
     if (*plot) {
       if (plot_out.empty()) plot_out = (std::filesystem::path(plot_csv).parent_path() /
                                         std::filesystem::path(plot_csv).stem()).string();

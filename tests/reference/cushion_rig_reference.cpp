@@ -3,7 +3,9 @@
 // code is used here on purpose.
 #include "cushion_rig_reference.hpp"
 
-#include <ida/ida.h>
+// IDAS, the library pneumo links: one process must not load both IDA and
+// IDAS (they export the same IDA* symbols).
+#include <idas/idas.h>
 #include <nvector/nvector_serial.h>
 #include <sundials/sundials_context.h>
 #include <sundials/sundials_types.h>
