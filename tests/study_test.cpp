@@ -99,7 +99,7 @@ TEST(SweepDesign, SamplesFileWithUnitsAndLineNumberedErrors) {
 TEST(SweepMetrics, NominalRigAgreesWithReference) {
   Netlist nl = load_netlist(kRig);
   const auto metrics = select_metrics(nl, {});
-  ASSERT_EQ(metrics.size(), 6u);
+  ASSERT_EQ(metrics.size(), 13u);  // 6 from the outputs, 7 from the energy audit
   const RunRecord r = run_one(nl, builtin_registry(), {}, {}, metrics);
   ASSERT_TRUE(r.ok) << r.reason;
   auto metric = [&](const std::string& name) {
@@ -125,6 +125,14 @@ TEST(SweepMetrics, NominalRigAgreesWithReference) {
             << "reference: t_cushion " << t_impact - t_entry << " s, v_impact " << v_impact << " m/s, p_EC_peak "
             << p_peak << " Pa, T_EC " << T_min << ".." << T_max << " K, t_move " << t_impact - 0.01 << " s\n";
   EXPECT_NEAR(metric("t_cushion"), t_impact - t_entry, 1e-3);
+  // Energy audit: the kinetic energy at entry from the reference's entry
+  // speed (3.7 kg), and the audit's closure (solver-integrated accounts).
+  double v_entry = NAN;
+  for (std::size_t i = 1; i < ref.samples.size() && std::isnan(v_entry); ++i)
+    if (ref.samples[i - 1].x < 0.08 && ref.samples[i].x >= 0.08) v_entry = ref.samples[i].v;
+  EXPECT_NEAR(metric("E_kin_entry"), 0.5 * 3.7 * v_entry * v_entry, 0.01 * 0.5 * 3.7 * v_entry * v_entry);
+  EXPECT_LT(std::abs(metric("audit_residual")), 1e-4);
+  EXPECT_GT(metric("E_stop"), 0.0);  // 1.5 rev still touches the stop at ~0.2 m/s
   EXPECT_NEAR(metric("v_impact"), v_impact, 0.02 * v_impact);
   EXPECT_NEAR(metric("p_EC_peak"), p_peak, 0.01 * p_peak);
   EXPECT_NEAR(metric("T_EC_min"), T_min, 0.5);

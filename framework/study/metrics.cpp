@@ -65,6 +65,37 @@ std::vector<Metric>& catalogue() {
          return r.solver.events.empty() ? kNaN : event_time(r, kImpactEvent) - r.solver.events.front().t;
        }},
   };
+  // Energy audit metrics (added once): a term of the first audited cylinder
+  // (NaN if the piston never entered the cushioning zone).
+  static const bool with_audit = [&] {
+  auto audit_term = [](bool in, const char* name) {
+    return [in, name](const CushionAudit& a) {
+      if (!a.entered) return kNaN;
+      for (const auto& t : in ? a.in : a.out)
+        if (t.name == name) return t.joules;
+      return kNaN;
+    };
+  };
+  auto audit_metric = [&](const char* metric, const char* unit, const char* description,
+                          std::function<double(const CushionAudit&)> f) {
+    Metric x{metric, unit, description, {}, nullptr};
+    x.from_audit = std::move(f);
+    m.push_back(std::move(x));
+  };
+  audit_metric("E_kin_entry", "J", "kinetic energy at cushion entry", audit_term(true, "kinetic_energy_at_entry"));
+  audit_metric("E_drive_cushion", "J", "driving work during cushioning", audit_term(true, "driving_work"));
+  audit_metric("E_compression", "J", "compression of the cushion gas",
+               audit_term(false, "cushion_gas_compression"));
+  audit_metric("E_throttle", "J", "flow work through the cushion throttle / bore opening",
+               audit_term(false, "cushion_throttle_dissipation"));
+  audit_metric("E_friction_cushion", "J", "friction while cushioning", audit_term(false, "friction"));
+  audit_metric("E_stop", "J", "absorbed by the end stop", audit_term(false, "end_stop"));
+  audit_metric("audit_residual", "1", "closure of the energy audit, (in - out) / in", [](const CushionAudit& a) {
+    return a.entered && a.total_in != 0 ? a.residual() / a.total_in : kNaN;
+  });
+  return true;
+  }();
+  (void)with_audit;
   return m;
 }
 
@@ -82,9 +113,26 @@ void register_metric(Metric m) {
   catalogue().push_back(std::move(m));
 }
 
+bool needs_audit(const std::vector<const Metric*>& metrics) {
+  return std::any_of(metrics.begin(), metrics.end(), [](const Metric* m) { return bool(m->from_audit); });
+}
+
+std::vector<double> compute_metrics(const std::vector<const Metric*>& metrics, const Netlist& nl,
+                                    const RunResult& run) {
+  std::vector<CushionAudit> audits;
+  if (needs_audit(metrics)) audits = energy_audit(nl, run);
+  std::vector<double> out;
+  for (const auto* m : metrics)
+    out.push_back(m->from_audit ? (audits.empty() ? kNaN : m->from_audit(audits.front())) : m->compute(run));
+  return out;
+}
+
 std::vector<const Metric*> available_metrics(const Netlist& nl) {
+  const bool has_cylinder = std::any_of(nl.components.begin(), nl.components.end(),
+                                        [](const ComponentDecl& c) { return c.type == "cushioned_cylinder"; });
   std::vector<const Metric*> out;
   for (const auto& m : metric_catalogue()) {
+    if (m.from_audit && !has_cylinder) continue;
     bool ok = true;
     for (const auto& need : m.needs)
       ok &= std::any_of(nl.outputs.begin(), nl.outputs.end(), [&](const OutputDecl& o) { return o.name == need; });

@@ -16,16 +16,27 @@
 // A metric whose event never happens (e.g. the piston never reaches the cap
 // by t_end) is NaN ("nan" in the results), not an error.
 //
-// Extension point: the energy audit (another issue) adds its metrics with
-// register_metric() - names, units and a function of the run - and they then
-// appear in sweeps and sensitivity studies like the others. None is defined
-// here yet.
+// Energy audit metrics (framework/analysis/energy_audit; available when the
+// netlist has a cushioned_cylinder - the run then carries the audit's
+// solver-integrated accounts; the first cylinder is audited), J unless said:
+//   E_kin_entry       kinetic energy at cushion entry
+//   E_drive_cushion   driving work during cushioning (rod-side gas, ambient)
+//   E_compression     compression of the cushion gas
+//   E_throttle        flow work through the cushion throttle / bore opening
+//   E_friction_cushion  friction while cushioning
+//   E_stop            absorbed by the end stop
+//   audit_residual [1]  (in - out) / in, the audit's closure
+//
+// Extension point: register_metric() adds further metrics - names, units and
+// a function of the run (or of the audit) - and they then appear in sweeps
+// and sensitivity studies like the others.
 #pragma once
 
 #include <functional>
 #include <string>
 #include <vector>
 
+#include "framework/analysis/energy_audit.hpp"
 #include "framework/run/run.hpp"
 
 namespace pneumo::study {
@@ -36,7 +47,17 @@ struct Metric {
   std::string description;
   std::vector<std::string> needs;  // output columns used
   std::function<double(const RunResult&)> compute;
+  // Set instead of `compute` for energy audit metrics.
+  std::function<double(const CushionAudit&)> from_audit = nullptr;
 };
+
+// True if any of the metrics needs the energy audit (the run must then be
+// prepared with prepare_energy_audit()).
+bool needs_audit(const std::vector<const Metric*>& metrics);
+// Values of the metrics for a finished run of netlist `nl` (prepared for the
+// audit if needs_audit()).
+std::vector<double> compute_metrics(const std::vector<const Metric*>& metrics, const Netlist& nl,
+                                    const RunResult& run);
 
 // All metrics known (built-in cushioning metrics plus registered ones).
 const std::vector<Metric>& metric_catalogue();

@@ -265,14 +265,22 @@ RunRecord run_one(Netlist& nl, const Registry& registry, const std::vector<Study
   RunRecord rec;
   try {
     for (std::size_t j = 0; j < parameters.size(); ++j) assign(nl, parameters[j], sample[j]);
-    System system(elaborate(nl, registry), assembly);
-    const RunResult run = run_system(system, solver_options(nl.simulation));
+    // The energy audit's accounts are extra (solver-integrated) outputs.
+    Netlist audited;
+    const bool audit = needs_audit(metrics);
+    if (audit) {
+      audited = nl;
+      prepare_energy_audit(audited);
+    }
+    const Netlist& run_nl = audit ? audited : nl;
+    System system(elaborate(run_nl, registry), assembly);
+    const RunResult run = run_system(system, solver_options(run_nl.simulation));
     rec.steps = run.solver.stats.steps;
     if (!run.solver.ok) {
       rec.reason = run.solver.message;
       return rec;
     }
-    for (const auto* m : metrics) rec.metrics.push_back(m->compute(run));
+    rec.metrics = compute_metrics(metrics, run_nl, run);
     rec.ok = true;
   } catch (const InputError& e) {
     rec.reason = e.what();
