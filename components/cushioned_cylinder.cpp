@@ -16,9 +16,11 @@
 // terms vanish smoothly in the main stroke because p_EC = p_ch there):
 //   F = p_A A_A + p_amb A_R - p_EC (A_B - A_CP) - p_ch A_CP + F_friction + F_stops
 // Friction (components/friction.hpp, `friction_model`): seed 000 eq. 4/7/8
-// presets, with a separate coefficient set in the cushioning zone blended
-// over the bore-opening ramp; or Coulomb + viscous; or LuGre (seed 002 eq. 8,
-// bristle state z as an internal variable - the piston can stick).
+// presets or custom eq. 8 coefficients (`friction: custom`, friction_b0 ...
+// as `pneumo fit friction -o` writes them), with a separate set in the
+// cushioning zone (`friction_cushion`, preset or custom friction_cushion_*)
+// blended over the bore-opening ramp; or Coulomb + viscous; or LuGre (seed
+// 002 eq. 8, bristle state z as an internal variable - the piston can stick).
 // End stops: elastic, force = max(0, k pen + d pen_rate), never pulling.
 //
 // Rod-end cushioning (present when `rod_plug_diameter` is given; the

@@ -2,6 +2,8 @@
 // row per supply pressure p0 in bar_rel) and Annex C (eq. 8), as printed.
 #include "components/friction.hpp"
 
+#include <stdexcept>
+
 namespace pneumo::components {
 
 namespace {
@@ -45,6 +47,76 @@ const std::map<std::string, FrictionCoefficients>& friction_presets() {
   return presets;
 }
 
+namespace {
+
+constexpr double kPerBar = 1e5;  // Pa per bar: the coefficients are per bar inside
+
+// The custom eq. 8 coefficients of one set (prefix "friction" or
+// "friction_cushion"); FC and vS of the main set are the shared
+// friction_FC / friction_vS (declared with the other models' parameters).
+std::vector<ParameterSpec> custom_parameters(const std::string& pre, bool with_FC_vS) {
+  using P = ParameterSpec;
+  const std::string set = pre == "friction" ? "main-stroke" : "cushioning-zone";
+  const std::string when = " (" + pre + ": custom)";
+  std::vector<ParameterSpec> out = {
+      P::text(pre + "_pressure", {"none", "pAB-", "pAB+", "pEC"},
+              "pressure p of the " + set + " eq. 8 set" + when +
+                  ": pAB- = |p_A - p_B|, pAB+ = p_A + p_B - 2 p_amb, pEC = p_EC - p_amb",
+              "none"),
+      P::scalar(pre + "_b0", "N", "eq. 8 bias b0" + when + "; default 0").optional(),
+      P::scalar(pre + "_b1", "N/Pa", "eq. 8 pressure slope b1, e.g. -0.1 N/bar" + when + "; default 0").optional(),
+      P::scalar(pre + "_FS0", "N", "eq. 8 static force FS0" + when + "; default 0").optional(),
+      P::scalar(pre + "_FS1", "N/Pa", "eq. 8 static force slope FS1, e.g. 0.714 N/bar" + when + "; default 0")
+          .optional(),
+      P::scalar(pre + "_kv0", "N", "eq. 8 viscous force kv0 at |v| = 1 m/s" + when + "; default 0").optional(),
+      P::scalar(pre + "_kv1", "N/Pa", "eq. 8 viscous slope kv1 at 1 m/s, e.g. 6.1 N/bar" + when + "; default 0")
+          .optional(),
+      P::scalar(pre + "_a", "1", "eq. 8 speed exponent a" + when + "; default 1").positive().optional(),
+  };
+  if (with_FC_vS) {
+    out.push_back(
+        P::scalar(pre + "_FC", "N", "eq. 8 Coulomb force FC (enters as FS0 - FC)" + when + "; default 0")
+            .non_negative()
+            .optional());
+    out.push_back(P::scalar(pre + "_vS", "m/s", "eq. 8 Stribeck velocity vS" + when + "; default 1 mm/s")
+                      .positive()
+                      .optional());
+  }
+  return out;
+}
+
+// The coefficient set named by the text parameter `pre` (a preset, or the
+// custom coefficients pre_b0 ...). Custom coefficients beside a preset are
+// an error: a pasted fit must not be silently ignored.
+FrictionCoefficients read_set(const ParameterValues& p, const std::string& pre, const std::string& name) {
+  const std::vector<std::string> own = {"_b0", "_b1", "_FS0", "_FS1", "_kv0", "_kv1", "_a"};
+  if (name != "custom") {
+    for (const auto& suffix : own)
+      if (p.has(pre + suffix))
+        throw ParameterError(pre + suffix, pre + suffix + " is a coefficient of " + pre + ": custom, but " + pre +
+                                               " is '" + name + "'; set " + pre + ": custom or remove it");
+    if (p.text(pre + "_pressure") != "none")
+      throw ParameterError(pre + "_pressure", pre + "_pressure selects the pressure of " + pre +
+                                                  ": custom; the preset '" + name + "' has its own");
+    return friction_presets().at(name);
+  }
+  auto get = [&](const std::string& suffix, double fallback) { return p.has(pre + suffix) ? p[pre + suffix] : fallback; };
+  // friction_FC / friction_vS always have a value (the defaults of the other
+  // models); friction_cushion_FC / _vS are optional.
+  return FrictionCoefficients{get("_b0", 0.0),
+                              get("_b1", 0.0) * kPerBar,
+                              get("_FS0", 0.0),
+                              get("_FS1", 0.0) * kPerBar,
+                              get("_FC", 0.0),
+                              get("_vS", 1e-3),
+                              get("_kv0", 0.0),
+                              get("_kv1", 0.0) * kPerBar,
+                              get("_a", 1.0),
+                              friction_pressure_from_name(p.text(pre + "_pressure"))};
+}
+
+}  // namespace
+
 std::vector<ParameterSpec> FrictionLaw::parameters(bool with_cushion) {
   using P = ParameterSpec;
   std::vector<ParameterSpec> out = {
@@ -52,26 +124,35 @@ std::vector<ParameterSpec> FrictionLaw::parameters(bool with_cushion) {
               "friction law: preset (seed 000 eq. 4/7/8 set named by 'friction'), coulomb_viscous "
               "(F_C tanh(v/v_reg) + d v), lugre (seed 002 eq. 8, bristle state z)",
               "preset"),
-      P::text("friction", friction_preset_names(), "coefficient set of seed 000 (friction_model preset)", "none"),
+      P::text("friction", friction_set_names(),
+              "coefficient set of seed 000 (friction_model preset), or custom: eq. 8 with friction_b0 ... friction_a",
+              "none"),
   };
   if (with_cushion)
-    out.push_back(P::text("friction_cushion", friction_preset_names(),
-                          "preset set in the cushioning zone (default: same as main stroke)", std::nullopt)
+    out.push_back(P::text("friction_cushion", friction_set_names(),
+                          "preset set in the cushioning zone, or custom (friction_cushion_b0 ...); default: same "
+                          "as main stroke",
+                          std::nullopt)
                       .optional());
   const std::vector<ParameterSpec> rest = {
       P::scalar("friction_scale", "1", "factor on the friction force", 1.0).non_negative(),
       P::scalar("friction_v_reg", "m/s", "velocity scale of the tanh sign regularisation", 1e-4).positive(),
       P::scalar("friction_v_eps", "m/s", "velocity below which |v| is rounded (|v|^a stays smooth)", 1e-6)
           .positive(),
-      P::scalar("friction_FC", "N", "Coulomb force F_C (coulomb_viscous, lugre)", 0.0).non_negative(),
+      P::scalar("friction_FC", "N", "Coulomb force F_C (coulomb_viscous, lugre; custom: eq. 8 FC, enters as FS0 - FC)",
+                0.0)
+          .non_negative(),
       P::scalar("friction_FS", "N", "static (break-away) force F_S (lugre); default F_C").non_negative().optional(),
-      P::scalar("friction_vS", "m/s", "Stribeck velocity v_S (lugre)", 1e-3).positive(),
+      P::scalar("friction_vS", "m/s", "Stribeck velocity v_S (lugre; custom: eq. 8 vS)", 1e-3).positive(),
       P::scalar("friction_sigma0", "N/m", "bristle stiffness sigma0 (lugre)", 1e5).positive(),
       P::scalar("friction_sigma1", "N*s/m", "bristle damping sigma1 (lugre)", 300.0).non_negative(),
       P::scalar("friction_viscous", "N*s/m", "viscous coefficient: d (coulomb_viscous), sigma2 (lugre)", 0.0)
           .non_negative(),
   };
   out.insert(out.end(), rest.begin(), rest.end());
+  for (auto& c : custom_parameters("friction", false)) out.push_back(std::move(c));
+  if (with_cushion)
+    for (auto& c : custom_parameters("friction_cushion", true)) out.push_back(std::move(c));
   return out;
 }
 
@@ -81,9 +162,30 @@ FrictionLaw FrictionLaw::from(const ParameterValues& p) {
   f.model = m == "lugre" ? FrictionModel::lugre
             : m == "coulomb_viscous" ? FrictionModel::coulomb_viscous
                                      : FrictionModel::preset;
-  f.main = friction_presets().at(p.text("friction"));
-  f.cushion = friction_presets().at(p.has("friction_cushion") ? p.text("friction_cushion") : p.text("friction"));
-  if (f.model != FrictionModel::preset && p.has("friction_cushion"))
+  const std::string& main = p.text("friction");
+  if (f.model != FrictionModel::preset && main == "custom")
+    throw ParameterError("friction", "friction: custom is a coefficient set of eq. 8; it needs friction_model: preset");
+  f.main = read_set(p, "friction", main);
+  const bool has_cushion_choice = p.has("friction_cushion");
+  if (has_cushion_choice) {
+    f.cushion = read_set(p, "friction_cushion", p.text("friction_cushion"));
+    if (p.text("friction_cushion") != "custom")
+      for (const char* name : {"friction_cushion_FC", "friction_cushion_vS"})
+        if (p.has(name))
+          throw ParameterError(name, std::string(name) + " is a coefficient of friction_cushion: custom, but "
+                                                         "friction_cushion is '" + p.text("friction_cushion") + "'");
+  } else {
+    f.cushion = f.main;
+    // Cushion coefficients without `friction_cushion: custom` would be ignored.
+    for (const char* name : {"friction_cushion_b0", "friction_cushion_b1", "friction_cushion_FS0",
+                             "friction_cushion_FS1", "friction_cushion_kv0", "friction_cushion_kv1",
+                             "friction_cushion_a", "friction_cushion_FC", "friction_cushion_vS"})
+      if (p.has(name))
+        throw ParameterError(name, std::string(name) + " needs friction_cushion: custom");
+    if (p.has("friction_cushion_pressure") && p.text("friction_cushion_pressure") != "none")
+      throw ParameterError("friction_cushion_pressure", "friction_cushion_pressure needs friction_cushion: custom");
+  }
+  if (f.model != FrictionModel::preset && has_cushion_choice)
     throw ParameterError("friction_cushion", "friction_cushion selects a preset; it needs friction_model: preset");
   f.scale = p["friction_scale"];
   f.v_reg = p["friction_v_reg"];
@@ -103,6 +205,20 @@ std::vector<std::string> friction_preset_names() {
   std::vector<std::string> names;
   for (const auto& [k, v] : friction_presets()) names.push_back(k);
   return names;
+}
+
+std::vector<std::string> friction_set_names() {
+  std::vector<std::string> names = friction_preset_names();
+  names.push_back("custom");
+  return names;
+}
+
+FrictionPressure friction_pressure_from_name(const std::string& name) {
+  if (name == "none") return FrictionPressure::none;
+  if (name == "pAB-") return FrictionPressure::ab_minus;
+  if (name == "pAB+") return FrictionPressure::ab_plus;
+  if (name == "pEC") return FrictionPressure::ec;
+  throw std::invalid_argument("unknown friction pressure '" + name + "' (none, pAB-, pAB+ or pEC)");
 }
 
 }  // namespace pneumo::components

@@ -14,6 +14,21 @@
 // tanh(v / v_reg) and |v| as sqrt(v^2 + v_eps^2) so that |v|^a (a < 1) has a
 // finite slope at rest. Both scales are parameters of the cylinder.
 //
+// Besides the presets, `friction: custom` (and `friction_cushion: custom`)
+// takes the eq. 8 coefficients from the parameters, in the form `pneumo fit
+// friction -o` writes them (framework/fit/friction_fit.cpp):
+//   friction_pressure  none | pAB- | pAB+ | pEC (default none)
+//   friction_b0, friction_FS0, friction_FC, friction_kv0   N (kv0: force at 1 m/s)
+//   friction_b1, friction_FS1, friction_kv1   N/Pa (netlists write N/bar)
+//   friction_vS  m/s;  friction_a  1
+// and the same with the prefix friction_cushion_ for the cushioning zone.
+// Absent coefficients are 0 (a: 1, vS: 1 mm/s). friction_FC and friction_vS
+// mean the same everywhere - the Coulomb force and the Stribeck velocity -
+// for custom (eq. 8) and for coulomb_viscous / lugre; the static force of
+// lugre is friction_FS, of eq. 8 friction_FS0 + friction_FS1 p. The custom
+// coefficients (and a friction_pressure other than none) are an error with a
+// named preset, so that a pasted fit cannot be silently ignored.
+//
 // FrictionLaw (below) selects one of three models per component
 // (`friction_model`), with the same parameters wherever it is used (the
 // cylinder, friction_element):
@@ -55,6 +70,10 @@ struct FrictionCoefficients {
 // (p0 in bar_rel), "annexC_pAB-", "annexC_pAB+", "annexC_pEC", and "none".
 const std::map<std::string, FrictionCoefficients>& friction_presets();
 std::vector<std::string> friction_preset_names();
+// The choices of `friction` / `friction_cushion`: the presets and "custom".
+std::vector<std::string> friction_set_names();
+// "none" | "pAB-" | "pAB+" | "pEC"; throws std::invalid_argument otherwise.
+FrictionPressure friction_pressure_from_name(const std::string& name);
 
 // Magnitude |F| (N) at speed |v| and pressure p (bar).
 template <class T>
@@ -92,7 +111,7 @@ struct FrictionLaw {
   double viscous = 0;                  // N*s/m: d (coulomb_viscous), sigma2 (lugre)
 
   // The friction_* parameter specs. `with_cushion` adds friction_cushion
-  // (cylinders).
+  // and its custom coefficients friction_cushion_* (cylinders).
   static std::vector<ParameterSpec> parameters(bool with_cushion);
   // Throws ParameterError for inconsistent values.
   static FrictionLaw from(const ParameterValues& p);

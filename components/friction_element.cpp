@@ -17,9 +17,13 @@ class FrictionElement final : public ComponentT<FrictionElement> {
         "Friction of a flange sliding against the ground: friction_model preset (seed 000 eq. 4/7/8 sets), "
         "coulomb_viscous, or lugre (seed 002 eq. 8 with the bristle deflection z as a state).";
     i.parameters = FrictionLaw::parameters(false);
-    i.parameters.push_back(ParameterSpec::scalar("friction_pressure", "Pa",
-                                                 "pressure the pressure-dependent presets use (p_AB-, p_AB+ or p_EC "
-                                                 "as a difference to ambient: write 3 bar for 3 bar_rel)",
+    // The value of the set's pressure p (its kind - friction_pressure for
+    // custom, built into a preset - only says which chamber pressure a
+    // cylinder would use; here there are no chambers).
+    i.parameters.push_back(ParameterSpec::scalar("pressure", "Pa",
+                                                 "pressure p of a pressure-dependent set (p_AB-, p_AB+ or p_EC as a "
+                                                 "difference to ambient: write 3 bar for 3 bar_rel); unused by sets "
+                                                 "without pressure",
                                                  0.0));
     i.ports = {{"flange", Domain::translational, Causality::acausal, "the sliding flange"}};
     i.observables = {{"F", "N", "friction force on the flange (+s)"},
@@ -39,7 +43,8 @@ class FrictionElement final : public ComponentT<FrictionElement> {
   }
 
   explicit FrictionElement(const Construction& c)
-      : ComponentT(c), law_(FrictionLaw::from(c.params)), p_bar_(c.params["friction_pressure"] / 1e5) {}
+      : ComponentT(c), law_(FrictionLaw::from(c.params)),
+        p_bar_(law_.main.pressure == FrictionPressure::none ? 0.0 : c.params["pressure"] / 1e5) {}
 
   template <class T>
   T z(const Eval<T>& e) const {

@@ -176,7 +176,7 @@ void check_presets(const std::vector<std::pair<std::string, Eq8>>& sets, const s
       for (double v : speeds) {
         const std::string id = std::to_string(n++);
         y << "  d" << id << ": {type: velocity_source, v: " << v << "}\n";
-        y << "  f" << id << ": {type: friction_element, friction: " << name << ", friction_pressure: " << p << " bar}\n";
+        y << "  f" << id << ": {type: friction_element, friction: " << name << ", pressure: " << p << " bar}\n";
         out_names.push_back("F" + id);
         expected.push_back(-eq(v, p));
       }

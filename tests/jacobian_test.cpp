@@ -176,7 +176,7 @@ components:
            friction_v_reg: 1e-3 m/s}
   drag:   {type: force_source, F: 30 N}
   sled:   {type: translational_mass, m: 1 kg, s0: 0, v0: 0.05 m/s}
-  eq8:    {type: friction_element, friction: annexC_pAB+, friction_pressure: 4 bar}
+  eq8:    {type: friction_element, friction: annexC_pAB+, pressure: 4 bar}
 connections:
   - [speed.y, drive.v_in]
   - [drive.flange, spring.b]
