@@ -13,6 +13,7 @@ PACKAGES=(
   libcli11-dev
   libgtest-dev googletest
   gnuplot-nox            # pneumo plot
+  chromium               # headless check of the pneumo diagnose HTML report (tests)
 )
 missing=()
 for p in "${PACKAGES[@]}"; do

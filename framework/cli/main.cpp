@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "components/builtin.hpp"
+#include "framework/cli/diagnose.hpp"
 #include "framework/core/units.hpp"
 #include "framework/io/plot.hpp"
 #include "framework/run/run.hpp"
@@ -164,6 +165,7 @@ int main(int argc, char** argv) {
   auto* comps = app.add_subcommand("components", "list component types, or show one");
   std::string type;
   comps->add_option("type", type, "component type to describe");
+  CLI::App* diagnose_cmd = add_diagnose_command(app);
 
   try {
     app.parse(argc, argv);
@@ -172,6 +174,7 @@ int main(int argc, char** argv) {
   }
 
   try {
+    if (*diagnose_cmd) return run_diagnose_command();
     if (*sim) return simulate_command(netlist, sets, output, stats, quiet, plot_prefix, plot_columns);
     if (*plot) {
       if (plot_out.empty()) plot_out = (std::filesystem::path(plot_csv).parent_path() /
