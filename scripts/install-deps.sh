@@ -15,6 +15,7 @@ PACKAGES=(
   libgtest-dev googletest
   gnuplot-nox            # pneumo plot
   libopenmpi-dev openmpi-bin   # pneumo sweep under mpirun (optional at build time)
+  chromium               # headless check of the pneumo diagnose HTML report (tests)
 )
 missing=()
 for p in "${PACKAGES[@]}"; do

@@ -15,6 +15,7 @@
 #include "components/builtin.hpp"
 #include "framework/cli/fit.hpp"
 #include "framework/analysis/energy_audit.hpp"
+#include "framework/cli/diagnose.hpp"
 #include "framework/core/units.hpp"
 #include "framework/core/version.hpp"
 #include "framework/io/plot.hpp"
@@ -206,6 +207,7 @@ int main(int argc, char** argv) {
   comps->add_option("--plugin", comp_plugins, "also list the types of this component plugin (shared library)")
       ->allow_extra_args(false);
   auto fit_cmd = pneumo::cli::add_fit_command(app);
+  CLI::App* diagnose_cmd = add_diagnose_command(app);
 
   try {
     app.parse(argc, argv);
@@ -217,6 +219,7 @@ int main(int argc, char** argv) {
   try {
     if (fit_cmd->selected()) return fit_cmd->run();
     if (*sim) return simulate_command(netlist, sets, output, stats, quiet, plot_prefix, plot_columns, audit_path);
+    if (*diagnose_cmd) return run_diagnose_command();
     if (*plot) {
       if (plot_out.empty()) plot_out = (std::filesystem::path(plot_csv).parent_path() /
                                         std::filesystem::path(plot_csv).stem()).string();

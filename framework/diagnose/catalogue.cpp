@@ -1,0 +1,332 @@
+#include "framework/diagnose/catalogue.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include "framework/netlist/netlist.hpp"
+
+namespace pneumo::diagnose {
+
+int Effect::parameter_index(const std::string& n) const {
+  for (std::size_t i = 0; i < parameters.size(); ++i)
+    if (parameters[i].name == n) return static_cast<int>(i);
+  return -1;
+}
+
+const Effect* Catalogue::find(const std::string& name) const {
+  for (const auto& e : effects)
+    if (e.name == name) return &e;
+  return nullptr;
+}
+
+namespace {
+
+bool has_key(const YAML::Node& map, const std::string& key) { return map.IsMap() && map[key]; }
+
+std::string format_number(double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
+
+// Replace ${name} in every scalar of `node` (a fresh clone) by the values.
+void substitute(YAML::Node node, const Effect& effect, const std::vector<double>& values) {
+  if (node.IsScalar()) {
+    std::string s = node.Scalar();
+    std::size_t pos;
+    bool changed = false;
+    while ((pos = s.find("${")) != std::string::npos) {
+      const std::size_t end = s.find('}', pos);
+      const std::string name = end == std::string::npos ? s.substr(pos + 2) : s.substr(pos + 2, end - pos - 2);
+      const int k = effect.parameter_index(name);
+      if (end == std::string::npos || k < 0)
+        throw InputError(location_of(effect.where.file, node), "", name,
+                         "effect '" + effect.name + "': '${" + name + "}' is not one of the effect's parameters");
+      s = s.substr(0, pos) + format_number(values[k]) + s.substr(end + 1);
+      changed = true;
+    }
+    if (changed) node = s;
+    return;
+  }
+  if (node.IsSequence())
+    for (std::size_t i = 0; i < node.size(); ++i) substitute(node[i], effect, values);
+  if (node.IsMap())
+    for (auto it = node.begin(); it != node.end(); ++it) substitute(it->second, effect, values);
+}
+
+std::set<std::string> port_set(const YAML::Node& list) {
+  std::set<std::string> s;
+  for (const auto& p : list) s.insert(p.as<std::string>());
+  return s;
+}
+
+[[noreturn]] void fail(const std::string& file, const YAML::Node& n, const std::string& effect,
+                       const std::string& parameter, const std::string& msg) {
+  throw InputError(location_of(file, n), "", parameter, (effect.empty() ? "" : "effect '" + effect + "': ") + msg);
+}
+
+double number(const std::string& file, const YAML::Node& n, const std::string& effect, const std::string& param,
+              const std::string& key) {
+  if (!n || !n.IsScalar()) fail(file, n, effect, param, "'" + key + "' must be an SI number");
+  try {
+    return n.as<double>();
+  } catch (const YAML::Exception&) {
+    fail(file, n, effect, param, "'" + key + "': '" + n.Scalar() + "' is not a number (SI values)");
+  }
+}
+
+// Every ${name} in the patch must be one of the effect's parameters.
+void check_references(const std::string& file, const YAML::Node& node, const Effect& effect) {
+  if (node.IsScalar()) {
+    const std::string& s = node.Scalar();
+    for (std::size_t pos = s.find("${"); pos != std::string::npos; pos = s.find("${", pos + 2)) {
+      const std::size_t end = s.find('}', pos);
+      const std::string name = end == std::string::npos ? s.substr(pos + 2) : s.substr(pos + 2, end - pos - 2);
+      if (end == std::string::npos || effect.parameter_index(name) < 0)
+        fail(file, node, effect.name, name, "'${" + name + "}' is not one of the effect's parameters");
+    }
+  } else if (node.IsSequence()) {
+    for (const auto& c : node) check_references(file, c, effect);
+  } else if (node.IsMap()) {
+    for (auto it = node.begin(); it != node.end(); ++it) check_references(file, it->second, effect);
+  }
+}
+
+}  // namespace
+
+YAML::Node apply_effects(const YAML::Node& model, const std::vector<EffectInstance>& effects,
+                         MeasurementModel* measurement) {
+  YAML::Node out = YAML::Clone(model);
+  for (const auto& inst : effects) {
+    const Effect& e = *inst.effect;
+    const std::string& file = e.where.file;
+    auto sub = [&](const YAML::Node& n) {
+      YAML::Node c = YAML::Clone(n);
+      substitute(c, e, inst.values);
+      return c;
+    };
+    if (e.disconnect.IsSequence()) {
+      for (const auto& d : e.disconnect) {
+        const auto want = port_set(d);
+        YAML::Node kept(YAML::NodeType::Sequence);
+        bool found = false;
+        for (const auto& c : out["connections"]) {
+          if (!found && port_set(c) == want) {
+            found = true;
+            continue;
+          }
+          kept.push_back(c);
+        }
+        if (!found) fail(file, d, e.name, "", "disconnect: the model has no connection with exactly these ports");
+        out["connections"] = kept;
+      }
+    }
+    if (e.add_components.IsMap())
+      for (auto it = e.add_components.begin(); it != e.add_components.end(); ++it) {
+        const auto name = it->first.as<std::string>();
+        if (has_key(out["components"], name))
+          fail(file, it->first, e.name, "", "add_components: the model already has a component '" + name + "'");
+        out["components"][name] = sub(it->second);
+      }
+    if (e.replace_components.IsMap())
+      for (auto it = e.replace_components.begin(); it != e.replace_components.end(); ++it) {
+        const auto name = it->first.as<std::string>();
+        if (!has_key(out["components"], name))
+          fail(file, it->first, e.name, "", "replace_components: the model has no component '" + name + "'");
+        out["components"][name] = sub(it->second);
+      }
+    if (e.set.IsMap())
+      for (auto it = e.set.begin(); it != e.set.end(); ++it) {
+        const auto key = it->first.as<std::string>();
+        const auto dot = key.find('.');
+        if (dot == std::string::npos)
+          fail(file, it->first, e.name, key, "set: key must be COMPONENT.PARAMETER or parameters.NAME");
+        const std::string comp = key.substr(0, dot), param = key.substr(dot + 1);
+        if (comp == "parameters") {
+          if (!has_key(out["parameters"], param))
+            fail(file, it->first, e.name, param, "set: the model has no top-level parameter '" + param + "'");
+          out["parameters"][param] = sub(it->second);
+        } else {
+          if (!has_key(out["components"], comp))
+            fail(file, it->first, e.name, param, "set: the model has no component '" + comp + "'");
+          out["components"][comp][param] = sub(it->second);
+        }
+      }
+    if (e.connect.IsSequence()) {
+      if (!has_key(out, "connections")) out["connections"] = YAML::Node(YAML::NodeType::Sequence);
+      for (const auto& c : e.connect) out["connections"].push_back(YAML::Clone(c));
+    }
+    if (e.measure.IsMap() && measurement)
+      for (auto it = e.measure.begin(); it != e.measure.end(); ++it) {
+        const auto output = it->first.as<std::string>();
+        const YAML::Node m = sub(it->second);
+        if (m["lag"]) measurement->lag[output] = number(file, m["lag"], e.name, output, "lag");
+      }
+  }
+  return out;
+}
+
+bool effects_conflict(const Effect& a, const Effect& b) {
+  auto keys = [](const Effect& e) {
+    std::set<std::string> k;
+    if (e.set.IsMap())
+      for (auto it = e.set.begin(); it != e.set.end(); ++it) k.insert("set:" + it->first.as<std::string>());
+    if (e.replace_components.IsMap())
+      for (auto it = e.replace_components.begin(); it != e.replace_components.end(); ++it)
+        k.insert("replace:" + it->first.as<std::string>());
+    if (e.disconnect.IsSequence())
+      for (const auto& d : e.disconnect)
+        for (const auto& p : d) k.insert("disconnect:" + p.as<std::string>());
+    if (e.measure.IsMap())
+      for (auto it = e.measure.begin(); it != e.measure.end(); ++it) k.insert("measure:" + it->first.as<std::string>());
+    return k;
+  };
+  const auto ka = keys(a), kb = keys(b);
+  for (const auto& k : ka)
+    if (kb.count(k)) return true;
+  return false;
+}
+
+Catalogue load_catalogue(const std::string& path, const YAML::Node& model, const std::string& model_file,
+                         const Registry& registry) {
+  Catalogue cat;
+  cat.file = path;
+  YAML::Node root;
+  {
+    std::ifstream in(path);
+    if (!in) throw InputError(SourceLocation{path, 0, 0}, "", "", "cannot open the catalogue file");
+    try {
+      root = YAML::Load(in);
+    } catch (const YAML::ParserException& ex) {
+      throw InputError(SourceLocation{path, ex.mark.line + 1, ex.mark.column + 1}, "", "", ex.msg);
+    }
+  }
+  if (!root.IsMap() || !root["effects"] || !root["effects"].IsMap())
+    throw InputError(SourceLocation{path, 1, 1}, "", "", "a catalogue needs 'effects:', a map of effect name -> patch");
+  static const std::set<std::string> kKeys = {"description",        "parameters", "requires", "add_components",
+                                              "replace_components", "set",        "disconnect", "connect",
+                                              "measure"};
+  for (auto it = root["effects"].begin(); it != root["effects"].end(); ++it) {
+    Effect e;
+    e.name = it->first.as<std::string>();
+    e.where = location_of(path, it->first);
+    const YAML::Node& body = it->second;
+    if (!body.IsMap()) fail(path, it->first, e.name, "", "an effect must be a map (parameters, set, connect, ...)");
+    for (auto k = body.begin(); k != body.end(); ++k)
+      if (!kKeys.count(k->first.as<std::string>()))
+        fail(path, k->first, e.name, "",
+             "unknown key '" + k->first.as<std::string>() +
+                 "' (valid: description, parameters, requires, add_components, replace_components, set, disconnect, "
+                 "connect, measure)");
+    if (body["description"]) e.description = body["description"].as<std::string>();
+    if (body["parameters"]) {
+      if (!body["parameters"].IsMap()) fail(path, body["parameters"], e.name, "", "'parameters' must be a map");
+      for (auto p = body["parameters"].begin(); p != body["parameters"].end(); ++p) {
+        EffectParameter ep;
+        ep.name = p->first.as<std::string>();
+        ep.where = location_of(path, p->first);
+        const YAML::Node& s = p->second;
+        if (!s.IsMap()) fail(path, p->first, e.name, ep.name, "needs {initial, lower, upper, null, unit}");
+        for (auto k = s.begin(); k != s.end(); ++k) {
+          const auto key = k->first.as<std::string>();
+          if (key != "initial" && key != "lower" && key != "upper" && key != "null" && key != "unit" &&
+              key != "scale")
+            fail(path, k->first, e.name, ep.name, "unknown key '" + key + "' (initial, lower, upper, null, unit, scale)");
+        }
+        for (const char* req : {"initial", "lower", "upper"})
+          if (!s[req]) fail(path, p->first, e.name, ep.name, std::string("missing '") + req + "'");
+        ep.initial = number(path, s["initial"], e.name, ep.name, "initial");
+        ep.lower = number(path, s["lower"], e.name, ep.name, "lower");
+        ep.upper = number(path, s["upper"], e.name, ep.name, "upper");
+        if (s["null"]) ep.null_value = number(path, s["null"], e.name, ep.name, "null");
+        if (s["unit"]) ep.unit = s["unit"].as<std::string>();
+        if (s["scale"]) {
+          const auto sc = s["scale"].as<std::string>();
+          if (sc != "log" && sc != "linear") fail(path, s["scale"], e.name, ep.name, "scale must be 'linear' or 'log'");
+          ep.log_scale = sc == "log";
+        }
+        if (!(ep.lower < ep.upper)) fail(path, p->first, e.name, ep.name, "lower must be below upper");
+        if (ep.initial < ep.lower || ep.initial > ep.upper)
+          fail(path, s["initial"], e.name, ep.name, "initial lies outside [lower, upper]");
+        if (ep.null_value && (*ep.null_value < ep.lower || *ep.null_value > ep.upper))
+          fail(path, s["null"], e.name, ep.name, "null lies outside [lower, upper]");
+        if (ep.log_scale && ep.lower <= 0) fail(path, s["lower"], e.name, ep.name, "scale: log needs lower > 0");
+        e.parameters.push_back(ep);
+      }
+    }
+    for (const char* key : {"add_components", "replace_components", "set", "measure"})
+      if (body[key] && !body[key].IsMap()) fail(path, body[key], e.name, "", std::string("'") + key + "' must be a map");
+    for (const char* key : {"disconnect", "connect"})
+      if (body[key]) {
+        if (!body[key].IsSequence()) fail(path, body[key], e.name, "", std::string("'") + key + "' must be a list of lists");
+        for (const auto& c : body[key])
+          if (!c.IsSequence() || c.size() < 2)
+            fail(path, c, e.name, "", std::string("'") + key + "': each entry is a list of two or more ports");
+      }
+    if (body["add_components"]) e.add_components = body["add_components"];
+    if (body["replace_components"]) e.replace_components = body["replace_components"];
+    if (body["set"]) e.set = body["set"];
+    if (body["disconnect"]) e.disconnect = body["disconnect"];
+    if (body["connect"]) e.connect = body["connect"];
+    if (body["measure"]) e.measure = body["measure"];
+    if (e.measure.IsMap())
+      for (auto m = e.measure.begin(); m != e.measure.end(); ++m) {
+        const auto out = m->first.as<std::string>();
+        if (!model["outputs"][out])
+          fail(path, m->first, e.name, out, "measure: the model has no output '" + out + "'");
+        if (!m->second.IsMap() || !m->second["lag"])
+          fail(path, m->first, e.name, out, "measure: only {lag: SECONDS} is supported");
+      }
+
+    // Availability: component types, parameters and ports the patch relies on.
+    auto check_type = [&](const std::string& type) {
+      if (e.unavailable.empty() && !registry.find(type))
+        e.unavailable = "unavailable: type " + type + " not registered";
+    };
+    for (const char* key : {"add_components", "replace_components"})
+      if (body[key])
+        for (auto c = body[key].begin(); c != body[key].end(); ++c)
+          if (c->second["type"]) check_type(c->second["type"].as<std::string>());
+    if (const auto& req = body["requires"]) {
+      if (req["types"])
+        for (const auto& t : req["types"]) check_type(t.as<std::string>());
+      for (const char* kind : {"parameters", "ports"})
+        if (req[kind])
+        for (const auto& q : req[kind]) {
+          const auto s = q.as<std::string>();
+          const auto dot = s.find('.');
+          if (dot == std::string::npos) fail(path, q, e.name, "", "requires: write TYPE.NAME");
+          const auto* entry = registry.find(s.substr(0, dot));
+          bool ok = entry != nullptr;
+          if (ok && std::string(kind) == "parameters") ok = entry->info->parameter(s.substr(dot + 1)) != nullptr;
+          if (ok && std::string(kind) == "ports") ok = entry->info->port_index(s.substr(dot + 1)) >= 0;
+          if (!ok && e.unavailable.empty())
+            e.unavailable = std::string("unavailable: ") + (kind[1] == 'a' ? "parameter " : "port ") + s +
+                            " not registered";
+        }
+    }
+    for (const char* key : {"add_components", "replace_components", "set", "disconnect", "connect", "measure"})
+      if (body[key]) check_references(path, body[key], e);
+    // Check the patch once at the initial values, so that errors surface now.
+    if (e.unavailable.empty()) {
+      std::vector<double> init;
+      for (const auto& p : e.parameters) init.push_back(p.initial);
+      MeasurementModel mm;
+      const YAML::Node patched = apply_effects(model, {EffectInstance{&e, init}}, &mm);
+      try {
+        Netlist nl = parse_netlist(YAML::Dump(patched), model_file + " (patched by effect '" + e.name + "')");
+        (void)elaborate(nl, registry);
+      } catch (const InputError& ex) {
+        throw InputError(e.where, ex.component(), ex.parameter(),
+                         "effect '" + e.name + "' does not apply to " + model_file + ": " + ex.message());
+      }
+    }
+    cat.effects.push_back(std::move(e));
+  }
+  return cat;
+}
+
+}  // namespace pneumo::diagnose

@@ -1,0 +1,86 @@
+// Candidate effects for sim-to-real diagnosis: patches to a YAML netlist with
+// free parameters (see README "Diagnosing the sim-to-real gap").
+//
+// A catalogue file:
+//   effects:
+//     leakage_piston_seal:
+//       description: leak across the piston seal, rod side <-> cap side
+//       parameters:                 # free parameters, SI values
+//         C_leak: {initial: 1e-10, lower: 0, upper: 2e-9, null: 0, unit: m3/(s*Pa), scale: linear}
+//       requires: {types: [t], parameters: [type.param], ports: [type.port]}   # optional
+//       add_components:     {NAME: {type: ..., param: ${C_leak}}}   # new components
+//       replace_components: {NAME: {type: ..., ...}}                # whole declaration replaced
+//       set: {COMPONENT.PARAM: VALUE, parameters.NAME: VALUE}       # one parameter changed
+//       disconnect: [[a.port, b.port]]   # removes the connection list with exactly these ports
+//       connect:    [[a.port, b.port]]   # adds a connection list
+//       measure:    {OUTPUT: {lag: ${tau}}}  # measurement model: first-order sensor lag (s)
+// `${name}` in any value is replaced by the parameter's SI value. `null` is
+// the value at which the effect vanishes (optional for structural switches,
+// whose reference is then the unpatched model). scale: log fits log(value)
+// (lower must then be > 0). An effect whose component type, parameter or
+// port is not in the registry is unavailable, not an error.
+#pragma once
+
+#include <yaml-cpp/yaml.h>
+
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "framework/core/error.hpp"
+#include "framework/model/registry.hpp"
+
+namespace pneumo::diagnose {
+
+struct EffectParameter {
+  std::string name;
+  double initial = 0, lower = 0, upper = 0;
+  std::optional<double> null_value;
+  std::string unit;
+  bool log_scale = false;
+  SourceLocation where;
+};
+
+struct Effect {
+  std::string name;
+  std::string description;
+  SourceLocation where;
+  std::vector<EffectParameter> parameters;
+  YAML::Node add_components, replace_components, set, disconnect, connect, measure;
+  std::string unavailable;  // non-empty: why the effect cannot be used with this registry
+
+  int parameter_index(const std::string& n) const;
+};
+
+struct Catalogue {
+  std::string file;
+  std::vector<Effect> effects;
+  const Effect* find(const std::string& name) const;
+};
+
+// An effect with values for its parameters, in the catalogue's order.
+struct EffectInstance {
+  const Effect* effect = nullptr;
+  std::vector<double> values;
+};
+
+// Measurement model per output: first-order lag time constants (s).
+struct MeasurementModel {
+  std::map<std::string, double> lag;
+};
+
+// Reads and checks a catalogue; each effect is applied at its initial values
+// to `model` and elaborated, so that a broken patch is reported at load time
+// with the catalogue's file:line, the effect and the parameter.
+Catalogue load_catalogue(const std::string& path, const YAML::Node& model, const std::string& model_file,
+                         const Registry& registry);
+
+// The model with the effects applied in order (later `set`s win).
+YAML::Node apply_effects(const YAML::Node& model, const std::vector<EffectInstance>& effects,
+                         MeasurementModel* measurement);
+
+// The parameter names two effects both `set`, replace or disconnect (a conflict for combining them).
+bool effects_conflict(const Effect& a, const Effect& b);
+
+}  // namespace pneumo::diagnose

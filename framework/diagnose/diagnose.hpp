@@ -1,0 +1,137 @@
+// Sim-to-real gap diagnosis (README "Diagnosing the sim-to-real gap").
+//
+// Where: residuals of the unpatched model on every measured run, weighted by
+// the noise each signal shows itself (robust high-pass estimate), split by
+// signal and by phase of the stroke, plus the time windows whose residuals
+// are significant against that noise.
+// Which: every available candidate effect is calibrated on the calibration
+// runs (bounded Levenberg-Marquardt, finite-difference sensitivities, runs in
+// parallel) after a linearised screening from the same sensitivities, and
+// scored on the validation runs by a likelihood ratio on the effective sample
+// size (lag-1 autocorrelation of the residuals) with a BIC penalty per
+// parameter. Effects whose improvements the signals cannot tell apart form a
+// group; a second effect is added by forward selection.
+// How far: the validation gap before and after, per signal and phase.
+#pragma once
+
+#include <yaml-cpp/yaml.h>
+
+#include <array>
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "framework/diagnose/catalogue.hpp"
+#include "framework/model/registry.hpp"
+#include "framework/netlist/netlist.hpp"
+
+namespace pneumo::diagnose {
+
+enum class Role { calibration, validation };
+
+struct MeasuredRun {
+  std::string name;
+  std::string csv_file;
+  Role role = Role::calibration;
+  std::vector<std::pair<std::string, std::string>> operating_point;  // name, value text (SI or quantity)
+  std::vector<double> t;
+  std::vector<std::string> signals;        // model output names, file order
+  std::vector<std::vector<double>> y;      // per signal, at t
+  std::vector<double> sigma;               // noise per signal, estimated from the data
+};
+
+// Reads DIR/*.yaml (each with data, role, operating_point) and their CSVs,
+// checked against the model's outputs and top-level parameters. Throws
+// InputError naming the file, line and column or parameter.
+std::vector<MeasuredRun> load_runs(const std::string& dir, const Netlist& model);
+
+// Robust white-noise level of a sampled signal: median absolute deviation of
+// third differences / sqrt(20), floored by the quantisation step / sqrt(12).
+double estimate_noise(const std::vector<double>& y);
+
+extern const char* const kPhaseNames[5];  // rest, acceleration, main_stroke, cushioning, end_position
+
+struct DiagnoseOptions {
+  int threads = 2;
+  int max_effects = 2;        // forward selection depth
+  int max_iterations = 12;    // Levenberg-Marquardt iterations per fit
+  int screen_keep = 8;        // full fits for at most this many candidates (best screened first)
+  double significance_bic = 6.0;  // LR_eff - k ln(n_eff) above this: "strong" evidence
+  double group_cosine = 0.9;
+  // Practical significance, because a model-form mismatch of the right effect
+  // leaves residual structure that abundant data make "statistically"
+  // significant: the model counts as explaining the data when its validation
+  // gap is at most `adequate_gap` (noise = 1; the noise estimate itself is
+  // uncertain by ~10 %), and an effect must remove at least
+  // `min_excess_reduction` of the gap in excess of the noise (gap - 1).
+  double adequate_gap = 1.3;
+  double min_excess_reduction = 0.5;
+  bool progress = true;
+  std::function<void(const std::string&)> log;  // progress lines (default: stderr)
+};
+
+struct Gap {  // normalised RMS residual (1 = noise level) and shares of the total
+  double rms = 0;
+  double ssr = 0;
+  long n = 0;
+};
+
+struct GapTable {
+  std::vector<std::string> signals;
+  Gap total;
+  std::vector<Gap> by_signal;                 // per signal
+  std::vector<std::array<Gap, 5>> by_phase;   // per signal, per phase
+  std::array<Gap, 5> phase_total{};
+};
+
+struct EffectResult {
+  std::string name, description;
+  std::string unavailable;  // non-empty: not evaluated
+  bool screened_out = false;
+  double screening_improvement = 0;  // linearised share of the calibration SSR removed
+  std::vector<std::string> parameter_names, parameter_units;
+  std::vector<double> values;
+  double gap_before = 0, gap_after = 0;  // validation, normalised RMS
+  GapTable validation_after;
+  double lr_eff = 0, delta_bic = 0, p_value = 1, n_eff = 0;
+  bool significant = false;
+  int rank = 0;              // 1 = best; 0 = not ranked (unavailable)
+  std::vector<std::string> group;  // effects the data cannot tell apart from this one
+  int fit_evaluations = 0;
+  int failed_validation_runs = 0;  // the solver failed at the fitted values (residual set to 1e4 noise units)
+};
+
+struct WindowFinding {
+  std::string run, signal;
+  double t0 = 0, t1 = 0, rms = 0, z = 0;
+};
+
+struct TracePlot {  // decimated traces of one validation run and signal
+  std::string run, signal;
+  std::vector<double> t, measured, before, after;
+  std::array<double, 6> phase_times{};  // phase boundaries
+};
+
+struct DiagnosisReport {
+  std::string model_file, catalogue_file, runs_dir;
+  std::vector<std::string> verdict;
+  std::vector<std::vector<std::string>> verdict_groups;
+  std::vector<EffectResult> effects;
+  GapTable calibration_before, validation_before, validation_after;
+  std::vector<std::pair<std::string, double>> noise;  // signal, sigma (median over runs)
+  std::vector<WindowFinding> windows;
+  std::vector<TracePlot> plots;
+  std::vector<std::string> calibration_runs, validation_runs;
+  std::vector<std::pair<std::string, std::vector<double>>> final_values;  // effect -> fitted values in the verdict model
+  double seconds = 0;
+  long simulations = 0;
+};
+
+DiagnosisReport diagnose(const std::string& model_file, const std::string& runs_dir,
+                         const std::string& catalogue_file, const Registry& registry, const DiagnoseOptions& options);
+
+void write_report_json(const DiagnosisReport& report, const std::string& path);
+void write_report_html(const DiagnosisReport& report, const std::string& path);
+
+}  // namespace pneumo::diagnose
