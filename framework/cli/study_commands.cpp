@@ -71,7 +71,7 @@ struct SweepArgs {
   std::string netlist, output, samples, metrics;
   std::vector<std::string> grid;
   int threads = 1;
-  bool quiet = false, eliminate = false;
+  bool quiet = false, eliminate = true;  // alias elimination is the default
 };
 
 int sweep_command(const SweepArgs& a) {
@@ -102,7 +102,7 @@ struct SensitivityArgs {
   std::vector<std::string> params;
   int trajectories = 20, levels = 4, base = 256, threads = 1;
   long seed = 1;
-  bool quiet = false, eliminate = false;
+  bool quiet = false, eliminate = true;  // alias elimination is the default
 };
 
 void write_atomic(const std::string& path, const std::string& text) {
@@ -217,8 +217,8 @@ void add_study_commands(CLI::App& app, int& status) {
   sw->add_option("-o,--output", sweep_args->output, "results CSV (default: NETLIST_STEM.sweep.csv)");
   sw->add_option("--metrics", sweep_args->metrics, "metrics, comma separated (default: all the netlist provides)");
   sw->add_flag("-q,--quiet", sweep_args->quiet, "no progress bar or summary");
-  sw->add_flag("--eliminate-aliases", sweep_args->eliminate,
-               "substitute alias equations before solving (faster; experimental, see README)");
+  sw->add_flag("--eliminate-aliases,!--keep-aliases", sweep_args->eliminate,
+               "substitute alias equations before solving (the default; --keep-aliases: hand IDA every unknown)");
   sw->callback([sweep_args, &status]() { status = guarded(sweep_args->netlist, [&] { return sweep_command(*sweep_args); }); });
 
   auto sa = std::make_shared<SensitivityArgs>();
@@ -235,8 +235,8 @@ void add_study_commands(CLI::App& app, int& status) {
   se->add_option("-o,--output", sa->output,
                  "indices CSV (default: NETLIST_STEM.sensitivity.csv); the runs go to OUTPUT_STEM.runs.csv");
   se->add_flag("-q,--quiet", sa->quiet, "no progress bar or tables");
-  se->add_flag("--eliminate-aliases", sa->eliminate,
-               "substitute alias equations before solving (faster; experimental, see README)");
+  se->add_flag("--eliminate-aliases,!--keep-aliases", sa->eliminate,
+               "substitute alias equations before solving (the default; --keep-aliases: hand IDA every unknown)");
   se->callback([sa, &status]() { status = guarded(sa->netlist, [&] { return sensitivity_command(*sa); }); });
 }
 

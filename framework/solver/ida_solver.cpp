@@ -159,6 +159,11 @@ SolverResult simulate(System& system, const SolverOptions& opt, const OutputFn& 
 
   VectorPtr y(N_VNew_Serial(n, context.ctx)), yp(N_VNew_Serial(n, context.ctx));
   VectorPtr atol(N_VNew_Serial(n, context.ctx)), id(N_VNew_Serial(n, context.ctx));
+  // Fused vector operations: IDA's predictor, interpolation (every output
+  // and root check) and error norms then combine k vectors in one pass
+  // instead of k - 1 N_VLinearSum calls; IDA clones y for its own vectors.
+  N_VEnableFusedOps_Serial(y.get(), SUNTRUE);
+  N_VEnableFusedOps_Serial(yp.get(), SUNTRUE);
   std::vector<double> y0, yp0;
   system.reset_modes();
   system.start_values(y0, yp0);

@@ -36,7 +36,7 @@ struct SweepOptions {
   std::vector<std::string> metrics;    // names; empty = all the netlist can provide
   bool keep_journal = false;           // for tests: do not delete the journals at the end
   long stop_after = -1;                // for tests: stop (as if killed) after this many new runs
-  AssemblyOptions assembly;            // e.g. alias elimination (faster, opt-in)
+  AssemblyOptions assembly;            // alias elimination (default on)
 };
 
 struct SweepSummary {
