@@ -6,7 +6,7 @@
 
 namespace pneumo::components {
 
-class DirectionalValve32 final : public ComponentT<DirectionalValve32> {
+class DirectionalValve32 final : public SpoolValve<DirectionalValve32> {
  public:
   enum Port { kP, kA, kR, kCommand };
   enum Var { kX };
@@ -32,7 +32,7 @@ class DirectionalValve32 final : public ComponentT<DirectionalValve32> {
   }
 
   explicit DirectionalValve32(const Construction& c)
-      : ComponentT(c), PA_(c.params, "PA"), AR_(c.params, "AR"), spool_(c.params, "P->A", "A->R") {}
+      : SpoolValve(c, kCommand, kX, "P->A", "A->R"), PA_(c.params, "PA"), AR_(c.params, "AR") {}
 
   template <class T>
   void equations(const Eval<T>& e, T* r) const {
@@ -50,16 +50,8 @@ class DirectionalValve32 final : public ComponentT<DirectionalValve32> {
     r[6] = spool_.equation(e, kCommand, kX);
   }
 
-  void start(StartValues& s, const GasModel&) const override { s.fix_var(kX, spool_.x0()); }
-  void initial_modes(double* modes) const override { modes[0] = 0.0; }
-  std::vector<double> time_events() const override { return spool_.time_events(); }
-  EventResult on_event(const Eval<double>& e, double* modes, EventKind, int, int) const override {
-    return spool_.on_event(e, modes, kCommand);
-  }
-
  private:
   ValvePath PA_, AR_;
-  SpoolDrive spool_;
 };
 
 void register_directional_valve_32(Registry& r) { r.add<DirectionalValve32>(); }

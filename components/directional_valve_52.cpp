@@ -7,7 +7,7 @@
 
 namespace pneumo::components {
 
-class DirectionalValve52 final : public ComponentT<DirectionalValve52> {
+class DirectionalValve52 final : public SpoolValve<DirectionalValve52> {
  public:
   enum Port { kP, kA, kB, kR, kCommand };
   enum Var { kX };
@@ -41,12 +41,11 @@ class DirectionalValve52 final : public ComponentT<DirectionalValve52> {
   }
 
   explicit DirectionalValve52(const Construction& c)
-      : ComponentT(c),
+      : SpoolValve(c, kCommand, kX, "P->A, B->R", "P->B, A->R"),
         PA_(c.params, "PA"),
         PB_(c.params, "PB"),
         AR_(c.params, "AR"),
-        BR_(c.params, "BR"),
-        spool_(c.params, "P->A, B->R", "P->B, A->R") {}
+        BR_(c.params, "BR") {}
 
   template <class T>
   void equations(const Eval<T>& e, T* r) const {
@@ -68,16 +67,8 @@ class DirectionalValve52 final : public ComponentT<DirectionalValve52> {
     r[8] = spool_.equation(e, kCommand, kX);
   }
 
-  void start(StartValues& s, const GasModel&) const override { s.fix_var(kX, spool_.x0()); }
-  void initial_modes(double* modes) const override { modes[0] = 0.0; }
-  std::vector<double> time_events() const override { return spool_.time_events(); }
-  EventResult on_event(const Eval<double>& e, double* modes, EventKind, int, int) const override {
-    return spool_.on_event(e, modes, kCommand);
-  }
-
  private:
   ValvePath PA_, PB_, AR_, BR_;
-  SpoolDrive spool_;
 };
 
 void register_directional_valve_52(Registry& r) { r.add<DirectionalValve52>(); }

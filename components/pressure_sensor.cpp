@@ -47,10 +47,7 @@ class PressureSensor final : public ComponentT<PressureSensor> {
 
   void start(StartValues& s, const GasModel& gas) const override {
     const double p0 = std::isnan(p0_) ? gas.p_ambient : p0_;
-    if (tau_ > 0.0)
-      s.fix_local(port_offset(kP), p0);
-    else
-      s.guess_local(port_offset(kP), p0);
+    pt1_start(s, port_offset(kP), tau_, p0);
   }
 
  private:

@@ -17,6 +17,16 @@ T pt1_residual(const Eval<T>& e, int output_port, const T& measured, double tau)
   return e.y(o) - measured;
 }
 
+// Start value of a PT1 output at local offset `offset`: fixed when lagged
+// (a differential state), else only a guess for the consistent initialisation
+// (the output is then algebraic, y = x).
+inline void pt1_start(StartValues& s, int offset, double tau, double initial) {
+  if (tau > 0.0)
+    s.fix_local(offset, initial);
+  else
+    s.guess_local(offset, initial);
+}
+
 inline ParameterSpec pt1_tau_parameter(const std::string& what) {
   return ParameterSpec::scalar("tau", "s", "time constant of the first-order lag of " + what + " (0 = ideal)", 0.0)
       .non_negative();

@@ -57,10 +57,7 @@ class TemperatureSensor final : public ComponentT<TemperatureSensor> {
 
   void start(StartValues& s, const GasModel& gas) const override {
     const double T0 = std::isnan(T0_) ? gas.T_ambient : T0_;
-    if (tau_ > 0.0)
-      s.fix_local(port_offset(kT), T0);
-    else
-      s.guess_local(port_offset(kT), T0);
+    pt1_start(s, port_offset(kT), tau_, T0);
   }
 
  private:

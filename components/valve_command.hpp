@@ -122,6 +122,31 @@ class SpoolDrive {
   std::vector<std::string> messages_;
 };
 
+// Base of the directional valves: the spool variable, its start value, the
+// schedule's time events and their handling, which do not depend on the
+// valve's paths. The derived valve declares its ports and paths and writes
+// its rows with spool_.equation(e, command_port_, spool_var_) for the spool.
+template <class Derived>
+class SpoolValve : public ComponentT<Derived> {
+ public:
+  SpoolValve(const Construction& c, int command_port, int spool_var, std::string actuated, std::string rest)
+      : ComponentT<Derived>(c),
+        spool_(c.params, std::move(actuated), std::move(rest)),
+        command_port_(command_port),
+        spool_var_(spool_var) {}
+
+  void start(StartValues& s, const GasModel&) const override { s.fix_var(spool_var_, spool_.x0()); }
+  void initial_modes(double* modes) const override { modes[0] = 0.0; }
+  std::vector<double> time_events() const override { return spool_.time_events(); }
+  EventResult on_event(const Eval<double>& e, double* modes, EventKind, int, int) const override {
+    return spool_.on_event(e, modes, command_port_);
+  }
+
+ protected:
+  SpoolDrive spool_;
+  int command_port_, spool_var_;
+};
+
 // One flow path of a valve: an ISO 6358 resistance. Parameters C and b are
 // common to all paths; C_XY and b_XY override them for path X -> Y.
 struct ValvePath {

@@ -20,6 +20,7 @@
 #include "components/builtin.hpp"
 #include "framework/netlist/netlist.hpp"
 #include "framework/run/run.hpp"
+#include "tests/test_support.hpp"
 
 namespace pneumo {
 namespace {
@@ -31,14 +32,7 @@ constexpr double kFC = 15, kFS = 25, kSigma2 = 20, kStroke = 0.2;
 
 struct RigRun {
   RunResult r;
-  std::vector<double> col(const std::string& name) const {
-    const int c = r.table.column(name);
-    EXPECT_GE(c, 0) << "no column " << name;
-    std::vector<double> out;
-    if (c >= 0)
-      for (const auto& row : r.table.rows) out.push_back(row[c]);
-    return out;
-  }
+  std::vector<double> col(const std::string& name) const { return test_support::column(r.table, name); }
 };
 
 RigRun run_rig(const std::string& A_in) {

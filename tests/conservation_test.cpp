@@ -24,17 +24,12 @@
 #include "components/builtin.hpp"
 #include "framework/netlist/netlist.hpp"
 #include "framework/run/run.hpp"
+#include "tests/test_support.hpp"
 
 namespace pneumo {
 namespace {
 
-std::string num(double v) {
-  std::ostringstream s;
-  s << std::setprecision(17) << v;
-  return s.str();
-}
-
-double rel_err(double actual, double expected) { return std::abs(actual - expected) / std::abs(expected); }
+using namespace test_support;
 
 struct Tank {
   std::string name;
@@ -53,13 +48,6 @@ std::string tank_yaml(const Tank& t) {
 
 std::string header() {
   return "gas: {R: " + num(kAir.R) + " J/(kg*K), kappa: " + num(kAir.kappa) + "}\ncomponents:\n";
-}
-
-RunResult run_text(const std::string& text) {
-  const Netlist nl = parse_netlist(text, "conservation.yaml");
-  RunResult r = run_simulation(nl, builtin_registry());
-  EXPECT_TRUE(r.solver.ok) << r.solver.message;
-  return r;
 }
 
 // Checks sum(m) and sum(U) over every output row against the initial totals.
@@ -104,7 +92,7 @@ TEST(Conservation, TwoVolumesThroughThrottle) {
                            "connections:\n  - [hot.port, valve.a]\n  - [valve.b, cold.port]\n" +
                            outputs({t1, t2}) +
                            "simulation: {t_end: 5 s, rtol: 1e-8, atol: 1e-8, output_interval: 10 ms}\n";
-  const RunResult r = run_text(text);
+  const RunResult r = run_text(text, "conservation.yaml");
   ASSERT_TRUE(r.solver.ok);
   expect_conserved(r.table, {t1, t2}, 1e-12, 1e-12);
 
@@ -145,7 +133,7 @@ TEST(Conservation, ThreeVolumesMeetingAtOneNode) {
                            "  - [va.b, vb.b, vc.b]\n" +
                            outputs({t1, t2, t3}) +
                            "simulation: {t_end: 8 s, rtol: 1e-8, atol: 1e-8, output_interval: 10 ms}\n";
-  const RunResult r = run_text(text);
+  const RunResult r = run_text(text, "conservation.yaml");
   ASSERT_TRUE(r.solver.ok);
   // Energy: the regularised stream mixing at a node without volume is
   // conservative only up to terms of order m_flow_small (1e-7 kg/s) times
@@ -175,7 +163,7 @@ TEST(Conservation, ConstantForceOnFreeMass) {
       "connections:\n  - [body.flange, push.flange]\n"
       "outputs: {s: body.s, v: body.v}\n"
       "simulation: {t_end: 2 s, rtol: 1e-8, atol: 1e-8, output_interval: 0.5 s}\n";
-  const RunResult r = run_text(text);
+  const RunResult r = run_text(text, "conservation.yaml");
   ASSERT_TRUE(r.solver.ok);
   ASSERT_EQ(r.table.rows.size(), 5u);
   for (const auto& row : r.table.rows) {

@@ -158,6 +158,15 @@ struct Case {
   double p, z;
 };
 
+// Test name of a case, e.g. p5bar_z1_5.
+std::string case_label(const ::testing::TestParamInfo<Case>& info) {
+  std::ostringstream s;
+  s << "p" << std::lround(info.param.p / 1e5) << "bar_z" << info.param.z;
+  std::string n = s.str();
+  std::replace(n.begin(), n.end(), '.', '_');
+  return n;
+}
+
 class FullRigRuns : public ::testing::TestWithParam<Case> {};
 
 TEST_P(FullRigRuns, CompletesWithPhysicalStates) {
@@ -199,13 +208,7 @@ TEST_P(FullRigRuns, CompletesWithPhysicalStates) {
 INSTANTIATE_TEST_SUITE_P(PaperOperatingPoints, FullRigRuns,
                          ::testing::Values(Case{5e5, 0.1}, Case{5e5, 1.5}, Case{5e5, 6.0}, Case{7e5, 0.1},
                                            Case{7e5, 1.5}, Case{7e5, 6.0}),
-                         [](const auto& info) {
-                           std::ostringstream s;
-                           s << "p" << std::lround(info.param.p / 1e5) << "bar_z" << info.param.z;
-                           std::string n = s.str();
-                           std::replace(n.begin(), n.end(), '.', '_');
-                           return n;
-                         });
+                         case_label);
 
 // ---------------------------------------------------------------------------
 // 2. The three regimes of seed 000 section 4, 3.7 kg.
@@ -427,13 +430,7 @@ TEST_P(WallHeat, FlowsBothWaysAndWallsKeepTheBalance) {
 }
 
 INSTANTIATE_TEST_SUITE_P(ThreeOpenings, WallHeat, ::testing::Values(Case{5e5, 0.1}, Case{5e5, 1.5}, Case{7e5, 6.0}),
-                         [](const auto& info) {
-                           std::ostringstream s;
-                           s << "p" << std::lround(info.param.p / 1e5) << "bar_z" << info.param.z;
-                           std::string n = s.str();
-                           std::replace(n.begin(), n.end(), '.', '_');
-                           return n;
-                         });
+                         case_label);
 
 // ---------------------------------------------------------------------------
 // 6. The command line.

@@ -29,18 +29,14 @@
 #include "framework/assembly/system.hpp"
 #include "framework/netlist/netlist.hpp"
 #include "framework/run/run.hpp"
+#include "tests/test_support.hpp"
 
 namespace pneumo {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-std::string read_file(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using namespace test_support;
 
 std::string rig_text() { return read_file(std::string(PNEUMO_SOURCE_DIR) + "/netlists/cushion_rig.yaml"); }
 
@@ -54,14 +50,7 @@ std::string replace_once(std::string s, const std::string& from, const std::stri
 
 struct SimRun {
   RunResult r;
-  std::vector<double> col(const std::string& name) const {
-    const int c = r.table.column(name);
-    EXPECT_GE(c, 0) << "no column " << name;
-    std::vector<double> out;
-    if (c < 0) return out;
-    for (const auto& row : r.table.rows) out.push_back(row[c]);
-    return out;
-  }
+  std::vector<double> col(const std::string& name) const { return test_support::column(r.table, name); }
 };
 
 SimRun run(const std::string& yaml, const std::string& name) {

@@ -31,18 +31,14 @@
 #include "framework/analysis/energy_audit.hpp"
 #include "framework/netlist/netlist.hpp"
 #include "framework/run/run.hpp"
+#include "tests/test_support.hpp"
 
 namespace pneumo {
 namespace {
 
-std::string rig_path() { return std::string(PNEUMO_SOURCE_DIR) + "/netlists/cushion_rig.yaml"; }
+using namespace test_support;
 
-std::string read_text(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+std::string rig_path() { return std::string(PNEUMO_SOURCE_DIR) + "/netlists/cushion_rig.yaml"; }
 
 double term(const std::vector<AuditTerm>& terms, const std::string& name) {
   for (const auto& t : terms)
@@ -110,7 +106,7 @@ TEST(EnergyAudit, MediumOpeningBalances) {
 }
 
 TEST(EnergyAudit, WallHeatLeavesTheCompressedGasAndTheAuditStillBalances) {
-  std::string y = read_text(rig_path());
+  std::string y = read_file(rig_path());
   const std::string anchor = "\nconnections:";
   const auto pos = y.find(anchor);
   ASSERT_NE(pos, std::string::npos);
@@ -136,15 +132,15 @@ TEST(EnergyAudit, CliPrintsAndWritesTheAuditAndKeepsTheCsvClean) {
                     log = (dir / "log.txt").string();
   const std::string cmd = std::string(PNEUMO_BINARY) + " simulate " + rig_path() + " -o " + csv +
                           " --energy-audit " + yaml + " > " + log + " 2>&1";
-  ASSERT_EQ(std::system(cmd.c_str()), 0) << read_text(log);
-  const std::string out = read_text(log);
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << read_file(log);
+  const std::string out = read_file(log);
   EXPECT_NE(out.find("energy audit of cylinder"), std::string::npos) << out;
   EXPECT_NE(out.find("balance: in"), std::string::npos);
-  const std::string audit = read_text(yaml);
+  const std::string audit = read_file(yaml);
   for (const char* key : {"cylinder: cylinder", "kinetic_energy_at_entry:", "cushion_throttle_dissipation:",
                           "end_stop:", "residual_relative:"})
     EXPECT_NE(audit.find(key), std::string::npos) << key;
-  const std::string header = read_text(csv).substr(0, read_text(csv).find('\n'));
+  const std::string header = read_file(csv).substr(0, read_file(csv).find('\n'));
   EXPECT_EQ(header.find("audit."), std::string::npos) << header;
   EXPECT_NE(header.find("p_EC"), std::string::npos);
   EXPECT_FALSE(std::filesystem::exists(yaml + ".writing"));
@@ -154,7 +150,7 @@ TEST(EnergyAudit, CliPrintsAndWritesTheAuditAndKeepsTheCsvClean) {
                           " --energy-audit " + (dir / "t.yaml").string() + " > " + log + " 2>&1";
   const int status = std::system(bad.c_str());
   EXPECT_EQ(WEXITSTATUS(status), 2);
-  EXPECT_NE(read_text(log).find("no cushioned_cylinder"), std::string::npos) << read_text(log);
+  EXPECT_NE(read_file(log).find("no cushioned_cylinder"), std::string::npos) << read_file(log);
 }
 
 }  // namespace

@@ -27,12 +27,15 @@
 #include "framework/fit/friction_fit.hpp"
 #include "framework/fit/throttle_fit.hpp"
 #include "friction_experiment.hpp"
+#include "tests/test_support.hpp"
 
 namespace pneumo {
 namespace {
 
 using namespace pneumo::fit;
 namespace fs = std::filesystem;
+using test_support::run_cli;
+using test_support::TempDir;
 
 std::vector<double> logspace(double a, double b, int n) {
   std::vector<double> v;
@@ -187,20 +190,6 @@ TEST(FitThrottle, NeedleThrottleGivesCofZAndLinearBofC) {
   EXPECT_NEAR(y["cushion_b0"].as<double>(), f.b0, 1e-5);
 }
 
-struct TempDir {
-  fs::path path;
-  TempDir() {
-    path = fs::temp_directory_path() / ("pneumo_fit_test_" + std::to_string(::getpid()) + "_" +
-                                        std::to_string(std::random_device{}()));
-    fs::create_directories(path);
-  }
-  ~TempDir() { fs::remove_all(path); }
-  std::string write(const std::string& name, const std::string& text) const {
-    std::ofstream(path / name) << text;
-    return (path / name).string();
-  }
-};
-
 std::string error_of(const std::function<void()>& f) {
   try {
     f();
@@ -244,16 +233,6 @@ TEST(FitBadData, NaNMissingColumnAndTooFewPointsAreClearErrors) {
   EXPECT_NE(e4.find("'kp': initial value 500 lies outside its bounds"), std::string::npos) << e4;
 }
 
-std::pair<int, std::string> run_cli(const std::string& args) {
-  const std::string cmd = std::string("'") + PNEUMO_BINARY + "' " + args + " 2>&1";
-  FILE* f = popen(cmd.c_str(), "r");
-  std::string out;
-  char buf[512];
-  while (f && fgets(buf, sizeof buf, f)) out += buf;
-  const int st = f ? pclose(f) : -1;
-  return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, out};
-}
-
 TEST(FitCli, FrictionFitWritesPresetAndBadFileExitsTwoNamingTheLine) {
   TempDir dir;
   std::ostringstream csv;
@@ -265,7 +244,7 @@ TEST(FitCli, FrictionFitWritesPresetAndBadFileExitsTwoNamingTheLine) {
       csv << v << "," << pA << "," << pB << "," << components::friction_magnitude(c, v, 1.0 + 0.2 * pB) << "\n";
     }
   const std::string data = dir.write("data.csv", csv.str());
-  const std::string preset = (dir.path / "preset.yaml").string();
+  const std::string preset = (dir.path() / "preset.yaml").string();
   const auto [rc, out] = run_cli("fit friction '" + data + "' --model eq4 --pressure pAB- -o '" + preset + "'");
   EXPECT_EQ(rc, 0) << out;
   EXPECT_NE(out.find("R2 1.00000"), std::string::npos) << out;  // noise-free data of the model's own form

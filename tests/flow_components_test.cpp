@@ -18,17 +18,14 @@
 #include "components/builtin.hpp"
 #include "framework/netlist/netlist.hpp"
 #include "framework/run/run.hpp"
+#include "tests/test_support.hpp"
 
 namespace pneumo {
 namespace {
 
-constexpr double kR = 287.05, kKappa = 1.4, kRhoRef = 1.185, kTRef = 293.15, kPAmb = 101325.0;
+using namespace test_support;
 
-std::string num(double v) {
-  std::ostringstream s;
-  s << std::setprecision(17) << v;
-  return s.str();
-}
+constexpr double kR = 287.05, kKappa = 1.4, kRhoRef = 1.185, kTRef = 293.15, kPAmb = 101325.0;
 
 // `text` with each {key} replaced by its value (netlist templates).
 std::string fill(std::string text, const std::vector<std::pair<std::string, std::string>>& values) {
@@ -38,29 +35,6 @@ std::string fill(std::string text, const std::vector<std::pair<std::string, std:
       text.replace(at, tag.size(), value);
   }
   return text;
-}
-
-RunResult run_text(const std::string& text, const std::string& name) {
-  const Netlist nl = parse_netlist(text, name);
-  RunResult r = run_simulation(nl, builtin_registry());
-  EXPECT_TRUE(r.solver.ok) << name << ": " << r.solver.message;
-  return r;
-}
-
-std::vector<double> column(const ResultsTable& table, const std::string& name) {
-  const int col = table.column(name);
-  if (col < 0) throw std::runtime_error("no column " + name);
-  std::vector<double> out;
-  for (const auto& row : table.rows) out.push_back(row[col]);
-  return out;
-}
-
-double at(const ResultsTable& table, const std::string& name, double t) {
-  const int col = table.column(name);
-  if (col < 0) throw std::runtime_error("no column " + name);
-  for (const auto& row : table.rows)
-    if (std::abs(row[0] - t) < 1e-9) return row[col];
-  throw std::runtime_error("no row at t = " + std::to_string(t));
 }
 
 double last(const ResultsTable& table, const std::string& name) { return table.rows.back()[table.column(name)]; }

@@ -34,11 +34,13 @@
 #include "framework/fit/friction_fit.hpp"
 #include "framework/netlist/netlist.hpp"
 #include "framework/run/run.hpp"
+#include "tests/test_support.hpp"
 
 namespace pneumo {
 namespace {
 
 namespace fs = std::filesystem;
+using namespace test_support;
 
 // Every line indented, so that a snippet becomes part of a component's mapping
 // (what a user does when pasting the fit's output into the cylinder).
@@ -113,15 +115,6 @@ std::string netlist(const std::vector<std::pair<std::string, std::string>>& rigs
   return y;
 }
 
-std::vector<double> column(const RunResult& r, const std::string& name) {
-  const int c = r.table.column(name);
-  EXPECT_GE(c, 0) << "no column " << name;
-  std::vector<double> out;
-  if (c >= 0)
-    for (const auto& row : r.table.rows) out.push_back(row[c]);
-  return out;
-}
-
 double max_abs(const std::vector<double>& v) {
   double m = 0;
   for (double x : v) m = std::max(m, std::abs(x));
@@ -157,9 +150,9 @@ TEST(CustomFriction, FitPresetReproducesTheNamedPresetsAlongACushionedStroke) {
   const RunResult r = run_simulation(parse_netlist(yaml, "custom_friction.yaml"), builtin_registry());
   ASSERT_TRUE(r.solver.ok) << r.solver.message;
 
-  const auto F_p = column(r, "F_preset"), F_c = column(r, "F_custom"), F_s = column(r, "F_shifted");
-  const auto x_p = column(r, "x_preset");
-  const auto open = column(r, "open_preset");
+  const auto F_p = column(r.table, "F_preset"), F_c = column(r.table, "F_custom"), F_s = column(r.table, "F_shifted");
+  const auto x_p = column(r.table, "x_preset");
+  const auto open = column(r.table, "open_preset");
   // The stroke uses both sets: the main stroke (bore open) and the
   // cushioning zone (bore closed, p_EC above supply), with friction at both.
   double F_main = 0, F_zone = 0;
@@ -196,8 +189,8 @@ TEST(CustomFriction, FitPresetFollowsTheSameFreeStroke) {
   const RunResult r = run_simulation(
       parse_netlist(netlist({{"preset", kPresets}, {"custom", custom}}, Motion::free), "free.yaml"), builtin_registry());
   ASSERT_TRUE(r.solver.ok) << r.solver.message;
-  const auto F_p = column(r, "F_preset"), F_c = column(r, "F_custom");
-  const auto x_p = column(r, "x_preset"), x_c = column(r, "x_custom"), v_p = column(r, "v_preset");
+  const auto F_p = column(r.table, "F_preset"), F_c = column(r.table, "F_custom");
+  const auto x_p = column(r.table, "x_preset"), x_c = column(r.table, "x_custom"), v_p = column(r.table, "v_preset");
   ASSERT_GT(x_p.back(), 0.099) << "the piston does not reach the cap";
   double d_sliding = 0;
   for (std::size_t k = 0; k < F_p.size(); ++k)
@@ -208,23 +201,6 @@ TEST(CustomFriction, FitPresetFollowsTheSameFreeStroke) {
   EXPECT_LE(d_sliding, 1e-9 * F_peak);
   EXPECT_LE(dF, 1e-6 * F_peak);
   EXPECT_LE(dx, 1e-9 * 0.1);
-}
-
-std::pair<int, std::string> run_cli(const std::string& args) {
-  const std::string cmd = std::string("'") + PNEUMO_BINARY + "' " + args + " 2>&1";
-  FILE* f = popen(cmd.c_str(), "r");
-  std::string out;
-  char buf[512];
-  while (f && fgets(buf, sizeof buf, f)) out += buf;
-  const int st = f ? pclose(f) : -1;
-  return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, out};
-}
-
-std::string read_text(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
 }
 
 // The CLI end to end: noise-free eq. 8 data of annexC_pAB+ (p = p_A + p_B
@@ -252,7 +228,7 @@ TEST(CustomFriction, FileWrittenByPneumoFitDrivesTheCylinder) {
   const auto [rc, out] = run_cli("fit friction '" + (dir / "points.csv").string() +
                                  "' --model eq8 --pressure pAB+ --fix FC=5.4 -o '" + (dir / "main.yaml").string() + "'");
   ASSERT_EQ(rc, 0) << out;
-  const std::string main = read_text(dir / "main.yaml");
+  const std::string main = read_file(dir / "main.yaml");
   fs::remove_all(dir);
   ASSERT_NE(main.find("friction: custom"), std::string::npos) << main;
 
@@ -261,7 +237,7 @@ TEST(CustomFriction, FileWrittenByPneumoFitDrivesTheCylinder) {
       parse_netlist(netlist({{"preset", kPresets}, {"fitted", custom}}, Motion::free), "fitted.yaml"),
       builtin_registry());
   ASSERT_TRUE(r.solver.ok) << r.solver.message;
-  const auto F_p = column(r, "F_preset"), F_f = column(r, "F_fitted");
+  const auto F_p = column(r.table, "F_preset"), F_f = column(r.table, "F_fitted");
   const double dF = max_abs_diff(F_p, F_f), F_peak = max_abs(F_p);
   std::cout << "[custom-friction] fitted file: max |F_fitted - F_preset| = " << dF << " N of peak " << F_peak
             << " N\n";
@@ -324,7 +300,7 @@ simulation: {t_end: 0.1 s, output_interval: 10 ms}
   const double v = 0.2, p = 4.0;
   const double expected = 5.63 - 0.1 * p + (17.06 + 0.714 * p - 5.4) * std::exp(-v / 3.98e-3) +
                           (87.46 + 6.1 * p) * std::pow(v, 0.746);
-  EXPECT_NEAR(-column(r, "F").back(), expected, 1e-6 * expected);
+  EXPECT_NEAR(-column(r.table, "F").back(), expected, 1e-6 * expected);
   EXPECT_NEAR(expected, components::friction_magnitude(c, v, p), 1e-9 * expected);
 }
 

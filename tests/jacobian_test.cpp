@@ -36,6 +36,7 @@
 #include "framework/netlist/netlist.hpp"
 #include "framework/run/run.hpp"
 #include "framework/testkit/testkit.hpp"
+#include "tests/test_support.hpp"
 
 namespace pneumo {
 namespace {
@@ -48,12 +49,7 @@ struct Snippet {
 };
 void PrintTo(const Snippet& s, std::ostream* os) { *os << s.name; }
 
-std::string read_file(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using test_support::read_file;
 
 const std::vector<Snippet>& snippets() {
   static const std::vector<Snippet> list = {

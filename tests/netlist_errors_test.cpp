@@ -26,11 +26,14 @@
 #include "framework/io/results.hpp"
 #include "framework/netlist/netlist.hpp"
 #include "framework/run/run.hpp"
+#include "tests/test_support.hpp"
 
 namespace pneumo {
 namespace {
 
 namespace fs = std::filesystem;
+using test_support::read_file;
+using test_support::TempDir;
 
 const std::string kBadDir = std::string(PNEUMO_SOURCE_DIR) + "/tests/data/bad_netlists/";
 
@@ -99,13 +102,6 @@ std::optional<InputError> input_error(const std::string& path, const std::vector
   return std::nullopt;
 }
 
-std::string read_file(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 std::string first_line(const fs::path& p) {
   std::ifstream in(p);
   std::string line;
@@ -125,29 +121,6 @@ std::string shell_quote(const std::string& s) {
   q.push_back('\'');
   return q;
 }
-
-// A fresh directory per test, removed afterwards.
-class TempDir {
- public:
-  TempDir() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    std::string name = std::string("pneumo_") + info->test_suite_name() + "_" + info->name() + "_" +
-                       std::to_string(::getpid());
-    for (auto& ch : name)
-      if (!std::isalnum(static_cast<unsigned char>(ch)) && ch != '_') ch = '_';
-    path_ = fs::temp_directory_path() / name;
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
 
 struct CliResult {
   bool exited = false;  // false: killed by a signal (a crash)

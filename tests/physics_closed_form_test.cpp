@@ -22,11 +22,13 @@
 #include "framework/io/results.hpp"
 #include "framework/netlist/netlist.hpp"
 #include "framework/run/run.hpp"
+#include "tests/test_support.hpp"
 
 namespace pneumo {
 namespace {
 
 namespace fs = std::filesystem;
+using namespace test_support;
 
 // A component parameter of a netlist in SI, read the way elaboration reads it.
 double netlist_parameter(const Netlist& nl, const std::string& component, const std::string& name) {
@@ -41,30 +43,6 @@ double netlist_parameter(const Netlist& nl, const std::string& component, const 
     if (spec->default_value) return *spec->default_value;
   }
   throw std::runtime_error("no parameter " + component + "." + name);
-}
-
-// The value of column `name` in the row at time t (outputs fall on a grid).
-double at(const ResultsTable& table, const std::string& name, double t) {
-  const int col = table.column(name);
-  if (col < 0) throw std::runtime_error("no column " + name);
-  for (const auto& row : table.rows)
-    if (std::abs(row[0] - t) < 1e-9) return row[col];
-  throw std::runtime_error("no row at t = " + std::to_string(t));
-}
-
-double rel_err(double actual, double expected) { return std::abs(actual - expected) / std::abs(expected); }
-
-std::string num(double v) {
-  std::ostringstream s;
-  s << std::setprecision(17) << v;
-  return s.str();
-}
-
-RunResult run_text(const std::string& text, const std::string& name) {
-  const Netlist nl = parse_netlist(text, name);
-  RunResult r = run_simulation(nl, builtin_registry());
-  EXPECT_TRUE(r.solver.ok) << name << ": " << r.solver.message;
-  return r;
 }
 
 // ---------------------------------------------------------------------------

@@ -23,6 +23,7 @@
 #include "framework/plugin/plugin.hpp"
 #include "framework/plugin/plugin_api.hpp"
 #include "framework/testkit/testkit.hpp"
+#include "tests/test_support.hpp"
 
 namespace pneumo {
 namespace {
@@ -31,23 +32,7 @@ namespace fs = std::filesystem;
 
 const fs::path kPlugins = PNEUMO_TEST_PLUGIN_DIR;
 
-class TempDir {
- public:
-  TempDir() {
-    static int counter = 0;
-    path_ = fs::temp_directory_path() /
-            ("pneumo_plugin_test_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
+using test_support::TempDir;
 
 // A tank draining through the seal of the example plugin; `plugins` are
 // written one a line from line 2 on.

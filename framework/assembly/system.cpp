@@ -123,6 +123,26 @@ std::string node_text(const Circuit& c, const std::vector<PortId>& ports) {
   return s + "}";
 }
 
+// The compressed-column (CSC) form KLU takes of the pattern whose column c
+// holds the rows cols[c]; returns the position in row_idx of each (row,
+// column) entry.
+std::map<std::pair<int, int>, int> compress_columns(const std::vector<std::set<int>>& cols,
+                                                    std::vector<long>& col_ptr, std::vector<long>& row_idx) {
+  const int n = static_cast<int>(cols.size());
+  col_ptr.assign(n + 1, 0);
+  row_idx.clear();
+  std::map<std::pair<int, int>, int> pos;
+  for (int c = 0; c < n; ++c) {
+    col_ptr[c] = static_cast<long>(row_idx.size());
+    for (int r : cols[c]) {
+      pos[{r, c}] = static_cast<int>(row_idx.size());
+      row_idx.push_back(r);
+    }
+  }
+  col_ptr[n] = static_cast<long>(row_idx.size());
+  return pos;
+}
+
 }  // namespace
 
 // ---------------------------------------------------------------------------
@@ -486,17 +506,7 @@ void System::build_pattern() {
       id_[c] = 1.0;
     }
   }
-  col_ptr_.assign(n_ + 1, 0);
-  row_idx_.clear();
-  std::map<std::pair<int, int>, int> pos;
-  for (int c = 0; c < n_; ++c) {
-    col_ptr_[c] = static_cast<long>(row_idx_.size());
-    for (int r : cols[c]) {
-      pos[{r, c}] = static_cast<int>(row_idx_.size());
-      row_idx_.push_back(r);
-    }
-  }
-  col_ptr_[n_] = static_cast<long>(row_idx_.size());
+  const auto pos = compress_columns(cols, col_ptr_, row_idx_);
   for (auto& b : blocks_) {
     const int nl = static_cast<int>(b->vars.size());
     b->jac_pos.assign(static_cast<std::size_t>(b->n_rows) * nl, -1);
@@ -774,17 +784,7 @@ void System::eliminate_aliases() {
       id[reduced[root]] = 1.0;
     }
   }
-  col_ptr_.assign(m + 1, 0);
-  row_idx_.clear();
-  std::map<std::pair<int, int>, int> pos;
-  for (int c = 0; c < m; ++c) {
-    col_ptr_[c] = static_cast<long>(row_idx_.size());
-    for (int r : cols[c]) {
-      pos[{r, c}] = static_cast<int>(row_idx_.size());
-      row_idx_.push_back(r);
-    }
-  }
-  col_ptr_[m] = static_cast<long>(row_idx_.size());
+  const auto pos = compress_columns(cols, col_ptr_, row_idx_);
   for (auto& b : blocks_) {
     const int nl = static_cast<int>(b->vars.size());
     b->scale.assign(nl, 1.0);

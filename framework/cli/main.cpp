@@ -21,6 +21,7 @@
 #include "framework/io/plot.hpp"
 #include "framework/plugin/plugin.hpp"
 #include "framework/cli/study_commands.hpp"
+#include "framework/cli/split_list.hpp"
 #include "framework/run/run.hpp"
 
 namespace {
@@ -81,14 +82,7 @@ void print_stats(const SolverResult& r, double seconds, std::ostream& out) {
     out << "  WARNING: " << s.pattern_misses << " Jacobian entries fell outside the structural pattern\n";
 }
 
-std::vector<std::string> split_list(const std::string& s) {
-  std::vector<std::string> out;
-  std::stringstream ss(s);
-  std::string item;
-  while (std::getline(ss, item, ','))
-    if (!item.empty()) out.push_back(item);
-  return out;
-}
+using pneumo::cli::split_list;
 
 int simulate_command(const std::string& netlist_path, const std::vector<std::string>& sets, std::string output,
                      bool stats, bool quiet, const std::string& plot_prefix, const std::string& plot_columns,

@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "components/builtin.hpp"
+#include "framework/cli/split_list.hpp"
 #include "framework/study/sensitivity.hpp"
 #include "framework/study/sweep.hpp"
 
@@ -18,15 +19,6 @@ namespace {
 
 namespace fs = std::filesystem;
 using namespace pneumo::study;
-
-std::vector<std::string> split_list(const std::string& s) {
-  std::vector<std::string> out;
-  std::stringstream ss(s);
-  std::string item;
-  while (std::getline(ss, item, ','))
-    if (!item.empty()) out.push_back(item);
-  return out;
-}
 
 std::string default_output(const std::string& netlist, const char* suffix) {
   return fs::path(netlist).stem().string() + suffix;

@@ -1,0 +1,124 @@
+// Helpers the test files share: reading a file, writing numbers into netlist
+// text, running a netlist text, reading result columns, a temporary
+// directory, running the CLI.
+// Header-only and test-only; every test file is built into one executable,
+// so these are inline.
+#pragma once
+
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <system_error>
+#include <utility>
+#include <vector>
+
+#include "components/builtin.hpp"
+#include "framework/netlist/netlist.hpp"
+#include "framework/run/run.hpp"
+
+namespace pneumo::test_support {
+
+// The whole file as text ("" if it cannot be read).
+inline std::string read_file(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// A number for netlist text, with all 17 significant digits so that the
+// parsed value is the double the test computed.
+inline std::string num(double v) {
+  std::ostringstream s;
+  s << std::setprecision(17) << v;
+  return s.str();
+}
+
+inline double rel_err(double actual, double expected) { return std::abs(actual - expected) / std::abs(expected); }
+
+// Runs a netlist text with the built-in components; a failed solve fails the
+// test (the partial result is returned for the report).
+inline RunResult run_text(const std::string& text, const std::string& name) {
+  const Netlist nl = parse_netlist(text, name);
+  RunResult r = run_simulation(nl, builtin_registry());
+  EXPECT_TRUE(r.solver.ok) << name << ": " << r.solver.message;
+  return r;
+}
+
+// Column `name` over all output rows; a missing column throws (fails the test).
+inline std::vector<double> column(const ResultsTable& table, const std::string& name) {
+  const int col = table.column(name);
+  if (col < 0) throw std::runtime_error("no column " + name);
+  std::vector<double> out;
+  for (const auto& row : table.rows) out.push_back(row[col]);
+  return out;
+}
+
+// The value of column `name` in the row at time t (outputs fall on a grid).
+inline double at(const ResultsTable& table, const std::string& name, double t) {
+  const int col = table.column(name);
+  if (col < 0) throw std::runtime_error("no column " + name);
+  for (const auto& row : table.rows)
+    if (std::abs(row[0] - t) < 1e-9) return row[col];
+  throw std::runtime_error("no row at t = " + std::to_string(t));
+}
+
+// A fresh directory for the running test, removed with its contents
+// afterwards; named after the test, the process and a counter.
+class TempDir {
+ public:
+  TempDir() {
+    static int counter = 0;
+    std::string name = "pneumo_";
+    if (const auto* info = ::testing::UnitTest::GetInstance()->current_test_info())
+      name += std::string(info->test_suite_name()) + "_" + info->name() + "_";
+    name += std::to_string(::getpid()) + "_" + std::to_string(counter++);
+    for (auto& ch : name)
+      if (!std::isalnum(static_cast<unsigned char>(ch)) && ch != '_') ch = '_';
+    path_ = std::filesystem::temp_directory_path() / name;
+    std::filesystem::remove_all(path_);
+    std::filesystem::create_directories(path_);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    std::filesystem::remove_all(path_, ec);
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+
+  const std::filesystem::path& path() const { return path_; }
+  // Writes `text` to the file `name` in this directory; returns its path.
+  std::string write(const std::string& name, const std::string& text) const {
+    std::ofstream(path_ / name) << text;
+    return (path_ / name).string();
+  }
+
+ private:
+  std::filesystem::path path_;
+};
+
+#ifdef PNEUMO_BINARY
+// Runs `pneumo ARGS` (stderr joined to stdout): {exit status, output};
+// status -1 when the process did not exit normally.
+inline std::pair<int, std::string> run_cli(const std::string& args) {
+  const std::string cmd = std::string("'") + PNEUMO_BINARY + "' " + args + " 2>&1";
+  FILE* f = popen(cmd.c_str(), "r");
+  std::string out;
+  char buf[512];
+  while (f && fgets(buf, sizeof buf, f)) out += buf;
+  const int st = f ? pclose(f) : -1;
+  return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, out};
+}
+#endif
+
+}  // namespace pneumo::test_support
