@@ -10,6 +10,7 @@
 // data and the validation gap shrink.
 //
 //   diagnose_benchmark [--source DIR] [--work DIR] [--quick] [--threads N] [--noise-scale F]
+//                      [--case NAME] [--screen-keep N]
 #include <algorithm>
 #include <cstdlib>
 #include <chrono>
@@ -130,6 +131,8 @@ int main(int argc, char** argv) {
   bool quick = false;
   int threads = 2;
   double noise_scale = 1.0;
+  std::string only_case;
+  int screen_keep = -1;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--source" && i + 1 < argc) source = argv[++i];
@@ -137,8 +140,11 @@ int main(int argc, char** argv) {
     else if (a == "--quick") quick = true;
     else if (a == "--threads" && i + 1 < argc) threads = std::stoi(argv[++i]);
     else if (a == "--noise-scale" && i + 1 < argc) noise_scale = std::stod(argv[++i]);
+    else if (a == "--case" && i + 1 < argc) only_case = argv[++i];
+    else if (a == "--screen-keep" && i + 1 < argc) screen_keep = std::stoi(argv[++i]);
     else {
-      std::cerr << "usage: diagnose_benchmark [--source DIR] [--work DIR] [--quick] [--threads N] [--noise-scale F]\n";
+      std::cerr << "usage: diagnose_benchmark [--source DIR] [--work DIR] [--quick] [--threads N] [--noise-scale F] "
+                   "[--case NAME] [--screen-keep N]\n";
       return 2;
     }
   }
@@ -160,6 +166,13 @@ int main(int argc, char** argv) {
       {"none_3", {}, 15},
   };
   if (quick) cases = {cases[0], cases[1], cases[2], cases[3]};
+  if (!only_case.empty()) {
+    std::erase_if(cases, [&](const Case& c) { return c.name != only_case; });
+    if (cases.empty()) {
+      std::cerr << "diagnose_benchmark: no case '" << only_case << "'\n";
+      return 2;
+    }
+  }
 
   struct Outcome {
     Case c;
@@ -170,6 +183,7 @@ int main(int argc, char** argv) {
   std::vector<Outcome> outcomes;
   DiagnoseOptions opt;
   opt.threads = threads;
+  if (screen_keep > 0) opt.screen_keep = screen_keep;
   opt.progress = std::getenv("PNEUMO_BENCH_VERBOSE") != nullptr;
   for (const auto& c : cases) {
     const fs::path dir = fs::path(work) / c.name;
@@ -221,7 +235,7 @@ int main(int argc, char** argv) {
   }
   for (std::size_t j = 0; j < cols.size(); ++j) std::printf("  column %zu = %s\n", j, cols[j].c_str());
 
-  int single = 0, right = 0, right_group = 0, clean = 0, claimed = 0, pairs = 0, pair_both = 0;
+  int single = 0, right = 0, right_group = 0, clean = 0, claimed = 0, pairs = 0, pair_both = 0, extra = 0;
   std::vector<double> shrink;
   for (const auto& o : outcomes) {
     if (o.c.withheld.empty()) {
@@ -233,6 +247,7 @@ int main(int argc, char** argv) {
     if (o.c.withheld.size() == 1) {
       ++single;
       right += first(o) == o.c.withheld[0];
+      extra += o.verdict.size() > 1;
       bool in = false;
       if (!o.groups.empty())
         for (const auto& g : o.groups[0]) in = in || g == o.c.withheld[0];
@@ -252,6 +267,7 @@ int main(int argc, char** argv) {
   for (const auto& o : outcomes) total_s += o.seconds;
   std::printf("\nsingle-effect cases: right effect first in %d / %d (%.0f %%; target >= 90 %%), within the reported group %d / %d\n",
               right, single, single ? 100.0 * right / single : 0.0, right_group, single);
+  std::printf("single-effect cases with a second effect claimed as well: %d / %d\n", extra, single);
   std::printf("clean cases: an effect claimed in %d / %d (target 0)\n", claimed, clean);
   std::printf("two-effect cases: both found in %d / %d\n", pair_both, pairs);
   std::printf("median validation gap shrink (cases with an effect): %.0f %% (target >= 70 %%)\n", 100 * med);

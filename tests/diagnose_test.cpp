@@ -5,6 +5,7 @@
 // real headless Chromium.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -54,8 +55,14 @@ std::string small_catalogue(const fs::path& dir, const std::vector<std::string>&
 // Two runs (calibration, validation) of the rig with `extra` YAML appended
 // to the netlist's components/connections (the withheld truth), sampled at
 // 500 Hz over 0.45 s with Gaussian noise (x 0.02 mm, p 2 kPa, T 0.3 K).
-void make_runs(const fs::path& dir, const std::string& leak_C, unsigned seed) {
+// `late_valve_lagging_T`: instead of the leak, an S-shaped valve opening from
+// 16 to 28 ms and a second-order thermometer (time constants 0.12 s, 0.04 s).
+void make_runs(const fs::path& dir, const std::string& leak_C, unsigned seed, bool late_valve_lagging_T = false) {
   YAML::Node model = YAML::LoadFile(kModel);
+  if (late_valve_lagging_T)
+    model["components"]["valve_cmd"] = YAML::Load(
+        "{type: signal_source, kind: table, table: [[0, 0], [0.016, 0], [0.019, 0.1], [0.022, 0.5], [0.025, 0.9], "
+        "[0.028, 1.0], [10, 1.0]]}");
   if (!leak_C.empty()) {
     // Near-laminar leak (b = 0.1): another form than the candidate's b = 0.3.
     model["components"]["true_leak"] = YAML::Load("{type: iso6358_throttle, C: " + leak_C + ", b: 0.1}");
@@ -84,11 +91,20 @@ void make_runs(const fs::path& dir, const std::string& leak_C, unsigned seed) {
     for (const auto& s : sig) csv << "," << s.first;
     csv << "\n";
     csv.precision(10);
+    std::vector<double> T_sensor(2, res.table.rows.front()[res.table.column("T_EC")]);  // two lag stages
+    double t_prev = res.table.rows.front()[0];
     for (const auto& row : res.table.rows) {
+      if (late_valve_lagging_T) {
+        const double h = row[0] - t_prev;
+        T_sensor[0] += (1 - std::exp(-h / 0.12)) * (row[res.table.column("T_EC")] - T_sensor[0]);
+        T_sensor[1] += (1 - std::exp(-h / 0.04)) * (T_sensor[0] - T_sensor[1]);
+        t_prev = row[0];
+      }
       csv << row[0];
       for (const auto& s : sig) {
         std::normal_distribution<double> n(0, s.second);
-        csv << "," << row[res.table.column(s.first)] + n(rng);
+        const double y = late_valve_lagging_T && s.first == "T_EC" ? T_sensor[1] : row[res.table.column(s.first)];
+        csv << "," << y + n(rng);
       }
       csv << "\n";
     }
@@ -177,6 +193,27 @@ TEST(Diagnose, ReportJsonHasVerdictEffectsAndWhere) {
   double share = 0;
   for (const auto& p : g.phase_total) share += p.ssr / g.total.ssr;
   EXPECT_NEAR(share, 1.0, 1e-9);
+}
+
+TEST(Diagnose, LaggingThermometerDoesNotHideALateValve) {
+  // Two effects at once: the lagging temperature dominates the total gap, the
+  // late valve shifts x and the pressures. Judged per signal, the first
+  // effect found does not hide the second; forward selection finds both.
+  const fs::path dir = temp_dir("two_effects");
+  make_runs(dir / "runs", "", 9, true);
+  const auto cat = small_catalogue(dir, {"valve_timing", "sensor_lag_T", "leakage_piston_seal"});
+  const auto r = pneumo::diagnose::diagnose(kModel, (dir / "runs").string(), cat, builtin_registry(), quiet());
+  ASSERT_EQ(r.verdict.size(), 2u);
+  EXPECT_NE(std::find(r.verdict.begin(), r.verdict.end(), "valve_timing"), r.verdict.end());
+  EXPECT_NE(std::find(r.verdict.begin(), r.verdict.end(), "sensor_lag_T"), r.verdict.end());
+  EXPECT_GT(r.validation_before.total.rms, 5.0);
+  EXPECT_LT(r.validation_after.total.rms, 0.2 * r.validation_before.total.rms);
+  // The fitted opening lies within the true 16-28 ms opening.
+  for (const auto& [name, v] : r.final_values)
+    if (name == "valve_timing") {
+      EXPECT_GT(v[0], 0.014);
+      EXPECT_LT(v[0], 0.028);
+    }
 }
 
 TEST(Diagnose, CleanDataClaimsNothing) {
@@ -304,7 +341,12 @@ TEST(Diagnose, BadCatalogueNamesFileLineEffectAndParameter) {
   e = load("effects:\n  leak:\n    parameters:\n      C: {initial: 1e-9, lower: 0, upper: 3e-9}\n"
            "    set: {meter_out.C: \"${D}\"}\n");
   EXPECT_NE(e.find("c.yaml:5:"), std::string::npos) << e;
-  EXPECT_NE(e.find("'${D}' is not one of the effect's parameters"), std::string::npos) << e;
+  EXPECT_NE(e.find("'${D}': 'D' is not one of the effect's parameters"), std::string::npos) << e;
+
+  e = load("effects:\n  leak:\n    parameters:\n      C: {initial: 1e-9, lower: 0, upper: 3e-9}\n"
+           "    set: {meter_out.C: \"${2 * (C + }\"}\n");
+  EXPECT_NE(e.find("c.yaml:5:"), std::string::npos) << e;
+  EXPECT_NE(e.find("expression ends early"), std::string::npos) << e;
 
   e = load("effects:\n  leak:\n    set: {meter_out.Cx: 1e-9}\n");
   EXPECT_NE(e.find("c.yaml:2:"), std::string::npos) << e;
@@ -336,6 +378,47 @@ TEST(Diagnose, ShippedCatalogueLoadsAgainstTheRig) {
   ASSERT_TRUE(a.solver.ok && b.solver.ok);
   const int cx = a.table.column("x");
   EXPECT_NEAR(a.table.rows.back()[cx], b.table.rows.back()[cx], 1e-7);
+}
+
+TEST(Diagnose, CushionZoneFrictionMovesFromTheMainLawToAnnexCpEC) {
+  // The free weight w is substituted into arithmetic expressions: at w = 1
+  // the coefficients are Annex C pEC's (seed 000), at the null w = 0 the
+  // main-stroke law (Annex B 5.14) holds in the cushioning zone too, so the
+  // stroke is the unpatched model's.
+  const YAML::Node model = YAML::LoadFile(kModel);
+  const Catalogue cat =
+      load_catalogue(kSource + "/catalogues/cushion_rig.yaml", model, kModel, builtin_registry());
+  const Effect* e = cat.find("friction_cushion_zone");
+  ASSERT_NE(e, nullptr);
+  ASSERT_EQ(e->parameters.size(), 1u);
+  ASSERT_TRUE(e->parameters[0].null_value.has_value());
+  const YAML::Node at1 = apply_effects(model, {{e, {1.0}}}, nullptr)["components"]["cylinder"];
+  EXPECT_NEAR(at1["friction_cushion_b0"].as<double>(), 9.66, 1e-12);
+  EXPECT_NEAR(at1["friction_cushion_FS0"].as<double>(), 8.8, 1e-12);
+  EXPECT_NEAR(at1["friction_cushion_vS"].as<double>(), 2.96e-3, 1e-15);
+  EXPECT_NEAR(at1["friction_cushion_a"].as<double>(), 1.0, 1e-12);
+  const std::string kv1 = at1["friction_cushion_kv1"].as<std::string>();
+  EXPECT_NEAR(std::stod(kv1), 19.61, 1e-12);
+  EXPECT_NE(kv1.find(" N/bar"), std::string::npos) << kv1;
+
+  Netlist patched = parse_netlist(YAML::Dump(apply_effects(model, {{e, {*e->parameters[0].null_value}}}, nullptr)), kModel);
+  Netlist base = load_netlist(kModel);
+  Netlist stronger = parse_netlist(YAML::Dump(apply_effects(model, {{e, {1.0}}}, nullptr)), kModel);
+  for (Netlist* n : {&patched, &base, &stronger}) n->simulation.t_end = 0.6;
+  const auto a = run_simulation(patched, builtin_registry()), b = run_simulation(base, builtin_registry()),
+             c = run_simulation(stronger, builtin_registry());
+  ASSERT_TRUE(a.solver.ok) << a.solver.message;
+  ASSERT_TRUE(b.solver.ok) << b.solver.message;
+  ASSERT_TRUE(c.solver.ok) << c.solver.message;
+  ASSERT_EQ(a.table.rows.size(), b.table.rows.size());
+  const int cx = a.table.column("x");
+  double max_null = 0, max_w1 = 0;
+  for (std::size_t i = 0; i < a.table.rows.size(); ++i) {
+    max_null = std::max(max_null, std::abs(a.table.rows[i][cx] - b.table.rows[i][cx]));
+    if (i < c.table.rows.size()) max_w1 = std::max(max_w1, std::abs(c.table.rows[i][cx] - b.table.rows[i][cx]));
+  }
+  EXPECT_LT(max_null, 1e-7);
+  EXPECT_GT(max_w1, 1e-4);  // and the effect does act in the cushioning zone
 }
 
 TEST(Diagnose, CommandLineReportsBadInputWithExitStatus2) {

@@ -1,10 +1,13 @@
 #include "framework/diagnose/catalogue.hpp"
 
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <optional>
 #include <set>
 #include <sstream>
+#include <stdexcept>
 
 #include "framework/netlist/netlist.hpp"
 
@@ -32,7 +35,84 @@ std::string format_number(double v) {
   return buf;
 }
 
-// Replace ${name} in every scalar of `node` (a fresh clone) by the values.
+// `${...}` holds a parameter name or a simple arithmetic expression of the
+// effect's parameters and numbers (+ - * /, parentheses, unary minus), so
+// that one free parameter can move several coefficients, e.g.
+// "${w * 0.26}" or "${(1 - w) * 2.776 + w * 9.66}". Recursive descent;
+// throws std::invalid_argument naming what is wrong.
+class Expression {
+ public:
+  Expression(const std::string& text, const Effect& effect, const std::vector<double>* values)
+      : s_(text), effect_(effect), values_(values) {}
+  double evaluate() {
+    const double v = sum();
+    skip();
+    if (i_ != s_.size()) throw std::invalid_argument("unexpected '" + s_.substr(i_) + "'");
+    return v;
+  }
+
+ private:
+  void skip() {
+    while (i_ < s_.size() && std::isspace(static_cast<unsigned char>(s_[i_]))) ++i_;
+  }
+  double sum() {
+    double v = product();
+    for (skip(); i_ < s_.size() && (s_[i_] == '+' || s_[i_] == '-'); skip()) {
+      const char op = s_[i_++];
+      const double w = product();
+      v = op == '+' ? v + w : v - w;
+    }
+    return v;
+  }
+  double product() {
+    double v = factor();
+    for (skip(); i_ < s_.size() && (s_[i_] == '*' || s_[i_] == '/'); skip()) {
+      const char op = s_[i_++];
+      const double w = factor();
+      v = op == '*' ? v * w : v / w;
+    }
+    return v;
+  }
+  double factor() {
+    skip();
+    if (i_ >= s_.size()) throw std::invalid_argument("expression ends early");
+    const char c = s_[i_];
+    if (c == '-' || c == '+') {
+      ++i_;
+      const double v = factor();
+      return c == '-' ? -v : v;
+    }
+    if (c == '(') {
+      ++i_;
+      const double v = sum();
+      skip();
+      if (i_ >= s_.size() || s_[i_] != ')') throw std::invalid_argument("missing ')'");
+      ++i_;
+      return v;
+    }
+    if (std::isdigit(static_cast<unsigned char>(c)) || c == '.') {
+      std::size_t used = 0;
+      const double v = std::stod(s_.substr(i_), &used);
+      i_ += used;
+      return v;
+    }
+    if (std::isalpha(static_cast<unsigned char>(c)) || c == '_') {
+      const std::size_t b = i_;
+      while (i_ < s_.size() && (std::isalnum(static_cast<unsigned char>(s_[i_])) || s_[i_] == '_')) ++i_;
+      const std::string name = s_.substr(b, i_ - b);
+      const int k = effect_.parameter_index(name);
+      if (k < 0) throw std::invalid_argument("'" + name + "' is not one of the effect's parameters");
+      return values_ ? (*values_)[k] : effect_.parameters[k].initial;
+    }
+    throw std::invalid_argument(std::string("unexpected '") + c + "'");
+  }
+  const std::string& s_;
+  const Effect& effect_;
+  const std::vector<double>* values_;
+  std::size_t i_ = 0;
+};
+
+// Replace every ${...} in every scalar of `node` (a fresh clone) by its value.
 void substitute(YAML::Node node, const Effect& effect, const std::vector<double>& values) {
   if (node.IsScalar()) {
     std::string s = node.Scalar();
@@ -40,12 +120,16 @@ void substitute(YAML::Node node, const Effect& effect, const std::vector<double>
     bool changed = false;
     while ((pos = s.find("${")) != std::string::npos) {
       const std::size_t end = s.find('}', pos);
-      const std::string name = end == std::string::npos ? s.substr(pos + 2) : s.substr(pos + 2, end - pos - 2);
-      const int k = effect.parameter_index(name);
-      if (end == std::string::npos || k < 0)
-        throw InputError(location_of(effect.where.file, node), "", name,
-                         "effect '" + effect.name + "': '${" + name + "}' is not one of the effect's parameters");
-      s = s.substr(0, pos) + format_number(values[k]) + s.substr(end + 1);
+      const std::string expr = end == std::string::npos ? s.substr(pos + 2) : s.substr(pos + 2, end - pos - 2);
+      double v = 0;
+      try {
+        if (end == std::string::npos) throw std::invalid_argument("missing '}'");
+        v = Expression(expr, effect, &values).evaluate();
+      } catch (const std::exception& ex) {
+        throw InputError(location_of(effect.where.file, node), "", expr,
+                         "effect '" + effect.name + "': '${" + expr + "}': " + ex.what());
+      }
+      s = s.substr(0, pos) + format_number(v) + s.substr(end + 1);
       changed = true;
     }
     if (changed) node = s;
@@ -78,15 +162,20 @@ double number(const std::string& file, const YAML::Node& n, const std::string& e
   }
 }
 
-// Every ${name} in the patch must be one of the effect's parameters.
+// Every ${...} in the patch must name the effect's parameters (or be an
+// expression of them that parses).
 void check_references(const std::string& file, const YAML::Node& node, const Effect& effect) {
   if (node.IsScalar()) {
     const std::string& s = node.Scalar();
     for (std::size_t pos = s.find("${"); pos != std::string::npos; pos = s.find("${", pos + 2)) {
       const std::size_t end = s.find('}', pos);
-      const std::string name = end == std::string::npos ? s.substr(pos + 2) : s.substr(pos + 2, end - pos - 2);
-      if (end == std::string::npos || effect.parameter_index(name) < 0)
-        fail(file, node, effect.name, name, "'${" + name + "}' is not one of the effect's parameters");
+      const std::string expr = end == std::string::npos ? s.substr(pos + 2) : s.substr(pos + 2, end - pos - 2);
+      try {
+        if (end == std::string::npos) throw std::invalid_argument("missing '}'");
+        (void)Expression(expr, effect, nullptr).evaluate();
+      } catch (const std::exception& ex) {
+        fail(file, node, effect.name, expr, "'${" + expr + "}': " + ex.what());
+      }
     }
   } else if (node.IsSequence()) {
     for (const auto& c : node) check_references(file, c, effect);
@@ -230,8 +319,12 @@ Catalogue load_catalogue(const std::string& path, const YAML::Node& model, const
         ep.where = location_of(path, p->first);
         const YAML::Node& s = p->second;
         if (!s.IsMap()) fail(path, p->first, e.name, ep.name, "needs {initial, lower, upper, null, unit}");
+        // yaml-cpp parses the plain key `null` as a Null node, which s["null"]
+        // does not find: the entry is taken from the iteration.
+        std::optional<YAML::Node> null_node;
         for (auto k = s.begin(); k != s.end(); ++k) {
           const auto key = k->first.as<std::string>();
+          if (key == "null") null_node.emplace(k->second);
           if (key != "initial" && key != "lower" && key != "upper" && key != "null" && key != "unit" &&
               key != "scale")
             fail(path, k->first, e.name, ep.name, "unknown key '" + key + "' (initial, lower, upper, null, unit, scale)");
@@ -241,7 +334,7 @@ Catalogue load_catalogue(const std::string& path, const YAML::Node& model, const
         ep.initial = number(path, s["initial"], e.name, ep.name, "initial");
         ep.lower = number(path, s["lower"], e.name, ep.name, "lower");
         ep.upper = number(path, s["upper"], e.name, ep.name, "upper");
-        if (s["null"]) ep.null_value = number(path, s["null"], e.name, ep.name, "null");
+        if (null_node) ep.null_value = number(path, *null_node, e.name, ep.name, "null");
         if (s["unit"]) ep.unit = s["unit"].as<std::string>();
         if (s["scale"]) {
           const auto sc = s["scale"].as<std::string>();
@@ -252,7 +345,7 @@ Catalogue load_catalogue(const std::string& path, const YAML::Node& model, const
         if (ep.initial < ep.lower || ep.initial > ep.upper)
           fail(path, s["initial"], e.name, ep.name, "initial lies outside [lower, upper]");
         if (ep.null_value && (*ep.null_value < ep.lower || *ep.null_value > ep.upper))
-          fail(path, s["null"], e.name, ep.name, "null lies outside [lower, upper]");
+          fail(path, *null_node, e.name, ep.name, "null lies outside [lower, upper]");
         if (ep.log_scale && ep.lower <= 0) fail(path, s["lower"], e.name, ep.name, "scale: log needs lower > 0");
         e.parameters.push_back(ep);
       }

@@ -14,7 +14,9 @@
 //       disconnect: [[a.port, b.port]]   # removes the connection list with exactly these ports
 //       connect:    [[a.port, b.port]]   # adds a connection list
 //       measure:    {OUTPUT: {lag: ${tau}}}  # measurement model: first-order sensor lag (s)
-// `${name}` in any value is replaced by the parameter's SI value. `null` is
+// `${name}` in any value is replaced by the parameter's SI value; `${...}`
+// may also hold arithmetic of the parameters and numbers (+ - * /,
+// parentheses), e.g. "${(1 - w) * 2.776 + w * 9.66}". `null` is
 // the value at which the effect vanishes (optional for structural switches,
 // whose reference is then the unpatched model). scale: log fits log(value)
 // (lower must then be > 0). An effect whose component type, parameter or

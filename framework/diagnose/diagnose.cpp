@@ -485,6 +485,26 @@ double excess_reduction(double gap_before, double gap_after) {
   return (e0 - e1) / e0;
 }
 
+// Practical significance: the model removes at least `min_excess_reduction`
+// of the excess gap of the whole validation set or of one signal whose own
+// gap exceeds `adequate_gap`. Per signal, because one badly fitted signal
+// (a lagging thermometer) can dominate the total and hide an effect that
+// repairs the others (x and p of a late valve).
+bool practically_significant(const GapTable& before, const GapTable& after, const DiagnoseOptions& opt,
+                             std::string* why = nullptr) {
+  if (excess_reduction(before.total.rms, after.total.rms) >= opt.min_excess_reduction) {
+    if (why) *why = "total";
+    return true;
+  }
+  for (std::size_t s = 0; s < before.by_signal.size() && s < after.by_signal.size(); ++s)
+    if (before.by_signal[s].rms > opt.adequate_gap &&
+        excess_reduction(before.by_signal[s].rms, after.by_signal[s].rms) >= opt.min_excess_reduction) {
+      if (why) *why = before.signals[s];
+      return true;
+    }
+  return false;
+}
+
 std::string fmt(const char* f, double a, double b = 0, double c = 0) {
   char buf[256];
   std::snprintf(buf, sizeof buf, f, a, b, c);
@@ -636,7 +656,7 @@ DiagnosisReport diagnose(const std::string& model_file, const std::string& runs_
     er.p_value = s.p;
     er.n_eff = s.n_eff;
     er.significant = s.delta_bic > opt.significance_bic && er.gap_before > opt.adequate_gap &&
-                     excess_reduction(er.gap_before, er.gap_after) >= opt.min_excess_reduction;
+                     practically_significant(rep.validation_before, er.validation_after, opt);
     log(fmt("  fit %-2.0f/%-2.0f ", q + 1, std::min<double>(screened.size(), opt.screen_keep)) + e.name +
         fmt(": validation gap %.3g -> %.3g, dBIC %.3g", er.gap_before, er.gap_after, er.delta_bic) +
         fmt("  (%.0f simulations) [%.1f s]", f.evaluations * cal.runs.size(), elapsed()) +
@@ -723,28 +743,60 @@ DiagnosisReport diagnose(const std::string& model_file, const std::string& runs_
   auto gap_of = [](const std::vector<double>& r) { return std::sqrt(ssr_of(r.data(), r.size()) / r.size()); };
   while (best && static_cast<int>(rep.verdict.size()) < opt.max_effects && gap_of(r_val_cur) > opt.adequate_gap) {
     struct Step {
-      const Cand* c;
+      const Effect* e;
       Engine::Fit fit;
       std::vector<double> r_val;
       Engine::Significance s;
     };
     std::vector<Step> steps;
-    int tried = 0;
-    for (int k : order) {
-      const Cand* c = cand_of(results[k].name);
-      if (!c || tried >= 4) continue;
-      bool skip = false;
-      for (const auto& ch : chosen) skip = skip || ch.effect == c->e || effects_conflict(*ch.effect, *c->e);
-      for (const auto& g : rep.verdict_groups)
-        for (const auto& n : g) skip = skip || n == c->e->name;
-      if (skip || results[k].delta_bic <= 0) continue;
-      ++tried;
+    // Re-screen the remaining candidates at the current model: what one
+    // effect improves alone says little about what it adds to another (a
+    // dominant signal can mask it), so each is added at its single fit (or
+    // initial) values and ranked by the calibration misfit it removes.
+    std::vector<std::pair<double, EffectInstance>> rescreen;
+    {
+      std::vector<EffectInstance> adds;
+      for (int k : order) {
+        const Effect* e = cat.find(results[k].name);
+        bool skip = false;
+        for (const auto& ch : chosen) skip = skip || ch.effect == e || effects_conflict(*ch.effect, *e);
+        for (const auto& g : rep.verdict_groups)
+          for (const auto& n : g) skip = skip || n == e->name;
+        if (skip) continue;
+        if (const Cand* c = cand_of(e->name)) {
+          adds.push_back(c->fit.effects[0]);
+        } else {
+          std::vector<double> init;
+          for (const auto& p : e->parameters) init.push_back(p.initial);
+          adds.push_back({e, init});
+        }
+      }
+      std::vector<Model> models;
+      for (const auto& a : adds) {
+        auto m = chosen;
+        m.push_back(a);
+        models.push_back(eng.model(m));
+      }
+      const auto rs = eng.residuals(models, cal);
+      const double c0 = ssr_of(r_cal_cur.data(), r_cal_cur.size());
+      for (std::size_t q = 0; q < adds.size(); ++q) {
+        const double gain = 1 - ssr_of(rs[q].data(), rs[q].size()) / c0;
+        log("  re-screening " + adds[q].effect->name + fmt(" at the current model: %.1f %%", 100 * gain));
+        if (gain > 0) rescreen.push_back({gain, adds[q]});
+      }
+      std::stable_sort(rescreen.begin(), rescreen.end(),
+                       [](const auto& a, const auto& b) { return a.first > b.first; });
+      if (rescreen.size() > 4) rescreen.resize(4);
+    }
+    for (const auto& [gain, add] : rescreen) {
+      (void)gain;
+      const Effect* e = add.effect;
       auto start = chosen;
-      start.push_back(c->fit.effects[0]);
-      log("  forward selection: " + rep.verdict.back() + " + " + c->e->name + fmt("  [%.1f s]", elapsed()));
+      start.push_back(add);
+      log("  forward selection: " + rep.verdict.back() + " + " + e->name + fmt("  [%.1f s]", elapsed()));
       auto f = eng.fit(start, cal, {}, opt.max_iterations);
       const auto r_val = eng.residuals({eng.model(f.effects)}, val)[0];
-      const auto s = eng.significance(r_val_cur, r_val, val, static_cast<int>(c->e->parameters.size()));
+      const auto s = eng.significance(r_val_cur, r_val, val, static_cast<int>(e->parameters.size()));
       // An added effect fitted back to its null value has vanished: no claim.
       bool vanished = true, has_null = false;
       const auto& added = f.effects.back();
@@ -759,23 +811,27 @@ DiagnosisReport diagnose(const std::string& model_file, const std::string& runs_
         vanished = vanished && std::abs(u(added.values[i]) - u(*spec.null_value)) < 0.01;
       }
       if (has_null && vanished) {
-        log("    " + c->e->name + " fitted back to its null value: not added");
+        log("    " + e->name + " fitted back to its null value: not added");
         continue;
       }
-      steps.push_back({c, f, r_val, s});
+      steps.push_back({e, f, r_val, s});
     }
+    const GapTable gap_cur = eng.gaps(r_val_cur, val);
     const Step* bs = nullptr;
-    for (const auto& s : steps)
-      if (s.s.delta_bic > opt.significance_bic &&
-          excess_reduction(gap_of(r_val_cur), gap_of(s.r_val)) >= opt.min_excess_reduction &&
-          (!bs || s.s.delta_bic > bs->s.delta_bic))
-        bs = &s;
+    for (const auto& s : steps) {
+      std::string why;
+      const bool practical = practically_significant(gap_cur, eng.gaps(s.r_val, val), opt, &why);
+      log("    + " + s.e->name + fmt(": dBIC %.3g", s.s.delta_bic) +
+          (practical ? ", removes enough of the excess gap of " + why : ", not practically significant"));
+      if (s.s.delta_bic > opt.significance_bic && practical && (!bs || s.s.delta_bic > bs->s.delta_bic)) bs = &s;
+    }
     if (!bs) break;
     chosen = bs->fit.effects;
     r_val_cur = bs->r_val;
-    rep.verdict.push_back(bs->c->e->name);
+    r_cal_cur = bs->fit.r_cal;
+    rep.verdict.push_back(bs->e->name);
     for (const auto& er : results)
-      if (er.name == bs->c->e->name) {
+      if (er.name == bs->e->name) {
         auto g = er.group;
         g.insert(g.begin(), er.name);
         rep.verdict_groups.push_back(g);

@@ -10,7 +10,8 @@
 // scored on the validation runs by a likelihood ratio on the effective sample
 // size (lag-1 autocorrelation of the residuals) with a BIC penalty per
 // parameter. Effects whose improvements the signals cannot tell apart form a
-// group; a second effect is added by forward selection.
+// group; a second effect is added by forward selection (the remaining
+// candidates re-screened at the current model).
 // How far: the validation gap before and after, per signal and phase.
 #pragma once
 
@@ -64,7 +65,9 @@ struct DiagnoseOptions {
   // significant: the model counts as explaining the data when its validation
   // gap is at most `adequate_gap` (noise = 1; the noise estimate itself is
   // uncertain by ~10 %), and an effect must remove at least
-  // `min_excess_reduction` of the gap in excess of the noise (gap - 1).
+  // `min_excess_reduction` of the gap in excess of the noise (gap - 1), of
+  // the total or of one signal whose own gap exceeds `adequate_gap` (a
+  // dominant signal must not hide an effect that repairs the others).
   double adequate_gap = 1.3;
   double min_excess_reduction = 0.5;
   bool progress = true;
