@@ -71,7 +71,10 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
  public:
   enum Port { kA, kB, kFlange, kHeatA, kHeatCap, kTapEC, kTapECr };
   // Internal variables; rod cushioning adds kMECr.., LuGre adds z (index z_var_).
-  enum Var { kMA, kUA, kTA, kMEC, kUEC, kTEC, kMch, kUch, kTch, kMECr, kUECr, kTECr };
+  // Each chamber's state is (m, U): its temperature U / (m c_v) and pressure
+  // (kappa - 1) U / V are evaluated in place rather than carried as unknowns
+  // (a row and a column fewer per chamber); they remain observables.
+  enum Var { kMA, kUA, kMEC, kUEC, kMch, kUch, kMECr, kUECr };
   enum Obs {
     kX, kV, kPA, kPEC, kPch, kTAo, kTECo, kTcho, kFfric, kFstop, kOpen, kCushionFlow,
     kZ, kFpressure, kHA, kHB, kHEC, kPdVA, kPdVEC, kPdVch, kPdV, kQA, kQcap, kHcushion, kPfric, kPstop, kEstop,
@@ -178,13 +181,10 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
                {"EC_rod", Domain::pneumatic, Causality::acausal,
                 "tapping into the rod cushion volume (rod cushioning only; closed if unconnected)", true}};
     i.variables = {{"m_A", "kg", "gas mass, rod side"},        {"U_A", "J", "internal energy, rod side"},
-                   {"T_A", "K", "gas temperature, rod side"},   {"m_EC", "kg", "gas mass, cushion volume"},
-                   {"U_EC", "J", "internal energy, cushion volume"}, {"T_EC", "K", "gas temperature, cushion volume"},
+                   {"m_EC", "kg", "gas mass, cushion volume"},  {"U_EC", "J", "internal energy, cushion volume"},
                    {"m_ch", "kg", "gas mass, channel"},         {"U_ch", "J", "internal energy, channel"},
-                   {"T_ch", "K", "gas temperature, channel"},
                    {"m_EC_rod", "kg", "gas mass, rod cushion volume"},
                    {"U_EC_rod", "J", "internal energy, rod cushion volume"},
-                   {"T_EC_rod", "K", "gas temperature, rod cushion volume"},
                    {"z", "m", "LuGre bristle deflection", 1e-5}};
     i.observables = {{"x", "m", "piston position (0 extended, stroke at the cap)"},
                      {"v", "m/s", "piston velocity"},
@@ -221,12 +221,12 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
                      {"H_EC_rod", "W", "enthalpy flow into the gas at the tapping port EC_rod"},
                      {"P_pdV_EC_rod", "W", "p dV/dt of the rod cushion volume"},
                      {"H_cushion_rod", "W", "enthalpy flow rod cushion volume -> rod-side channel"}};
-    i.equations = {"mass balance A",       "energy balance A",    "gas law A",           "U_A = m c_v T",
-                   "outflow temperature A", "mass balance EC",     "energy balance EC",   "U_EC = m c_v T",
-                   "mass balance ch",      "energy balance ch",   "gas law ch",          "U_ch = m c_v T",
+    i.equations = {"mass balance A",       "energy balance A",    "gas law A",
+                   "outflow temperature A", "mass balance EC",     "energy balance EC",
+                   "mass balance ch",      "energy balance ch",   "gas law ch",
                    "outflow temperature B", "force balance",       "wall heat A",         "wall heat cap",
                    "tap EC pressure",      "tap EC temperature",  "mass balance ECr",    "energy balance ECr",
-                   "U_ECr = m c_v T",      "tap EC_rod pressure", "tap EC_rod temperature", "bristle dynamics"};
+                   "tap EC_rod pressure", "tap EC_rod temperature", "bristle dynamics"};
     i.roots = 6;
     return i;
   }
@@ -251,11 +251,11 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
     }
     if (!rod) {
       erase_names(i.ports, {"EC_rod"});
-      erase_names(i.variables, {"m_EC_rod", "U_EC_rod", "T_EC_rod"});
+      erase_names(i.variables, {"m_EC_rod", "U_EC_rod"});
       erase_names(i.observables, {"p_EC_rod", "T_EC_rod", "bore_open_rod", "m_flow_cushion_rod", "H_EC_rod",
                                   "P_pdV_EC_rod", "H_cushion_rod"});
       erase_strings(i.equations,
-                    {"mass balance ECr", "energy balance ECr", "U_ECr = m c_v T", "tap EC_rod pressure",
+                    {"mass balance ECr", "energy balance ECr", "tap EC_rod pressure",
                      "tap EC_rod temperature"});
       i.roots = 4;
     }
@@ -319,14 +319,15 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
         throw ParameterError("rod_cushion_length",
                              "the cushioning zones (with their bore-opening ramps) at both ends overlap");
     }
-    z_var_ = rod_ ? 12 : 9;
+    z_var_ = rod_ ? 8 : 6;
   }
 
   // Everything derived from the local variables, for equations and outputs.
   template <class T>
   struct State {
     T x, v, p_A, p_EC, p_ch, V_A, V_EC, V_ch, open, m_x, H_x, F_fric, F_stop, z;
-    T p_ECr, V_ECr, open_r, m_xr, H_xr;  // rod cushioning only
+    T T_A, T_EC, T_ch;                          // gas temperatures U / (m c_v)
+    T p_ECr, V_ECr, open_r, m_xr, H_xr, T_ECr;  // rod cushioning only
     T F_pressure;
   };
 
@@ -358,24 +359,28 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
     s.V_A = V0_A_ + A_colr_ * s.x;
     s.V_EC = V0_EC_ + (A_B_ - A_CP_) * (stroke_ - s.x);
     s.V_ch = V0_ch_ + A_CP_ * (stroke_ - s.x);
-    const T& T_EC = e.var(kTEC);
-    const T& T_ch = e.var(kTch);
-    s.p_EC = e.var(kMEC) * gas.R * T_EC / s.V_EC;
-    s.p_ch = e.var(kMch) * gas.R * T_ch / s.V_ch;
+    s.T_A = e.var(kUA) / (e.var(kMA) * gas.cv());
+    s.T_EC = e.var(kUEC) / (e.var(kMEC) * gas.cv());
+    s.T_ch = e.var(kUch) / (e.var(kMch) * gas.cv());
+    const T& T_EC = s.T_EC;
+    const T& T_ch = s.T_ch;
+    s.p_EC = (gas.kappa - 1.0) * e.var(kUEC) / s.V_EC;
+    s.p_ch = (gas.kappa - 1.0) * e.var(kUch) / s.V_ch;
     const T gap = stroke_ - L_ - s.x;
     s.m_x = cushion_flow(cap_, gap, s.p_EC, s.p_ch, T_EC, T_ch, s.x, gas, s.open);  // EC -> ch
     s.H_x = enthalpy_inflow(s.m_x, T_EC, T_ch, gas);
     const T zero = 0.0 * s.x;
     s.z = friction_.has_state() ? e.var(z_var_) : zero;
     if (rod_) {
-      const T& T_ECr = e.var(kTECr);
+      s.T_ECr = e.var(kUECr) / (e.var(kMECr) * gas.cv());
+      const T& T_ECr = s.T_ECr;
       s.V_ECr = V0_ECr_ + (A_B_ - A_CPr_) * s.x;
-      s.p_ECr = e.var(kMECr) * gas.R * T_ECr / s.V_ECr;
+      s.p_ECr = (gas.kappa - 1.0) * e.var(kUECr) / s.V_ECr;
       const T gap_r = s.x - L_r_;
-      s.m_xr = cushion_flow(rodc_, gap_r, s.p_ECr, s.p_A, T_ECr, e.var(kTA), s.x, gas, s.open_r);  // ECr -> A
-      s.H_xr = enthalpy_inflow(s.m_xr, T_ECr, e.var(kTA), gas);
+      s.m_xr = cushion_flow(rodc_, gap_r, s.p_ECr, s.p_A, T_ECr, s.T_A, s.x, gas, s.open_r);  // ECr -> A
+      s.H_xr = enthalpy_inflow(s.m_xr, T_ECr, s.T_A, gas);
     } else {
-      s.p_ECr = s.V_ECr = s.m_xr = s.H_xr = zero;
+      s.p_ECr = s.V_ECr = s.m_xr = s.H_xr = s.T_ECr = zero;
       s.open_r = zero + 1.0;
     }
     // Friction.
@@ -428,11 +433,19 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
     const auto fl = e.flange(kFlange);
     const auto hA = e.heat_port(kHeatA);
     const auto hC = e.heat_port(kHeatCap);
+    // T > 0 <=> U > 0 for m > 0; checked before state() divides by m.
+    for (int k : {kMA, kUA, kMEC, kUEC, kMch, kUch}) e.reject_unless_positive(e.var(k));
+    if (rod_) {
+      e.reject_unless_positive(e.var(kMECr));
+      e.reject_unless_positive(e.var(kUECr));
+    }
     const State<T> s = state(e);
-    for (int k : {kMA, kTA, kMEC, kTEC, kMch, kTch}) e.reject_unless_positive(e.var(k));
     // Rod-side chamber A (volume grows with x); with rod cushioning the
     // rod-side channel, fed from ECr, adiabatic.
-    const T H_A = enthalpy_inflow(A.m_flow, A.T_in, e.var(kTA), gas);
+    // Port outflows carry the port's T_out, the value the connected side
+    // reads as its T_in, so that the energy crossing a port balances exactly
+    // (U / (m c_v) equals T_out only to the Newton tolerance).
+    const T H_A = enthalpy_inflow(A.m_flow, A.T_in, A.T_out, gas);
     if (!rod_) {
       r[0] = e.der(kMA) - A.m_flow;
       r[1] = e.der(kUA) - H_A + A.p * A_A_ * s.v - hA.Q;
@@ -440,62 +453,61 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
       r[0] = e.der(kMA) - A.m_flow - s.m_xr;
       r[1] = e.der(kUA) - H_A - s.H_xr + A.p * A_colr_ * s.v;
     }
-    r[2] = A.p - e.var(kMA) * gas.R * e.var(kTA) / s.V_A;  // solved for p (scaling)
-    r[3] = e.var(kTA) - e.var(kUA) / (e.var(kMA) * gas.cv());
-    r[4] = A.T_out - e.var(kTA);
+    r[2] = A.p - (gas.kappa - 1.0) * e.var(kUA) / s.V_A;  // solved for p (scaling)
+    // With wall_alpha = 0 the heat ports equal the gas temperatures; the
+    // other port temperatures of the same gas are then written as their
+    // aliases (not as T_out - U / (m c_v)) so that alias elimination folds
+    // them into one unknown per chamber.
+    const bool walls_at_gas_T = !(wall_alpha_ > 0);
+    r[3] = A.T_out - (walls_at_gas_T && !rod_ ? hA.T : s.T_A);
     // Cushion annulus EC (volume shrinks with x), tapped by port EC.
     if (!taps_) {
-      r[5] = e.der(kMEC) + s.m_x;
-      r[6] = e.der(kUEC) + s.H_x - s.p_EC * (A_B_ - A_CP_) * s.v - hC.Q;
+      r[4] = e.der(kMEC) + s.m_x;
+      r[5] = e.der(kUEC) + s.H_x - s.p_EC * (A_B_ - A_CP_) * s.v - hC.Q;
     } else {
       const auto tap = e.gas_port(kTapEC);
-      const T H_tap = enthalpy_inflow(tap.m_flow, tap.T_in, e.var(kTEC), gas);
-      r[5] = e.der(kMEC) + s.m_x - tap.m_flow;
-      r[6] = e.der(kUEC) + s.H_x - H_tap - s.p_EC * (A_B_ - A_CP_) * s.v - hC.Q;
+      const T H_tap = enthalpy_inflow(tap.m_flow, tap.T_in, tap.T_out, gas);
+      r[4] = e.der(kMEC) + s.m_x - tap.m_flow;
+      r[5] = e.der(kUEC) + s.H_x - H_tap - s.p_EC * (A_B_ - A_CP_) * s.v - hC.Q;
     }
-    r[7] = e.var(kTEC) - e.var(kUEC) / (e.var(kMEC) * gas.cv());
     // Channel ch: inflow from EC, outflow through port B.
-    const T H_B = enthalpy_inflow(B.m_flow, B.T_in, e.var(kTch), gas);
-    r[8] = e.der(kMch) - s.m_x - B.m_flow;
-    r[9] = e.der(kUch) - s.H_x - H_B - s.p_ch * A_CP_ * s.v;
-    r[10] = B.p - e.var(kMch) * gas.R * e.var(kTch) / s.V_ch;
-    r[11] = e.var(kTch) - e.var(kUch) / (e.var(kMch) * gas.cv());
-    r[12] = B.T_out - e.var(kTch);
+    const T H_B = enthalpy_inflow(B.m_flow, B.T_in, B.T_out, gas);
+    r[6] = e.der(kMch) - s.m_x - B.m_flow;
+    r[7] = e.der(kUch) - s.H_x - H_B - s.p_ch * A_CP_ * s.v;
+    r[8] = B.p - (gas.kappa - 1.0) * e.var(kUch) / s.V_ch;
+    r[9] = B.T_out - s.T_ch;
     // Force balance: the flange pulls on the cylinder with f = -F.
     const T F = s.F_pressure + s.F_fric + s.F_stop;
-    r[13] = fl.f + F;
+    r[10] = fl.f + F;
     // Walls: at the gas temperature, or exchanging heat with the gas.
-    const T& T_gas_A = rod_ ? e.var(kTECr) : e.var(kTA);
+    const T& T_gas_A = rod_ ? s.T_ECr : s.T_A;
     if (wall_alpha_ > 0) {
-      r[14] = hA.Q - wall_alpha_ * wall_area_rod(s.x) * (hA.T - T_gas_A);
-      r[15] = hC.Q - wall_alpha_ * wall_area_cap(s.x) * (hC.T - e.var(kTEC));
+      r[11] = hA.Q - wall_alpha_ * wall_area_rod(s.x) * (hA.T - T_gas_A);
+      r[12] = hC.Q - wall_alpha_ * wall_area_cap(s.x) * (hC.T - s.T_EC);
     } else {
-      r[14] = hA.T - T_gas_A;
-      r[15] = hC.T - e.var(kTEC);
+      r[11] = hA.T - T_gas_A;
+      r[12] = hC.T - s.T_EC;
     }
-    int row = 16;
+    int row = 13;
     if (taps_) {
       const auto tap = e.gas_port(kTapEC);
       r[row++] = tap.p - s.p_EC;
-      r[row++] = tap.T_out - e.var(kTEC);
+      r[row++] = tap.T_out - (walls_at_gas_T ? hC.T : s.T_EC);
     }
     if (rod_) {
-      e.reject_unless_positive(e.var(kMECr));
-      e.reject_unless_positive(e.var(kTECr));
       // Rod cushion annulus ECr (volume grows with x), tapped by EC_rod.
       T m_tap = 0.0 * s.x, H_tap = 0.0 * s.x;
       if (taps_) {
         const auto tapr = e.gas_port(kTapECr);
         m_tap = tapr.m_flow;
-        H_tap = enthalpy_inflow(tapr.m_flow, tapr.T_in, e.var(kTECr), gas);
+        H_tap = enthalpy_inflow(tapr.m_flow, tapr.T_in, tapr.T_out, gas);
       }
       r[row++] = e.der(kMECr) + s.m_xr - m_tap;
       r[row++] = e.der(kUECr) + s.H_xr - H_tap + s.p_ECr * (A_B_ - A_CPr_) * s.v - hA.Q;
-      r[row++] = e.var(kTECr) - e.var(kUECr) / (e.var(kMECr) * gas.cv());
       if (taps_) {
         const auto tapr = e.gas_port(kTapECr);
         r[row++] = tapr.p - s.p_ECr;
-        r[row++] = tapr.T_out - e.var(kTECr);
+        r[row++] = tapr.T_out - (walls_at_gas_T ? hA.T : s.T_ECr);
       }
     }
     if (friction_.has_state()) r[row++] = e.der(z_var_) - friction_.lugre_zdot(s.v, e.var(z_var_));
@@ -504,9 +516,9 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
   double observe(int k, const Eval<double>& e) const override {
     const State<double> s = state(e);
     const GasModel& gas = e.gas();
-    auto inflow = [&](int port, int var) {
+    auto inflow = [&](int port) {
       const auto g = e.gas_port(port);
-      return enthalpy_inflow(g.m_flow, g.T_in, e.var(var), gas);
+      return enthalpy_inflow(g.m_flow, g.T_in, g.T_out, gas);
     };
     const double pdV_A = s.p_A * A_colr_ * s.v;
     const double pdV_EC = -s.p_EC * (A_B_ - A_CP_) * s.v;
@@ -518,18 +530,18 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
       case kPA: return s.p_A;
       case kPEC: return s.p_EC;
       case kPch: return s.p_ch;
-      case kTAo: return e.var(kTA);
-      case kTECo: return e.var(kTEC);
-      case kTcho: return e.var(kTch);
+      case kTAo: return s.T_A;
+      case kTECo: return s.T_EC;
+      case kTcho: return s.T_ch;
       case kFfric: return s.F_fric;
       case kFstop: return s.F_stop;
       case kOpen: return s.open;
       case kCushionFlow: return s.m_x;
       case kZ: return s.z;
       case kFpressure: return s.F_pressure;
-      case kHA: return inflow(kA, kTA);
-      case kHB: return inflow(kB, kTch);
-      case kHEC: return taps_ ? inflow(kTapEC, kTEC) : 0.0;
+      case kHA: return inflow(kA);
+      case kHB: return inflow(kB);
+      case kHEC: return taps_ ? inflow(kTapEC) : 0.0;
       case kPdVA: return pdV_A;
       case kPdVEC: return pdV_EC;
       case kPdVch: return pdV_ch;
@@ -545,10 +557,10 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
       }
       case kUgas: return e.var(kUA) + e.var(kUEC) + e.var(kUch) + (rod_ ? e.var(kUECr) : 0.0);
       case kPECr: return s.p_ECr;
-      case kTECro: return e.var(kTECr);
+      case kTECro: return s.T_ECr;
       case kOpenR: return s.open_r;
       case kCushionFlowR: return s.m_xr;
-      case kHECr: return taps_ ? inflow(kTapECr, kTECr) : 0.0;
+      case kHECr: return taps_ ? inflow(kTapECr) : 0.0;
       case kPdVECr: return pdV_ECr;
       case kHcushionR: return s.H_xr;
     }
@@ -597,15 +609,14 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
     const double V_A = V0_A_ + A_colr_ * x;
     const double V_EC = V0_EC_ + (A_B_ - A_CP_) * (stroke_ - x);
     const double V_ch = V0_ch_ + A_CP_ * (stroke_ - x);
-    auto gas_state = [&](int m, int U, int Tv, double p, double V) {
+    auto gas_state = [&](int m, int U, double p, double V) {
       const double mass = p * V / (gas.R * T0_);
       sv.fix_var(m, mass);
       sv.fix_var(U, mass * gas.cv() * T0_);
-      sv.guess_var(Tv, T0_);
     };
-    gas_state(kMA, kUA, kTA, p0_A_, V_A);
-    gas_state(kMEC, kUEC, kTEC, p0_cap_, V_EC);
-    gas_state(kMch, kUch, kTch, p0_cap_, V_ch);
+    gas_state(kMA, kUA, p0_A_, V_A);
+    gas_state(kMEC, kUEC, p0_cap_, V_EC);
+    gas_state(kMch, kUch, p0_cap_, V_ch);
     sv.guess_pressure(kA, p0_A_);
     sv.guess_pressure(kB, p0_cap_);
     if (taps_) sv.guess_pressure(kTapEC, p0_cap_);
@@ -615,7 +626,7 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
     sv.guess_temperature(kHeatA, T0_);
     sv.guess_temperature(kHeatCap, T0_);
     if (rod_) {
-      gas_state(kMECr, kUECr, kTECr, p0_A_, V0_ECr_ + (A_B_ - A_CPr_) * x);
+      gas_state(kMECr, kUECr, p0_A_, V0_ECr_ + (A_B_ - A_CPr_) * x);
       if (taps_) {
         sv.guess_pressure(kTapECr, p0_A_);
         sv.guess_temperature(kTapECr, T0_);
@@ -659,7 +670,7 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
   double x0_, p0_A_, p0_cap_, T0_;
   bool rod_ = false, taps_ = false;
   double A_CPr_ = 0, A_colr_ = 0, L_r_ = 0, V0_ECr_ = 0;
-  int z_var_ = 9;
+  int z_var_ = 6;
 };
 
 void register_cushioned_cylinder(Registry& r) { r.add<CushionedCylinder>(); }

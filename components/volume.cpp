@@ -3,7 +3,11 @@
 // volume (a line, a fitting between two resistances): gas entering at one
 // port mixes with the contents and leaves at the other, which a one-port
 // volume on a three-port node cannot do (it sees only the net flow). States m and U (not p and T) so that mass and energy are
-// conserved by construction, to the solver's tolerance.
+// conserved by construction, to the solver's tolerance. The temperature is
+// no unknown of its own: T = U / (m c_v) and p = (kappa - 1) U / V (m R T / V
+// of an ideal gas) are evaluated in place, so the pressure row does not depend
+// on T; T stays an output as an observable. The port temperatures remain
+// unknowns (the connected components read them), all aliases of one.
 #include "components/builtin.hpp"
 #include "components/enthalpy_flow.hpp"
 
@@ -12,8 +16,8 @@ namespace pneumo::components {
 class Volume final : public ComponentT<Volume> {
  public:
   enum Port { kPort, kHeat, kPortB };
-  enum Var { kM, kU, kT };
-  enum Observable { kP };
+  enum Var { kM, kU };
+  enum Observable { kP, kT };
 
   static ComponentInfo describe() {
     ComponentInfo i;
@@ -28,10 +32,10 @@ class Volume final : public ComponentT<Volume> {
     i.ports = {{"port", Domain::pneumatic, Causality::acausal, "gas port"},
                {"heat", Domain::thermal, Causality::acausal, "heat port to the wall (insulated if unconnected)", true},
                {"port_b", Domain::pneumatic, Causality::acausal, "second gas port (closed if unconnected)", true}};
-    i.variables = {{"m", "kg", "gas mass"}, {"U", "J", "internal energy of the gas"}, {"T", "K", "gas temperature"}};
-    i.observables = {{"p", "Pa", "pressure, absolute"}};
+    i.variables = {{"m", "kg", "gas mass"}, {"U", "J", "internal energy of the gas"}};
+    i.observables = {{"p", "Pa", "pressure, absolute"}, {"T", "K", "gas temperature, U / (m c_v)"}};
     i.equations = {"mass balance",        "energy balance",
-                   "gas law p = m R T / V", "T = U / (m c_v)",
+                   "gas law p = (kappa - 1) U / V",
                    "outflow temperature", "wall temperature seen by the heat port",
                    "pressure at port_b",  "outflow temperature at port_b"};
     return i;
@@ -47,31 +51,40 @@ class Volume final : public ComponentT<Volume> {
     const auto port_b = e.gas_port(kPortB);
     const T& m = e.var(kM);
     const T& U = e.var(kU);
-    const T& Tg = e.var(kT);
     const GasModel& gas = e.gas();
     e.reject_unless_positive(m);
-    e.reject_unless_positive(Tg);
-    const T H = enthalpy_inflow(port.m_flow, port.T_in, Tg, gas) + enthalpy_inflow(port_b.m_flow, port_b.T_in, Tg, gas);
+    e.reject_unless_positive(U);  // T > 0 for m > 0
+    const T Tg = U / (m * gas.cv());
+    // Outflows carry the port's T_out, the very value the downstream side
+    // reads as T_in (U / (m c_v) equals it only to the Newton tolerance), so
+    // that energy leaving here is exactly the energy arriving there.
+    const T H = enthalpy_inflow(port.m_flow, port.T_in, port.T_out, gas) +
+                enthalpy_inflow(port_b.m_flow, port_b.T_in, port_b.T_out, gas);
     r[0] = e.der(kM) - port.m_flow - port_b.m_flow;
     r[1] = e.der(kU) - H - heat.Q;
-    // Each algebraic equation is solved for its own variable (p in Pa, T in
-    // K): rows written as p V - m R T would scale with V and leave Newton
+    // Each algebraic equation is solved for its own variable (p in Pa): a
+    // row written as p V - (kappa - 1) U would scale with V and leave Newton
     // matrices of tiny volumes numerically singular.
-    r[2] = port.p - m * gas.R * Tg / V_;
-    r[3] = Tg - U / (m * gas.cv());
-    r[4] = port.T_out - Tg;
-    r[5] = heat.T - Tg;
-    r[6] = port_b.p - port.p;
-    r[7] = port_b.T_out - Tg;
+    r[2] = port.p - (gas.kappa - 1.0) * U / V_;
+    // The heat port's temperature carries T; the outflow temperatures are
+    // written as its aliases (not as T_out - U / (m c_v)) so that alias
+    // elimination folds them into one unknown, as it folded them into the
+    // former T variable.
+    r[3] = port.T_out - heat.T;
+    r[4] = heat.T - Tg;
+    r[5] = port_b.p - port.p;
+    r[6] = port_b.T_out - heat.T;
   }
 
-  double observe(int, const Eval<double>& e) const override { return e.gas_port(kPort).p; }
+  double observe(int k, const Eval<double>& e) const override {
+    if (k == kT) return e.var(kU) / (e.var(kM) * e.gas().cv());
+    return e.gas_port(kPort).p;
+  }
 
   void start(StartValues& s, const GasModel& gas) const override {
     const double m0 = p0_ * V_ / (gas.R * T0_);
     s.fix_var(kM, m0);
     s.fix_var(kU, m0 * gas.cv() * T0_);
-    s.guess_var(kT, T0_);
     s.guess_pressure(kPort, p0_);
     s.guess_temperature(kPort, T0_);
     s.guess_temperature(kHeat, T0_);
