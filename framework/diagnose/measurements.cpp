@@ -8,6 +8,7 @@
 #include <set>
 #include <sstream>
 
+#include "framework/core/text.hpp"
 #include "framework/diagnose/diagnose.hpp"
 
 namespace pneumo::diagnose {
@@ -43,22 +44,6 @@ double estimate_noise(const std::vector<double>& y) {
 
 namespace {
 
-std::string trim(const std::string& s) {
-  const auto b = s.find_first_not_of(" \t\r");
-  if (b == std::string::npos) return "";
-  const auto e = s.find_last_not_of(" \t\r");
-  return s.substr(b, e - b + 1);
-}
-
-std::vector<std::string> split_csv(const std::string& line) {
-  std::vector<std::string> out;
-  std::stringstream ss(line);
-  std::string cell;
-  while (std::getline(ss, cell, ',')) out.push_back(trim(cell));
-  if (!line.empty() && line.back() == ',') out.push_back("");
-  return out;
-}
-
 void read_csv_into(MeasuredRun& run, const std::string& path, const Netlist& model) {
   std::ifstream in(path);
   if (!in) throw InputError(SourceLocation{path, 0, 0}, "", "", "cannot open the measured data file");
@@ -68,7 +53,7 @@ void read_csv_into(MeasuredRun& run, const std::string& path, const Netlist& mod
   while (std::getline(in, line)) {
     ++lineno;
     if (trim(line).empty() || trim(line)[0] == '#') continue;
-    header = split_csv(line);
+    header = split_trimmed(line, ',');
     break;
   }
   if (header.empty()) throw InputError(SourceLocation{path, 0, 0}, "", "", "the file is empty (expected a header t,<output>,...)");
@@ -100,7 +85,7 @@ void read_csv_into(MeasuredRun& run, const std::string& path, const Netlist& mod
   while (std::getline(in, line)) {
     ++lineno;
     if (trim(line).empty() || trim(line)[0] == '#') continue;
-    const auto cells = split_csv(line);
+    const auto cells = split_trimmed(line, ',');
     if (cells.size() != header.size())
       throw InputError(SourceLocation{path, lineno, 1}, "", "",
                        "expected " + std::to_string(header.size()) + " values (" + std::to_string(header.size()) +

@@ -5,29 +5,10 @@
 #include <fstream>
 #include <sstream>
 
+#include "framework/core/text.hpp"
 #include "framework/core/units.hpp"
 
 namespace pneumo::fit {
-
-namespace {
-
-std::string trim(const std::string& s) {
-  const auto a = s.find_first_not_of(" \t\r");
-  if (a == std::string::npos) return "";
-  const auto b = s.find_last_not_of(" \t\r");
-  return s.substr(a, b - a + 1);
-}
-
-std::vector<std::string> split_fields(const std::string& line) {
-  std::vector<std::string> out;
-  std::string item;
-  std::stringstream ss(line);
-  while (std::getline(ss, item, ',')) out.push_back(trim(item));
-  if (!line.empty() && line.back() == ',') out.push_back("");
-  return out;
-}
-
-}  // namespace
 
 int DataTable::column(const std::string& name) const {
   for (std::size_t i = 0; i < names.size(); ++i)
@@ -56,7 +37,7 @@ DataTable parse_data_table(const std::string& text, const std::string& file_name
     ++line_no;
     const std::string s = trim(line);
     if (s.empty() || s[0] == '#') continue;
-    const auto fields = split_fields(s);
+    const auto fields = split_trimmed(s, ',');
     if (!have_header) {
       have_header = true;
       t.header_line = line_no;

@@ -3,6 +3,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "framework/core/text.hpp"
 #include "framework/core/units.hpp"
 
 namespace pneumo::study {
@@ -17,22 +18,6 @@ const ComponentDecl* find_component(const Netlist& nl, const std::string& name) 
   for (const auto& c : nl.components)
     if (c.name == name) return &c;
   return nullptr;
-}
-
-std::string trim(const std::string& s) {
-  const auto a = s.find_first_not_of(" \t\r");
-  if (a == std::string::npos) return "";
-  const auto b = s.find_last_not_of(" \t\r");
-  return s.substr(a, b - a + 1);
-}
-
-std::vector<std::string> split(const std::string& s, char sep) {
-  std::vector<std::string> out;
-  std::string item;
-  std::stringstream ss(s);
-  while (std::getline(ss, item, sep)) out.push_back(trim(item));
-  if (!s.empty() && s.back() == sep) out.push_back("");
-  return out;
 }
 
 }  // namespace
@@ -117,7 +102,7 @@ Design grid_design(const Netlist& nl, const Registry& registry, const std::vecto
   for (const auto& spec : specs) {
     const std::string option = "--grid " + spec;
     const auto eq = spec.find('=');
-    const auto parts = eq == std::string::npos ? std::vector<std::string>{} : split(spec.substr(eq + 1), ':');
+    const auto parts = eq == std::string::npos ? std::vector<std::string>{} : split_trimmed(spec.substr(eq + 1), ':');
     if (eq == std::string::npos || eq == 0 || parts.size() != 3)
       throw InputError(netlist_where(nl), "", "", option + ": expected NAME=FROM:TO:COUNT, e.g. p_supply=5bar:8bar:4");
     const StudyParameter p = resolve_parameter(nl, registry, trim(spec.substr(0, eq)));
@@ -165,7 +150,7 @@ Design samples_design(const Netlist& nl, const Registry& registry, const std::st
   while (std::getline(in, line)) {
     ++line_no;
     if (trim(line).empty() || trim(line)[0] == '#') continue;
-    const auto cells = split(line, ',');
+    const auto cells = split_trimmed(line, ',');
     const SourceLocation where{path, line_no, 1};
     if (!header) {
       for (const auto& cell : cells) {
@@ -208,7 +193,7 @@ std::vector<Range> parse_ranges(const Netlist& nl, const Registry& registry, con
   for (const auto& spec : specs) {
     const std::string option = "--param " + spec;
     const auto eq = spec.find('=');
-    const auto parts = eq == std::string::npos ? std::vector<std::string>{} : split(spec.substr(eq + 1), ':');
+    const auto parts = eq == std::string::npos ? std::vector<std::string>{} : split_trimmed(spec.substr(eq + 1), ':');
     if (eq == std::string::npos || eq == 0 || parts.size() != 2)
       throw InputError(netlist_where(nl), "", "", option + ": expected NAME=LOW:HIGH, e.g. m_load=2kg:6kg");
     Range r;
