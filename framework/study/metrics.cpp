@@ -48,8 +48,21 @@ double extreme(const RunResult& r, const std::string& name, double from, bool hi
   return any ? best : kNaN;
 }
 
-std::vector<Metric>& catalogue() {
-  static std::vector<Metric> m = {
+// A metric that is one term of the first audited cylinder's energy audit
+// (NaN if the piston never entered the cushioning zone).
+Metric audit_metric(const char* name, const char* unit, const char* description, bool in, const char* term) {
+  Metric m{name, unit, description, {}, nullptr};
+  m.from_audit = [in, term](const CushionAudit& a) {
+    if (!a.entered) return kNaN;
+    for (const auto& t : in ? a.in : a.out)
+      if (t.name == term) return t.joules;
+    return kNaN;
+  };
+  return m;
+}
+
+std::vector<Metric> builtin_metrics() {
+  std::vector<Metric> m = {
       {"t_cushion", "s", "time in the cushioning zone: cushion entry event to the first cap-end impact", {"x"},
        [](const RunResult& r) { return event_time(r, kImpactEvent) - event_time(r, kEntryEvent); }},
       {"v_impact", "m/s", "piston velocity at the first cap-end impact", {"v"},
@@ -64,38 +77,24 @@ std::vector<Metric>& catalogue() {
        [](const RunResult& r) {
          return r.solver.events.empty() ? kNaN : event_time(r, kImpactEvent) - r.solver.events.front().t;
        }},
+      audit_metric("E_kin_entry", "J", "kinetic energy at cushion entry", true, "kinetic_energy_at_entry"),
+      audit_metric("E_drive_cushion", "J", "driving work during cushioning", true, "driving_work"),
+      audit_metric("E_compression", "J", "compression of the cushion gas", false, "cushion_gas_compression"),
+      audit_metric("E_throttle", "J", "flow work through the cushion throttle / bore opening", false,
+                   "cushion_throttle_dissipation"),
+      audit_metric("E_friction_cushion", "J", "friction while cushioning", false, "friction"),
+      audit_metric("E_stop", "J", "absorbed by the end stop", false, "end_stop"),
   };
-  // Energy audit metrics (added once): a term of the first audited cylinder
-  // (NaN if the piston never entered the cushioning zone).
-  static const bool with_audit = [&] {
-  auto audit_term = [](bool in, const char* name) {
-    return [in, name](const CushionAudit& a) {
-      if (!a.entered) return kNaN;
-      for (const auto& t : in ? a.in : a.out)
-        if (t.name == name) return t.joules;
-      return kNaN;
-    };
-  };
-  auto audit_metric = [&](const char* metric, const char* unit, const char* description,
-                          std::function<double(const CushionAudit&)> f) {
-    Metric x{metric, unit, description, {}, nullptr};
-    x.from_audit = std::move(f);
-    m.push_back(std::move(x));
-  };
-  audit_metric("E_kin_entry", "J", "kinetic energy at cushion entry", audit_term(true, "kinetic_energy_at_entry"));
-  audit_metric("E_drive_cushion", "J", "driving work during cushioning", audit_term(true, "driving_work"));
-  audit_metric("E_compression", "J", "compression of the cushion gas",
-               audit_term(false, "cushion_gas_compression"));
-  audit_metric("E_throttle", "J", "flow work through the cushion throttle / bore opening",
-               audit_term(false, "cushion_throttle_dissipation"));
-  audit_metric("E_friction_cushion", "J", "friction while cushioning", audit_term(false, "friction"));
-  audit_metric("E_stop", "J", "absorbed by the end stop", audit_term(false, "end_stop"));
-  audit_metric("audit_residual", "1", "closure of the energy audit, (in - out) / in", [](const CushionAudit& a) {
+  Metric closure{"audit_residual", "1", "closure of the energy audit, (in - out) / in", {}, nullptr};
+  closure.from_audit = [](const CushionAudit& a) {
     return a.entered && a.total_in != 0 ? a.residual() / a.total_in : kNaN;
-  });
-  return true;
-  }();
-  (void)with_audit;
+  };
+  m.push_back(std::move(closure));
+  return m;
+}
+
+std::vector<Metric>& catalogue() {
+  static std::vector<Metric> m = builtin_metrics();
   return m;
 }
 
