@@ -93,14 +93,6 @@ class SignalDefaultBlock final : public Block {
   void residual(double, const Pattern* y, const Pattern*, Pattern* r, const EvalContext&) const override { eval(y, r); }
 };
 
-// Lower bound of a variable's typical magnitude, by unit.
-double nominal_floor(const std::string& unit) {
-  static const std::map<std::string, double> floors{
-      {"Pa", 1e4}, {"K", 10.0},  {"kg", 1e-9}, {"J", 1e-4},  {"kg/s", 1e-6}, {"W", 1e-3},
-      {"m", 1e-3}, {"m/s", 1e-3}, {"N", 1e-1}, {"m3", 1e-9}, {"1", 1e-3}};
-  auto it = floors.find(unit);
-  return it == floors.end() ? 1.0 : it->second;
-}
 
 struct PortVars {
   int across = -1;
@@ -824,6 +816,15 @@ void System::eliminate_aliases() {
 void System::start_values(std::vector<double>& y0, std::vector<double>& yp0) const {
   y0 = start_value_;
   yp0.assign(n_, 0.0);
+}
+
+// Lower bound of a variable's typical magnitude, by unit.
+double nominal_floor(const std::string& unit) {
+  static const std::map<std::string, double> floors{
+      {"Pa", 1e4}, {"K", 10.0},  {"kg", 1e-9}, {"J", 1e-4},  {"kg/s", 1e-6}, {"W", 1e-3},
+      {"m", 1e-3}, {"m/s", 1e-3}, {"N", 1e-1}, {"m3", 1e-9}, {"1", 1e-3}};
+  auto it = floors.find(unit);
+  return it == floors.end() ? 1.0 : it->second;
 }
 
 std::string System::row_name(int row) const {

@@ -80,6 +80,10 @@ struct AssemblyOptions {
   bool eliminate_aliases = true;
 };
 
+// Lower bound of the typical magnitude of a quantity in `unit` (SI unit
+// text, e.g. "Pa", "kg"): scales absolute tolerances; 1 for other units.
+double nominal_floor(const std::string& unit);
+
 class System {
  public:
   // Takes ownership of the circuit. Throws InputError (dangling or

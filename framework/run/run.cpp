@@ -31,9 +31,11 @@ RunResult run_system(System& system, const SolverOptions& options) {
       slot[i] = static_cast<int>(quad.integrands.size());
       quad.integrands.push_back(p);
       quad.integrands.back().integral = false;
+      // As for the states: the tolerance's fraction of the typical magnitude
+      // of the integral's unit (J, kg, ...).
+      quad.atol.push_back(options.atol * nominal_floor(p.unit));
     }
   }
-  quad.atol = 1e-3 * options.atol;
   const OutputFn output = [&](double t, const double* y, const double* yp) {
     std::vector<double> row;
     row.reserve(probes.size() + 1);

@@ -208,7 +208,9 @@ SolverResult simulate(System& system, const SolverOptions& opt, const OutputFn& 
     check(IDAQuadInit(ida, quadrature_cb, q.get()), "IDAQuadInit");
     // Error-controlled like the states: an integral is as accurate as the
     // trajectory it integrates (absolute tolerance in the integral's unit).
-    check(IDAQuadSStolerances(ida, opt.rtol, quad->atol), "IDAQuadSStolerances");
+    VectorPtr atol_q(N_VNew_Serial(n_quad, context.ctx));
+    std::copy(quad->atol.begin(), quad->atol.end(), N_VGetArrayPointer(atol_q.get()));
+    check(IDAQuadSVtolerances(ida, opt.rtol, atol_q.get()), "IDAQuadSVtolerances");
     check(IDASetQuadErrCon(ida, SUNTRUE), "IDASetQuadErrCon");
     quad->values->assign(n_quad, 0.0);
   }

@@ -55,7 +55,7 @@ using OutputFn = std::function<void(double t, const double* y, const double* yp)
 // OutputFn call.
 struct Quadratures {
   std::vector<Probe> integrands;
-  double atol = 1e-9;  // absolute tolerance, in the integral's unit
+  std::vector<double> atol;  // absolute tolerance of each integral, in its unit
   std::vector<double>* values = nullptr;
 };
 
