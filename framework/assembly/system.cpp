@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <map>
 #include <numeric>
 #include <random>
@@ -156,6 +157,21 @@ System::System(Circuit circuit, const AssemblyOptions& options) : circuit_(std::
     }
   }
   build_slots();
+  m_ = n_;
+  j1_col_ptr_ = col_ptr_;
+  j1_row_idx_ = row_idx_;
+  ida_row_of_full_ = row_of_;
+  ida_to_m_.resize(n_);
+  std::iota(ida_to_m_.begin(), ida_to_m_.end(), 0);
+  m_to_ida_ = ida_to_m_;
+  explicit_of_m_.assign(n_, -1);
+  m_start_ = start_value_;
+  if (options.eliminate_aliases && options.eliminate_explicit) eliminate_explicit();
+  if (explicit_.empty()) {
+    final_blocks_.resize(blocks_.size());
+    std::iota(final_blocks_.begin(), final_blocks_.end(), 0);
+  }
+  reset_modes();
 }
 
 void System::build_slots() {
@@ -449,6 +465,9 @@ void System::build_nodes() {
 void System::reset_modes() {
   for (const auto& b : blocks_)
     if (b->component) b->component->initial_modes(modes_.data() + b->mode0);
+  yw_ = m_start_;
+  ypw_.assign(m_start_.size(), 0.0);
+  cache_valid_ = false;
 }
 
 void System::build_pattern() {
@@ -813,6 +832,360 @@ void System::eliminate_aliases() {
   F_full_.assign(n_full_, 0.0);
 }
 
+// Explicit elimination. After alias elimination most algebraic unknowns of a
+// pneumatic circuit are given by one equation each, explicitly, from states
+// and from unknowns given before them: a chamber's port pressure
+// p = (kappa-1) U/V, a throttle's flow from the pressures around it, a port's
+// outflow temperature, the force a cylinder puts on its flange. Handed to
+// IDA, each is another Newton unknown with its own convergence test (the
+// tight flow tolerances caused most of the rig's convergence failures) and
+// another entry in every vector operation. Here they are solved inside the
+// residual instead: in dependency order ("levels"), each block that gives
+// unknowns of a level is evaluated once, and each such unknown is corrected
+// by -F_row / coef - exact, since the row is linear in it with the constant
+// coefficient coef. IDA then sees the states and the few unknowns that no
+// equation gives explicitly (torn: a pressure between two throttles without
+// a volume, a signal from a component with modes). Its Jacobian is the
+// Schur complement of the AD Jacobian over the alias-reduced unknowns.
+//
+// An equation qualifies for unknown v if it has no y', depends on v only
+// linearly through sums and constant factors (the Pattern scalar's `nonlin`
+// set, at three points) with the same nonzero dF/dv at those points and
+// three times, and belongs to a framework block or a component without
+// discrete modes. Every Jacobian evaluation re-checks the coefficient.
+void System::eliminate_explicit() {
+  const int m = n_;
+  // Structure at the alias-reduced level: y and y' dependencies of each
+  // kept row, the unknowns it depends on nonlinearly, and dF/dy per unknown.
+  std::vector<std::set<int>> dy(m), dyp(m), nonlin(m);
+  std::vector<std::map<int, double>> coef(m);
+  std::vector<std::map<int, char>> coef_const(m);
+  std::vector<int> full_row(m, -1), row_block(m, -1);
+  for (std::size_t bi = 0; bi < blocks_.size(); ++bi) {
+    const Block& b = *blocks_[bi];
+    for (int k = 0; k < b.n_rows; ++k) {
+      const int q = row_of_[b.row0 + k];
+      if (q < 0) continue;
+      full_row[q] = b.row0 + k;
+      row_block[q] = static_cast<int>(bi);
+    }
+  }
+  constexpr double kCheckTimes[3] = {0.0, 0.3711, 97.13};
+  std::mt19937 rng(24680);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  bool invalid = false;
+  EvalContext ctx{&circuit_.gas, modes_.data(), &invalid};
+  std::vector<Pattern> py(kMaxLocal), pyp(kMaxLocal), pr(kMaxLocal * 2);
+  std::vector<Dual> dyv(kMaxLocal), dypv(kMaxLocal), dr(kMaxLocal * 2);
+  for (int pass = 0; pass < 3; ++pass) {
+    std::vector<double> y0(start_value_), yp0(m, 0.0);
+    if (pass > 0)
+      for (int i = 0; i < m; ++i) {
+        y0[i] += 0.05 * nominal_[i] * u(rng) + 0.01 * y0[i] * u(rng);
+        yp0[i] = 0.1 * nominal_[i] * u(rng);
+      }
+    for (const auto& bp : blocks_) {
+      const Block& b = *bp;
+      if (b.all_eliminated) continue;
+      const int nl = static_cast<int>(b.vars.size());
+      for (int i = 0; i < nl; ++i) {
+        const int g = b.vars[i];
+        const double v = g >= 0 ? b.scale[i] * y0[g] : b.offset[i];
+        const double vp = g >= 0 ? b.scale[i] * yp0[g] : 0.0;
+        py[i] = Pattern(v);
+        pyp[i] = Pattern(vp);
+        if (g >= 0) {
+          py[i].deps.set(i);
+          pyp[i].deps.set(kMaxLocal + i);
+        }
+        dyv[i] = Dual::variable(v, i, g >= 0 ? b.scale[i] : 0.0, nl);
+        dypv[i] = Dual(vp);
+      }
+      if (static_cast<int>(pr.size()) < b.n_rows) pr.resize(b.n_rows), dr.resize(b.n_rows);
+      std::fill_n(pr.begin(), b.n_rows, Pattern(0.0));
+      b.residual(kCheckTimes[pass], py.data(), pyp.data(), pr.data(), ctx);
+      b.residual(kCheckTimes[pass], dyv.data(), dypv.data(), dr.data(), ctx);
+      for (int k = 0; k < b.n_rows; ++k) {
+        const int q = row_of_[b.row0 + k];
+        if (q < 0) continue;
+        std::map<int, double> c;
+        for (int i = 0; i < nl; ++i) {
+          const int g = b.vars[i];
+          if (g < 0) continue;
+          if (pr[k].deps.test(i)) dy[q].insert(g);
+          if (pr[k].nonlin.test(i)) nonlin[q].insert(g);
+          if (pr[k].deps.test(kMaxLocal + i)) dyp[q].insert(g);
+          c[g] += dr[k].deriv(i);
+        }
+        for (const auto& [g, d] : c) {
+          if (pass == 0) {
+            coef[q][g] = d;
+            coef_const[q][g] = std::isfinite(d) && d != 0.0;
+          } else if (d != coef[q][g]) {
+            coef_const[q][g] = 0;
+          }
+        }
+      }
+    }
+  }
+
+  // Candidate (row, unknown) pairs.
+  std::vector<char> candidate_row(m, 0);
+  auto usable = [&](int q, int v) {
+    if (!candidate_row[q] || id_[v] != 0.0 || nonlin[q].count(v)) return false;
+    auto it = coef_const[q].find(v);
+    return it != coef_const[q].end() && it->second;
+  };
+  for (int q = 0; q < m; ++q) {
+    if (row_block[q] < 0 || !dyp[q].empty() || dy[q].empty()) continue;
+    const Block& b = *blocks_[row_block[q]];
+    if (b.component && b.component->info().modes > 0) continue;
+    // The mixed temperature at a node of three or more ports stays an
+    // unknown of IDA: computed from the flows, its steep weights near zero
+    // flow stalled the consistent-initialisation Newton on the flows.
+    if (dynamic_cast<const StreamMixBlock*>(&b)) continue;
+    candidate_row[q] = 1;
+  }
+  // Forward propagation from the states: a row whose unknowns but one are
+  // known gives that one. When stuck, one unknown stays with IDA (torn):
+  // the one whose tearing lets the most rows be solved, preferring one that
+  // no row gives explicitly.
+  std::vector<char> known(m, 0), used(m, 0);
+  std::vector<int> level(m, 0);
+  std::vector<int> order_var, order_row;
+  for (int v = 0; v < m; ++v) known[v] = id_[v] != 0.0;
+  auto propagate = [&](std::vector<char>& kn, std::vector<char>& us, bool record) {
+    int solved = 0;
+    for (bool progress = true; progress;) {
+      progress = false;
+      for (int q = 0; q < m; ++q) {
+        if (!candidate_row[q] || us[q]) continue;
+        int unknown = -1, count = 0, lvl = 0;
+        for (int v : dy[q]) {
+          if (!kn[v]) unknown = v, ++count;
+          else lvl = std::max(lvl, level[v]);
+        }
+        if (count != 1 || !usable(q, unknown)) continue;
+        kn[unknown] = 1;
+        us[q] = 1;
+        ++solved;
+        progress = true;
+        if (!record) continue;
+        level[unknown] = lvl + 1;
+        order_var.push_back(unknown);
+        order_row.push_back(q);
+      }
+    }
+    return solved;
+  };
+  for (;;) {
+    propagate(known, used, true);
+    int best = -1;
+    long best_score = -1;
+    for (int v = 0; v < m; ++v) {
+      if (known[v]) continue;
+      bool explicit_somewhere = false;
+      int rows = 0;
+      for (int q = 0; q < m; ++q) {
+        if (used[q] || !dy[q].count(v)) continue;
+        ++rows;
+        explicit_somewhere |= usable(q, v);
+      }
+      auto kn = known;
+      auto us = used;
+      kn[v] = 1;
+      const long unlocked = propagate(kn, us, false);
+      const long score = unlocked * 1000000L + (explicit_somewhere ? 0 : 1000) + rows;
+      if (score > best_score) best = v, best_score = score;
+    }
+    if (best < 0) break;
+    known[best] = 1;  // torn: level 0, an unknown of IDA
+  }
+  if (order_var.empty()) return;
+
+  // Explicit unknowns in level order (stable).
+  std::vector<int> idx(order_var.size());
+  std::iota(idx.begin(), idx.end(), 0);
+  std::stable_sort(idx.begin(), idx.end(), [&](int a, int b) { return level[order_var[a]] < level[order_var[b]]; });
+  explicit_of_m_.assign(m, -1);
+  for (int a : idx) {
+    ExplicitUnknown x;
+    x.var = order_var[a];
+    x.row = full_row[order_row[a]];
+    x.coef = coef[order_row[a]][x.var];
+    x.level = level[x.var];
+    explicit_of_m_[x.var] = static_cast<int>(explicit_.size());
+    explicit_.push_back(std::move(x));
+  }
+  // IDA's unknowns and rows.
+  m_to_ida_.assign(m, -1);
+  ida_to_m_.clear();
+  for (int v = 0; v < m; ++v)
+    if (explicit_of_m_[v] < 0) {
+      m_to_ida_[v] = static_cast<int>(ida_to_m_.size());
+      ida_to_m_.push_back(v);
+    }
+  const int n = static_cast<int>(ida_to_m_.size());
+  std::vector<int> ida_row_of_m(m, -1);
+  int rows = 0;
+  for (int q = 0; q < m; ++q)
+    if (!used[q]) ida_row_of_m[q] = rows++;
+  if (rows != n)
+    throw StructureError("internal error: explicit elimination left " + std::to_string(rows) + " equations for " +
+                         std::to_string(n) + " unknowns");
+  ida_row_of_full_.assign(n_full_, -1);
+  for (int r = 0; r < n_full_; ++r)
+    if (row_of_[r] >= 0) ida_row_of_full_[r] = ida_row_of_m[row_of_[r]];
+
+  // Rows of the alias-level Jacobian, by row.
+  std::vector<std::vector<std::pair<long, int>>> j1_rows(m);
+  for (int c = 0; c < m; ++c)
+    for (long p = j1_col_ptr_[c]; p < j1_col_ptr_[c + 1]; ++p) j1_rows[j1_row_idx_[p]].push_back({p, c});
+  // Symbolic Schur complement: d var / d y_IDA of each explicit unknown.
+  std::vector<std::vector<int>> d_pattern(explicit_.size());
+  d_cols_.clear();
+  for (std::size_t e = 0; e < explicit_.size(); ++e) {
+    auto& x = explicit_[e];
+    const int q = row_of_[x.row];
+    x.entries = j1_rows[q];
+    std::set<int> cols;
+    for (const auto& [p, c] : x.entries) {
+      if (c == x.var) continue;
+      const int j = explicit_of_m_[c];
+      if (j >= 0) cols.insert(d_pattern[j].begin(), d_pattern[j].end());
+      else cols.insert(m_to_ida_[c]);
+    }
+    d_pattern[e].assign(cols.begin(), cols.end());
+    x.d0 = static_cast<int>(d_cols_.size());
+    x.dn = static_cast<int>(cols.size());
+    d_cols_.insert(d_cols_.end(), cols.begin(), cols.end());
+  }
+  std::vector<std::set<int>> cols(n);  // IDA pattern: column -> rows
+  std::vector<std::vector<int>> kept_cols(m);
+  std::vector<double> id(n, 0.0);
+  for (int q = 0; q < m; ++q) {
+    if (used[q]) continue;
+    std::set<int> cs;
+    for (const auto& [p, c] : j1_rows[q]) {
+      const int j = explicit_of_m_[c];
+      if (j >= 0) cs.insert(d_pattern[j].begin(), d_pattern[j].end());
+      else cs.insert(m_to_ida_[c]);
+    }
+    for (int c : cs) cols[c].insert(ida_row_of_m[q]);
+    kept_cols[q].assign(cs.begin(), cs.end());
+    for (int v : dyp[q]) id[m_to_ida_[v]] = 1.0;
+  }
+  const auto pos = compress_columns(cols, col_ptr_, row_idx_);
+  kept_rows_.clear();
+  for (int q = 0; q < m; ++q) {
+    if (used[q]) continue;
+    KeptRow k;
+    k.row = full_row[q];
+    k.entries = j1_rows[q];
+    for (int c : kept_cols[q]) k.out.push_back({c, pos.at({ida_row_of_m[q], c})});
+    kept_rows_.push_back(std::move(k));
+  }
+
+  // Evaluation plan: per level the blocks giving its unknowns; at the end
+  // the blocks with rows for IDA (and components with neither, for the
+  // alias checks).
+  int max_level = 0;
+  for (const auto& x : explicit_) max_level = std::max(max_level, x.level);
+  stages_.assign(max_level, {});
+  std::vector<char> gives(blocks_.size(), 0), keeps(blocks_.size(), 0);
+  for (std::size_t e = 0; e < explicit_.size(); ++e) {
+    const int bi = row_block[row_of_[explicit_[e].row]];
+    gives[bi] = 1;
+    auto& stage = stages_[explicit_[e].level - 1];
+    auto it = std::find_if(stage.begin(), stage.end(), [&](const auto& s) { return s.first == bi; });
+    if (it == stage.end()) stage.push_back({bi, {static_cast<int>(e)}});
+    else it->second.push_back(static_cast<int>(e));
+  }
+  for (int q = 0; q < m; ++q)
+    if (!used[q] && row_block[q] >= 0) keeps[row_block[q]] = 1;
+  final_blocks_.clear();
+  for (std::size_t bi = 0; bi < blocks_.size(); ++bi)
+    if (keeps[bi] || (!gives[bi] && !(blocks_[bi]->all_eliminated && !blocks_[bi]->component)))
+      final_blocks_.push_back(static_cast<int>(bi));
+
+  // IDA-level names, start values, scales.
+  std::vector<std::string> names;
+  std::vector<double> start, nominal;
+  std::vector<unsigned char> kind;
+  for (int v : ida_to_m_) {
+    names.push_back(var_names_[v]);
+    start.push_back(start_value_[v]);
+    kind.push_back(start_kind_[v]);
+    nominal.push_back(nominal_[v]);
+  }
+  m_start_ = start_value_;
+  var_names_ = std::move(names);
+  start_value_ = std::move(start);
+  start_kind_ = std::move(kind);
+  nominal_ = std::move(nominal);
+  id_ = std::move(id);
+  n_ = n;
+  // Root functions usually read a position or a time only. Evaluated with
+  // every explicit unknown set to NaN at three points, a block whose roots
+  // stay finite does not read them: IDA's root checks (one per step and per
+  // output) then skip expand().
+  roots_read_explicit_.assign(blocks_.size(), 0);
+  for (std::size_t bi = 0; bi < blocks_.size(); ++bi) {
+    const Block& b = *blocks_[bi];
+    if (!b.component || b.component->info().roots == 0) continue;
+    std::mt19937 rng2(13579);
+    std::vector<double> g(b.component->info().roots);
+    double ly[kMaxLocal], lyp[kMaxLocal];
+    for (int pass = 0; pass < 3 && !roots_read_explicit_[bi]; ++pass) {
+      for (std::size_t i = 0; i < b.vars.size(); ++i) {
+        const int v = b.vars[i];
+        const double y0 = v >= 0 ? b.scale[i] * m_start_[v] * (1.0 + 0.01 * pass * u(rng2)) : b.offset[i];
+        ly[i] = v >= 0 && explicit_of_m_[v] >= 0 ? std::numeric_limits<double>::quiet_NaN() : y0;
+        lyp[i] = 0.0;
+      }
+      Eval<double> e(*b.component, 0.1 * pass, ly, lyp, modes_.data() + b.mode0, b.connected.get(), circuit_.gas,
+                     &invalid);
+      b.component->roots(e, g.data());
+      for (double x : g) roots_read_explicit_[bi] |= !std::isfinite(x);
+    }
+    any_roots_read_explicit_ |= roots_read_explicit_[bi] != 0;
+  }
+  j1_values_.assign(j1_row_idx_.size(), 0.0);
+  d_values_.assign(d_cols_.size(), 0.0);
+  scatter_.assign(n, 0.0);
+  cache_y_.assign(n, 0.0);
+}
+
+bool System::expand(double t, const double* y, const double* yp) const {
+  for (int i = 0; i < n_; ++i) ypw_[ida_to_m_[i]] = yp[i];
+  if (cache_valid_ && t == cache_t_ && std::equal(y, y + n_, cache_y_.begin())) return cache_invalid_;
+  for (int i = 0; i < n_; ++i) yw_[ida_to_m_[i]] = y[i];
+  // Each explicit unknown is solved from its start value, not from the last
+  // call's: the result is then a function of (t, y) alone, without rounding
+  // noise from the call history (which stalled IDA's initialisation Newton
+  // at rtol 1e-9); a start value also keeps blocks that read an unknown
+  // before its level from seeing zero pressures.
+  for (const auto& x : explicit_) yw_[x.var] = m_start_[x.var];
+  bool invalid = false;
+  EvalContext ctx{&circuit_.gas, modes_.data(), &invalid};
+  double ly[kMaxLocal], lyp[kMaxLocal];
+  for (const auto& stage : stages_)
+    for (const auto& [bi, list] : stage) {
+      const Block& b = *blocks_[bi];
+      gather(b, yw_.data(), ypw_.data(), ly, lyp);
+      b.residual(t, ly, lyp, F_full_.data() + b.row0, ctx);
+      for (int e : list) {
+        const auto& x = explicit_[e];
+        yw_[x.var] -= F_full_[x.row] / x.coef;
+      }
+    }
+  std::copy_n(y, n_, cache_y_.begin());
+  cache_t_ = t;
+  cache_valid_ = true;
+  cache_invalid_ = invalid;
+  return invalid;
+}
+
 void System::start_values(std::vector<double>& y0, std::vector<double>& yp0) const {
   y0 = start_value_;
   yp0.assign(n_, 0.0);
@@ -839,18 +1212,24 @@ int System::residual(double t, const double* y, const double* yp, double* F) con
   EvalContext ctx{&circuit_.gas, modes_.data(), &invalid};
   double ly[kMaxLocal], lyp[kMaxLocal];
   const bool reduced = n_full_ != n_;
+  if (!explicit_.empty()) {
+    invalid = expand(t, y, yp);
+    y = yw_.data();
+    yp = ypw_.data();
+  }
   double* Ff = reduced ? F_full_.data() : F;
-  for (const auto& b : blocks_) {
-    if (b->all_eliminated && !b->component) {  // an identity once substituted
-      std::fill_n(Ff + b->row0, b->n_rows, 0.0);
+  for (int bi : final_blocks_) {
+    const Block& b = *blocks_[bi];
+    if (b.all_eliminated && !b.component) {  // an identity once substituted
+      std::fill_n(Ff + b.row0, b.n_rows, 0.0);
       continue;
     }
-    gather(*b, y, yp, ly, lyp);
-    b->residual(t, ly, lyp, Ff + b->row0, ctx);
+    gather(b, y, yp, ly, lyp);
+    b.residual(t, ly, lyp, Ff + b.row0, ctx);
   }
   if (reduced)
     for (int r = 0; r < n_full_; ++r)
-      if (row_of_[r] >= 0) F[row_of_[r]] = Ff[r];
+      if (ida_row_of_full_[r] >= 0) F[ida_row_of_full_[r]] = Ff[r];
   for (std::size_t e = 0; e < eliminated_.size(); ++e) {
     const int r = eliminated_[e];
     if (std::abs(Ff[r]) > 1e-10 * eliminated_nominal_[e] && std::isfinite(Ff[r])) {
@@ -869,7 +1248,60 @@ int System::residual(double t, const double* y, const double* yp, double* F) con
 }
 
 int System::jacobian(double t, const double* y, const double* yp, double cj, double* values) const {
+  if (explicit_.empty()) return jacobian_blocks(t, y, yp, cj, values);
+  const bool invalid = expand(t, y, yp);
+  const int flag = jacobian_blocks(t, yw_.data(), ypw_.data(), cj, j1_values_.data());
+  // d var / d y_IDA of each explicit unknown, in level order:
+  //   coef dvar + sum_c F_row,c dc = 0, dc of an explicit c known already.
+  for (const auto& x : explicit_) {
+    for (int k = 0; k < x.dn; ++k) scatter_[d_cols_[x.d0 + k]] = 0.0;
+    for (const auto& [p, c] : x.entries) {
+      const double a = j1_values_[p];
+      if (c == x.var) {
+        if (std::abs(a - x.coef) > 1e-9 * std::abs(x.coef)) {
+          std::string name = "?";
+          for (const auto& b : blocks_)
+            if (x.row >= b->row0 && x.row < b->row0 + b->n_rows)
+              name = b->row_names[x.row - b->row0] + " [" + b->where.to_string() + "]";
+          throw std::runtime_error("equation '" + name + "', solved explicitly at assembly (linear, dF/dy " +
+                                   std::to_string(x.coef) + "), now has dF/dy " + std::to_string(a) + " at t = " +
+                                   std::to_string(t) + "; assemble with eliminate_explicit = false");
+        }
+        continue;
+      }
+      if (a == 0.0) continue;
+      const int j = explicit_of_m_[c];
+      if (j < 0) {
+        scatter_[m_to_ida_[c]] += a;
+        continue;
+      }
+      const auto& xj = explicit_[j];
+      for (int k = 0; k < xj.dn; ++k) scatter_[d_cols_[xj.d0 + k]] += a * d_values_[xj.d0 + k];
+    }
+    for (int k = 0; k < x.dn; ++k) d_values_[x.d0 + k] = -scatter_[d_cols_[x.d0 + k]] / x.coef;
+  }
+  // IDA's rows: F_row,y + sum over explicit c of F_row,c dc/dy.
   std::fill(values, values + nnz(), 0.0);
+  for (const auto& kr : kept_rows_) {
+    for (const auto& [c, p] : kr.out) scatter_[c] = 0.0;
+    for (const auto& [p, c] : kr.entries) {
+      const double a = j1_values_[p];
+      if (a == 0.0) continue;
+      const int j = explicit_of_m_[c];
+      if (j < 0) {
+        scatter_[m_to_ida_[c]] += a;
+        continue;
+      }
+      const auto& xj = explicit_[j];
+      for (int k = 0; k < xj.dn; ++k) scatter_[d_cols_[xj.d0 + k]] += a * d_values_[xj.d0 + k];
+    }
+    for (const auto& [c, p] : kr.out) values[p] = scatter_[c];
+  }
+  return invalid || flag ? 1 : 0;
+}
+
+int System::jacobian_blocks(double t, const double* y, const double* yp, double cj, double* values) const {
+  std::fill(values, values + j1_row_idx_.size(), 0.0);
   bool invalid = false;
   EvalContext ctx{&circuit_.gas, modes_.data(), &invalid};
   static thread_local std::vector<Dual> ly(kMaxLocal), lyp(kMaxLocal), r(kMaxLocal * 2);
@@ -920,6 +1352,19 @@ void System::jacobian_parts(double t, const double* y, const double* yp, std::ve
                             std::vector<double>& dFdyp) const {
   dFdy.assign(static_cast<std::size_t>(n_) * n_, 0.0);
   dFdyp.assign(static_cast<std::size_t>(n_) * n_, 0.0);
+  if (!explicit_.empty()) {
+    // The explicit unknowns have no y': dF/dy' = J(cj = 1) - J(cj = 0).
+    std::vector<double> j0(nnz()), j1(nnz());
+    jacobian(t, y, yp, 0.0, j0.data());
+    jacobian(t, y, yp, 1.0, j1.data());
+    for (int c = 0; c < n_; ++c)
+      for (long p = col_ptr_[c]; p < col_ptr_[c + 1]; ++p) {
+        const std::size_t k = static_cast<std::size_t>(row_idx_[p]) * n_ + c;
+        dFdy[k] = j0[p];
+        dFdyp[k] = j1[p] - j0[p];
+      }
+    return;
+  }
   bool invalid = false;
   EvalContext ctx{&circuit_.gas, modes_.data(), &invalid};
   std::vector<Dual> ly(kMaxLocal), lyp(kMaxLocal), r(kMaxLocal * 2);
@@ -945,6 +1390,19 @@ void System::jacobian_parts(double t, const double* y, const double* yp, std::ve
 }
 
 void System::roots(double t, const double* y, const double* yp, double* g) const {
+  if (!explicit_.empty() && !any_roots_read_explicit_) {
+    // The states alone (the explicit unknowns keep stale values nobody reads).
+    for (int i = 0; i < n_; ++i) {
+      yw_[ida_to_m_[i]] = y[i];
+      ypw_[ida_to_m_[i]] = yp[i];
+    }
+    cache_valid_ = false;
+    y = yw_.data();
+    yp = ypw_.data();
+  } else {
+    y = block_y(t, y, yp);
+    yp = block_yp(yp);
+  }
   bool invalid = false;
   double ly[kMaxLocal], lyp[kMaxLocal];
   for (const auto& b : blocks_) {
@@ -966,6 +1424,8 @@ std::vector<double> System::time_events() const {
 }
 
 bool System::handle_time_event(double t, const double* y, const double* yp, std::vector<EventLogEntry>& log) {
+  y = block_y(t, y, yp);
+  yp = block_yp(yp);
   bool changed = false;
   bool invalid = false;
   double ly[kMaxLocal], lyp[kMaxLocal];
@@ -986,6 +1446,8 @@ bool System::handle_time_event(double t, const double* y, const double* yp, std:
 
 bool System::handle_roots(double t, const double* y, const double* yp, const int* root_info,
                           std::vector<EventLogEntry>& log) {
+  y = block_y(t, y, yp);
+  yp = block_yp(yp);
   bool changed = false;
   bool invalid = false;
   double ly[kMaxLocal], lyp[kMaxLocal];
@@ -1007,6 +1469,8 @@ bool System::handle_roots(double t, const double* y, const double* yp, const int
 }
 
 double System::probe(const Probe& p, double t, const double* y, const double* yp) const {
+  y = block_y(t, y, yp);
+  yp = block_yp(yp);
   const Block& b = *blocks_[p.component];  // component blocks come first, in order
   if (p.kind == Probe::Kind::local) {
     const int g = b.vars[p.index];

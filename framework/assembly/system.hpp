@@ -78,6 +78,17 @@ struct AssemblyOptions {
   // unknown of the netlist goes to IDA (`--keep-aliases`; the component
   // Jacobian checks use it to see each component's rows as written).
   bool eliminate_aliases = true;
+  // After alias elimination, solve every algebraic unknown that one
+  // equation gives explicitly - an equation without y' that is linear, with
+  // a constant coefficient, in that unknown and whose other unknowns are
+  // states or unknowns solved before it (port pressures p = (kappa-1) U/V,
+  // throttle flows, stream temperatures, forces) - by one evaluation and a
+  // division inside every residual call, in dependency order, so that IDA
+  // integrates (nearly) only the states: on the cushion rig 22 unknowns
+  // become 11. The Jacobian IDA sees is the exact Schur complement of the
+  // AD Jacobian. Needs eliminate_aliases; rows of components with discrete
+  // modes are never used (an event could change them).
+  bool eliminate_explicit = true;
 };
 
 // Lower bound of the typical magnitude of a quantity in `unit` (SI unit
@@ -96,6 +107,8 @@ class System {
   int size() const { return n_; }
   // Unknowns before alias elimination (size() counts those left for IDA).
   int full_size() const { return n_full_; }
+  // Unknowns solved explicitly inside the residual (eliminate_explicit).
+  int explicit_size() const { return static_cast<int>(explicit_.size()); }
   const Circuit& circuit() const { return circuit_; }
   const GasModel& gas() const { return circuit_.gas; }
 
@@ -145,7 +158,21 @@ class System {
   void build_pattern();
   void check_structure() const;
   void eliminate_aliases();
+  void eliminate_explicit();
   void build_slots();
+  // Unknowns the blocks read (after alias elimination, before explicit
+  // elimination) from IDA's y: copies the states and solves the explicit
+  // unknowns into yw_/ypw_ (cached for the last t and y). Returns true if a
+  // component rejected the point.
+  bool expand(double t, const double* y, const double* yp) const;
+  const double* block_y(double t, const double* y, const double* yp) const {
+    if (explicit_.empty()) return y;
+    expand(t, y, yp);
+    return yw_.data();
+  }
+  const double* block_yp(const double* yp) const { return explicit_.empty() ? yp : ypw_.data(); }
+  // AD Jacobian over the alias-reduced unknowns into values (pattern j1_*).
+  int jacobian_blocks(double t, const double* y, const double* yp, double cj, double* values) const;
 
   Circuit circuit_;
   std::vector<std::unique_ptr<Block>> blocks_;
@@ -168,6 +195,40 @@ class System {
   std::vector<int> eliminated_;    // full rows eliminated
   std::vector<double> eliminated_nominal_;  // scale of each, for the check
   mutable std::vector<double> F_full_;
+
+  // Explicit elimination. "m-level": the m_ unknowns after alias
+  // elimination, which the blocks' vars index; IDA sees n_ of them.
+  struct ExplicitUnknown {
+    int var = -1;    // m-level unknown
+    int row = -1;    // full row that gives it
+    double coef = 0.0;  // dF_row / dy_var (constant)
+    int level = 0;   // 1 + the highest level among the unknowns the row reads
+    std::vector<std::pair<long, int>> entries;  // (j1 position, m-level column) of the row
+    int d0 = 0, dn = 0;  // its derivative d var / d y_IDA: d_cols_[d0, d0 + dn)
+  };
+  struct KeptRow {
+    int row = -1;  // full row
+    std::vector<std::pair<long, int>> entries;  // (j1 position, m-level column)
+    std::vector<std::pair<int, long>> out;      // (IDA column, IDA CSC position)
+  };
+  int m_ = 0;
+  std::vector<ExplicitUnknown> explicit_;   // in level order
+  std::vector<int> explicit_of_m_;          // m-level unknown -> explicit index or -1
+  std::vector<int> ida_to_m_, m_to_ida_;    // IDA unknown <-> m-level unknown (-1: explicit)
+  std::vector<int> ida_row_of_full_;        // full row -> IDA row, -1 if eliminated
+  std::vector<std::vector<std::pair<int, std::vector<int>>>> stages_;  // per level: (block, explicit indices)
+  std::vector<int> final_blocks_;           // blocks evaluated for IDA's rows (and the alias checks)
+  std::vector<double> m_start_;
+  std::vector<long> j1_col_ptr_, j1_row_idx_;
+  std::vector<int> d_cols_;
+  std::vector<KeptRow> kept_rows_;
+  mutable std::vector<double> yw_, ypw_, j1_values_, d_values_, scatter_, cache_y_;
+  // Blocks whose root functions read explicit unknowns (the others are
+  // evaluated on the states alone, without expand()).
+  std::vector<char> roots_read_explicit_;
+  bool any_roots_read_explicit_ = false;
+  mutable double cache_t_ = 0.0;
+  mutable bool cache_valid_ = false, cache_invalid_ = false;
 };
 
 }  // namespace pneumo

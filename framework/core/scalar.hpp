@@ -87,10 +87,16 @@ class Dual {
 // Pattern: which local variables a value depends on. Bits [0, kMaxLocal)
 // mark y_i, bits [kMaxLocal, 2 kMaxLocal) mark y'_i. The value is carried so
 // that branches in component code take the same path as with double.
+// `nonlin` marks the dependencies that enter other than linearly with a
+// constant coefficient (through a product of two variables, a quotient by a
+// variable, a function, a branch): an equation linear in y_i can be solved
+// for y_i by one division (System's explicit elimination).
 class Pattern {
  public:
+  using Bits = std::bitset<2 * kMaxLocal>;
   double v = 0.0;
-  std::bitset<2 * kMaxLocal> deps;
+  Bits deps;
+  Bits nonlin;
 
   Pattern() = default;
   Pattern(double value) : v(value) {}  // NOLINT: implicit from constants is intended
@@ -100,21 +106,40 @@ class Pattern {
   Pattern& operator*=(const Pattern& b) { return *this = *this * b; }
   Pattern& operator/=(const Pattern& b) { return *this = *this / b; }
 
+  // Linear combination: each side keeps its own nonlinear dependencies.
   static Pattern join(double value, const Pattern& a, const Pattern& b) {
     Pattern r(value);
     r.deps = a.deps | b.deps;
+    r.nonlin = a.nonlin | b.nonlin;
+    return r;
+  }
+  // Any other function of the operands: all their dependencies nonlinear.
+  static Pattern join_nonlinear(double value, const Pattern& a, const Pattern& b) {
+    Pattern r(value);
+    r.deps = r.nonlin = a.deps | b.deps;
     return r;
   }
   static Pattern keep(double value, const Pattern& a) {
     Pattern r(value);
-    r.deps = a.deps;
+    r.deps = r.nonlin = a.deps;
     return r;
   }
   friend Pattern operator+(const Pattern& a, const Pattern& b) { return join(a.v + b.v, a, b); }
   friend Pattern operator-(const Pattern& a, const Pattern& b) { return join(a.v - b.v, a, b); }
-  friend Pattern operator*(const Pattern& a, const Pattern& b) { return join(a.v * b.v, a, b); }
-  friend Pattern operator/(const Pattern& a, const Pattern& b) { return join(a.v / b.v, a, b); }
-  friend Pattern operator-(const Pattern& a) { return keep(-a.v, a); }
+  friend Pattern operator*(const Pattern& a, const Pattern& b) {
+    // A factor without dependencies is a constant coefficient.
+    if (a.deps.none() || b.deps.none()) return join(a.v * b.v, a, b);
+    return join_nonlinear(a.v * b.v, a, b);
+  }
+  friend Pattern operator/(const Pattern& a, const Pattern& b) {
+    if (b.deps.none()) return join(a.v / b.v, a, b);
+    return join_nonlinear(a.v / b.v, a, b);
+  }
+  friend Pattern operator-(const Pattern& a) {
+    Pattern r = a;
+    r.v = -a.v;
+    return r;
+  }
   friend Pattern operator+(const Pattern& a) { return a; }
 };
 
@@ -183,7 +208,7 @@ inline Pattern pow(const Pattern& b, double a) { return Pattern::keep(std::pow(b
 inline double select(bool c, double a, double b) { return c ? a : b; }
 inline Dual select(bool c, const Dual& a, const Dual& b) { return c ? a : b; }
 inline Pattern select(bool c, const Pattern& a, const Pattern& b) {
-  return Pattern::join(c ? a.v : b.v, a, b);
+  return Pattern::join_nonlinear(c ? a.v : b.v, a, b);
 }
 
 template <class T>
