@@ -54,6 +54,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <type_traits>
 
 #include "components/builtin.hpp"
 #include "components/enthalpy_flow.hpp"
@@ -347,16 +348,41 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
     return m_bore + m_throttle + m_check;
   }
 
+  // Everything derived from the local variables. It reads only the
+  // position, the velocity and the chambers' masses and energies (not the
+  // port pressures: p_A too comes from U_A / V_A, which the gas-law row
+  // makes the port's pressure), so the framework can solve the ports'
+  // pressures and the flange force from it in one pass. For double it is
+  // memoised on those inputs: one residual call evaluates the cylinder
+  // twice at the same state (the explicitly solved unknowns first, then
+  // IDA's rows), and outputs observe it at a point just evaluated.
   template <class T>
   State<T> state(const Eval<T>& e) const {
+    if constexpr (std::is_same_v<T, double>) {
+      const int n = static_cast<int>(info().variables.size());
+      double key[kMemoKey];
+      key[0] = e.flange(kFlange).s;
+      key[1] = e.flange(kFlange).v;
+      for (int k = 0; k < n; ++k) key[2 + k] = e.var(k);
+      if (memo_valid_ && std::equal(key, key + 2 + n, memo_key_)) return memo_state_;
+      memo_state_ = compute_state(e);
+      std::copy_n(key, 2 + n, memo_key_);
+      memo_valid_ = true;
+      return memo_state_;
+    } else {
+      return compute_state(e);
+    }
+  }
+
+  template <class T>
+  State<T> compute_state(const Eval<T>& e) const {
     const GasModel& gas = e.gas();
     const auto fl = e.flange(kFlange);
-    const auto A = e.gas_port(kA);
     State<T> s;
     s.x = fl.s;
     s.v = fl.v;
-    s.p_A = A.p;
     s.V_A = V0_A_ + A_colr_ * s.x;
+    s.p_A = (gas.kappa - 1.0) * e.var(kUA) / s.V_A;
     s.V_EC = V0_EC_ + (A_B_ - A_CP_) * (stroke_ - s.x);
     s.V_ch = V0_ch_ + A_CP_ * (stroke_ - s.x);
     s.T_A = e.var(kUA) / (e.var(kMA) * gas.cv());
@@ -386,14 +412,23 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
     // Friction.
     if (friction_.model == FrictionModel::preset) {
       const T p_rod = rod_ ? s.p_ECr : s.p_A;  // the rod-side pressure at the piston
-      // Main-stroke and cushioning-zone sets blended by the openings.
-      const T F_main = friction_force(friction_main_, s.v, p_rod, s.p_EC, s.p_EC, gas.p_ambient, v_reg_, v_eps_);
-      const T F_cush = friction_force(friction_cushion_, s.v, p_rod, s.p_EC, s.p_EC, gas.p_ambient, v_reg_, v_eps_);
+      // Main-stroke and cushioning-zone sets blended by the openings. A set
+      // whose weight is 0 (the opening clamped at 0 or 1, so its derivative
+      // is 0 too) is not evaluated, except for the structural pattern.
+      constexpr bool structural = std::is_same_v<T, Pattern>;
+      const double open = value(s.open), open_r = value(s.open_r);
+      const T F_main = structural || (open > 0.0 && open_r > 0.0)
+                           ? friction_force(friction_main_, s.v, p_rod, s.p_EC, s.p_EC, gas.p_ambient, v_reg_, v_eps_)
+                           : zero;
+      const T F_cush = structural || open < 1.0 ? friction_force(friction_cushion_, s.v, p_rod, s.p_EC, s.p_EC,
+                                                                 gas.p_ambient, v_reg_, v_eps_)
+                                                : zero;
       if (!rod_) {
         s.F_fric = friction_scale_ * (s.open * F_main + (1.0 - s.open) * F_cush);
       } else {
-        const T F_cush_r =
-            friction_force(friction_cushion_, s.v, p_rod, s.p_EC, s.p_ECr, gas.p_ambient, v_reg_, v_eps_);
+        const T F_cush_r = structural || open_r < 1.0 ? friction_force(friction_cushion_, s.v, p_rod, s.p_EC, s.p_ECr,
+                                                                       gas.p_ambient, v_reg_, v_eps_)
+                                                      : zero;
         s.F_fric = friction_scale_ *
                    (s.open * s.open_r * F_main + (1.0 - s.open) * F_cush + (1.0 - s.open_r) * F_cush_r);
       }
@@ -671,6 +706,11 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
   bool rod_ = false, taps_ = false;
   double A_CPr_ = 0, A_colr_ = 0, L_r_ = 0, V0_ECr_ = 0;
   int z_var_ = 6;
+  // state<double>() memo: its inputs (s, v, internal variables) and result.
+  static constexpr int kMemoKey = 2 + 9;
+  mutable bool memo_valid_ = false;
+  mutable double memo_key_[kMemoKey] = {};
+  mutable State<double> memo_state_{};
 };
 
 void register_cushioned_cylinder(Registry& r) { r.add<CushionedCylinder>(); }
