@@ -101,12 +101,16 @@ struct PortVars {
   int t_out = -1;
 };
 
-// Copy a block's local variables (and their derivatives) out of the global vectors.
+// Copy a block's local variables (and their derivatives) out of the global
+// vectors (the hot path: every block evaluation starts here).
 void gather(const Block& b, const double* y, const double* yp, double* ly, double* lyp) {
-  for (std::size_t i = 0; i < b.vars.size(); ++i) {
-    const int g = b.vars[i];
-    ly[i] = g >= 0 ? b.scale[i] * y[g] : b.offset[i];
-    lyp[i] = g >= 0 ? b.scale[i] * yp[g] : 0.0;
+  for (const auto& [i, c] : b.constants) {
+    ly[i] = c;
+    lyp[i] = 0.0;
+  }
+  for (const auto& m : b.mapped) {
+    ly[m.local] = m.scale * y[m.var];
+    lyp[m.local] = m.scale * yp[m.var];
   }
 }
 
@@ -167,15 +171,20 @@ System::System(Circuit circuit, const AssemblyOptions& options) : circuit_(std::
   explicit_of_m_.assign(n_, -1);
   m_start_ = start_value_;
   if (options.eliminate_aliases && options.eliminate_explicit) eliminate_explicit();
-  if (explicit_.empty()) {
-    final_blocks_.resize(blocks_.size());
-    std::iota(final_blocks_.begin(), final_blocks_.end(), 0);
-  }
+  if (explicit_.empty())
+    for (std::size_t bi = 0; bi < blocks_.size(); ++bi)
+      if (!blocks_[bi]->all_eliminated) final_blocks_.push_back(static_cast<int>(bi));
   reset_modes();
 }
 
 void System::build_slots() {
   for (auto& b : blocks_) {
+    b->mapped.clear();
+    b->constants.clear();
+    for (std::size_t i = 0; i < b->vars.size(); ++i) {
+      if (b->vars[i] >= 0) b->mapped.push_back({static_cast<int>(i), b->vars[i], b->scale[i]});
+      else b->constants.push_back({static_cast<int>(i), b->offset[i]});
+    }
     b->all_eliminated = true;
     for (int k = 0; k < b->n_rows; ++k) b->all_eliminated &= row_of_[b->row0 + k] < 0;
     const int nl = static_cast<int>(b->vars.size());
@@ -1112,8 +1121,7 @@ void System::eliminate_explicit() {
       }
   final_blocks_.clear();
   for (std::size_t bi = 0; bi < blocks_.size(); ++bi)
-    if (keeps[bi] || (!gives[bi] && !(blocks_[bi]->all_eliminated && !blocks_[bi]->component)))
-      final_blocks_.push_back(static_cast<int>(bi));
+    if (keeps[bi]) final_blocks_.push_back(static_cast<int>(bi));
 
   // IDA-level names, start values, scales.
   std::vector<std::string> names;
@@ -1224,13 +1232,13 @@ int System::residual(double t, const double* y, const double* yp, double* F) con
     y = yw_.data();
     yp = ypw_.data();
   }
+  // Blocks whose rows were all substituted as aliases are not evaluated:
+  // their rows are identities after substitution, checked at assembly at
+  // three points and times, and such a block has no discrete modes that
+  // could change them. The other blocks' eliminated rows are checked here.
   double* Ff = reduced ? F_full_.data() : F;
   for (int bi : final_blocks_) {
     const Block& b = *blocks_[bi];
-    if (b.all_eliminated && !b.component) {  // an identity once substituted
-      std::fill_n(Ff + b.row0, b.n_rows, 0.0);
-      continue;
-    }
     gather(b, y, yp, ly, lyp);
     b.residual(t, ly, lyp, Ff + b.row0, ctx);
   }

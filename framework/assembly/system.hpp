@@ -51,6 +51,13 @@ class Block {
   // After alias elimination local i is scale[i] * y[vars[i]], or the
   // constant offset[i] when vars[i] == -1.
   std::vector<double> scale, offset;
+  // The same, compiled for gather(): locals read from an unknown, constants.
+  struct Mapped {
+    int local, var;
+    double scale;
+  };
+  std::vector<Mapped> mapped;
+  std::vector<std::pair<int, double>> constants;
   // AD directions: one per distinct unknown the block reads (aliases share
   // one; constants have none, slot -1), so a Dual carries n_slots
   // derivatives instead of one per local variable.
