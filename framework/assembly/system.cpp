@@ -190,8 +190,18 @@ void System::build_slots() {
     const int nl = static_cast<int>(b->vars.size());
     b->slot.assign(nl, -1);
     b->slot_local.clear();
+    // Differential unknowns take the first directions: a Dual carries as
+    // many derivatives as its highest direction, and a component's costly
+    // part (a cylinder's flows and friction from its positions, masses and
+    // energies) usually depends on its states alone.
+    std::vector<int> order(nl);
+    std::iota(order.begin(), order.end(), 0);
+    std::stable_sort(order.begin(), order.end(), [&](int a, int c) {
+      auto rank = [&](int i) { return b->vars[i] >= 0 && id_[b->vars[i]] != 0.0 ? 0 : 1; };
+      return rank(a) < rank(c);
+    });
     std::map<int, int> seen;
-    for (int i = 0; i < nl; ++i) {
+    for (int i : order) {
       if (b->vars[i] < 0) continue;
       auto [it, fresh] = seen.emplace(b->vars[i], static_cast<int>(b->slot_local.size()));
       if (fresh) b->slot_local.push_back(i);
@@ -1323,7 +1333,6 @@ int System::jacobian_blocks(double t, const double* y, const double* yp, double 
   for (const auto& b : blocks_) {
     if (b->all_eliminated) continue;
     const int nl = static_cast<int>(b->vars.size());
-    const int ns = static_cast<int>(b->slot_local.size());
     for (int i = 0; i < nl; ++i) {
       // One pass gives dF/dy + cj dF/dy': y_i seeded with 1, y'_i with cj
       // (times the alias sign: local i is scale_i * y_g), in the direction
@@ -1340,9 +1349,11 @@ int System::jacobian_blocks(double t, const double* y, const double* yp, double 
       const double s = b->scale[i];
       a.v = s * y[g];
       ap.v = s * yp[g];
-      a.n = ap.n = ns;
-      std::fill_n(a.d.begin(), ns, 0.0);
-      std::fill_n(ap.d.begin(), ns, 0.0);
+      // Only the directions up to its own are active (see build_slots).
+      const int active = b->slot[i] + 1;
+      a.n = ap.n = active;
+      std::fill_n(a.d.begin(), active, 0.0);
+      std::fill_n(ap.d.begin(), active, 0.0);
       a.d[b->slot[i]] = s;
       ap.d[b->slot[i]] = cj * s;
     }
