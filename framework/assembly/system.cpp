@@ -174,6 +174,20 @@ System::System(Circuit circuit, const AssemblyOptions& options) : circuit_(std::
   if (explicit_.empty())
     for (std::size_t bi = 0; bi < blocks_.size(); ++bi)
       if (!blocks_[bi]->all_eliminated) final_blocks_.push_back(static_cast<int>(bi));
+  // Row maps of the residual's hot loop: IDA's rows, and the substituted
+  // rows of blocks that are evaluated (the others are never written).
+  for (int r = 0; r < n_full_; ++r)
+    if (ida_row_of_full_[r] >= 0) kept_full_rows_.push_back({r, ida_row_of_full_[r]});
+  std::vector<char> evaluated(blocks_.size(), 0);
+  for (int bi : final_blocks_) evaluated[bi] = 1;
+  for (const auto& stage : stages_)
+    for (const auto& entry : stage) evaluated[entry.first] = 1;
+  for (std::size_t e = 0; e < eliminated_.size(); ++e)
+    for (std::size_t bi = 0; bi < blocks_.size(); ++bi) {
+      const Block& b = *blocks_[bi];
+      if (evaluated[bi] && eliminated_[e] >= b.row0 && eliminated_[e] < b.row0 + b.n_rows)
+        checked_aliases_.push_back(static_cast<int>(e));
+    }
   reset_modes();
 }
 
@@ -1253,9 +1267,8 @@ int System::residual(double t, const double* y, const double* yp, double* F) con
     b.residual(t, ly, lyp, Ff + b.row0, ctx);
   }
   if (reduced)
-    for (int r = 0; r < n_full_; ++r)
-      if (ida_row_of_full_[r] >= 0) F[ida_row_of_full_[r]] = Ff[r];
-  for (std::size_t e = 0; e < eliminated_.size(); ++e) {
+    for (const auto& [r, q] : kept_full_rows_) F[q] = Ff[r];
+  for (int e : checked_aliases_) {
     const int r = eliminated_[e];
     if (std::abs(Ff[r]) > 1e-10 * eliminated_nominal_[e] && std::isfinite(Ff[r])) {
       std::string name = "?";

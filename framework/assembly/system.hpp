@@ -225,6 +225,8 @@ class System {
   std::vector<int> ida_row_of_full_;        // full row -> IDA row, -1 if eliminated
   std::vector<std::vector<std::pair<int, std::vector<int>>>> stages_;  // per level: (block, explicit indices)
   std::vector<int> final_blocks_;           // blocks evaluated for IDA's rows (and the alias checks)
+  std::vector<std::pair<int, int>> kept_full_rows_;  // (full row, IDA row) of IDA's rows
+  std::vector<int> checked_aliases_;        // indices into eliminated_ of rows evaluated per residual
   std::vector<double> m_start_;
   std::vector<long> j1_col_ptr_, j1_row_idx_;
   std::vector<int> d_cols_;
