@@ -548,8 +548,14 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
     if (friction_.has_state()) r[row++] = e.der(z_var_) - friction_.lugre_zdot(s.v, e.var(z_var_));
   }
 
-  double observe(int k, const Eval<double>& e) const override {
+  double observe(int k, const Eval<double>& e) const override { return observe(k, state(e), e); }
+  void observe_all(const int* ks, int n, const Eval<double>& e, double* out) const override {
     const State<double> s = state(e);
+    for (int i = 0; i < n; ++i) out[i] = observe(ks[i], s, e);
+  }
+
+  // Observable k from the state computed once for all observables asked.
+  double observe(int k, const State<double>& s, const Eval<double>& e) const {
     const GasModel& gas = e.gas();
     auto inflow = [&](int port) {
       const auto g = e.gas_port(port);

@@ -417,3 +417,108 @@ INSTANTIATE_TEST_SUITE_P(OnceFailing, CushionRigRobustness,
 
 }  // namespace
 }  // namespace pneumo
+
+namespace pneumo {
+namespace {
+
+// ---------------------------------------------------------------------------
+// 5. Outputs. The solver takes one step per call and reads the output times
+// it passed off IDA's interpolant; the rows must still be exactly the grid
+// t_start + k * output_interval (and t_end), each once, plus rows at events.
+// The sampled outputs are evaluated as one ProbeSet (one state() of the
+// cylinder per row): it must give what System::probe gives, probe by probe.
+// ---------------------------------------------------------------------------
+
+TEST(CushionRigOutputs, RowsAreTheOutputGridPlusEventRows) {
+  const Netlist nl = load_netlist(std::string(PNEUMO_SOURCE_DIR) + "/netlists/cushion_rig.yaml");
+  const RunResult r = run_simulation(nl, builtin_registry());
+  ASSERT_TRUE(r.solver.ok) << r.solver.message;
+  const SolverOptions o = solver_options(nl.simulation);
+  const long n_out = static_cast<long>(std::ceil((o.t_end - o.t_start) / o.output_interval - 1e-9));
+  std::vector<double> grid;
+  for (long k = 0; k < n_out; ++k) grid.push_back(o.t_start + k * o.output_interval);
+  grid.push_back(o.t_end);
+  std::vector<double> t;
+  for (const auto& row : r.table.rows) t.push_back(row[0]);
+  ASSERT_TRUE(std::is_sorted(t.begin(), t.end()));
+  // Every grid time exactly once (bitwise: no interpolation-time drift).
+  for (double tg : grid) EXPECT_EQ(std::count(t.begin(), t.end(), tg), 1) << "output time " << tg;
+  // The other rows are at logged events (mode changes), none elsewhere.
+  std::size_t off_grid = 0;
+  for (double tr : t) {
+    if (std::binary_search(grid.begin(), grid.end(), tr)) continue;
+    ++off_grid;
+    const bool at_event = std::any_of(r.solver.events.begin(), r.solver.events.end(),
+                                      [&](const EventLogEntry& ev) { return ev.t == tr; });
+    EXPECT_TRUE(at_event) << "row at t = " << tr << " s is neither an output time nor an event";
+  }
+  std::cout << "[cushion-outputs] " << t.size() << " rows: " << grid.size() << " grid times + " << off_grid
+            << " event rows (" << r.solver.events.size() << " events), " << r.solver.stats.steps << " steps, "
+            << r.solver.stats.root_evals << " root evaluations\n";
+  EXPECT_EQ(t.size(), grid.size() + off_grid);
+  EXPECT_GT(off_grid, 0u);
+}
+
+TEST(CushionRigOutputs, ProbeSetEqualsProbeForEveryCylinderQuantity) {
+  const Netlist nl = load_netlist(std::string(PNEUMO_SOURCE_DIR) + "/netlists/cushion_rig.yaml");
+  System system(elaborate(nl, builtin_registry()));
+  const Circuit& c = system.circuit();
+  const int cyl = c.find("cylinder"), load = c.find("load");
+  ASSERT_GE(cyl, 0);
+  ASSERT_GE(load, 0);
+  // Every observable and local variable of the cylinder, interleaved with
+  // the load's, so that the grouping by component has to put each value
+  // back in its own slot.
+  std::vector<Probe> probes;
+  auto add = [&](int comp, Probe::Kind kind, int index) {
+    Probe p;
+    p.component = comp;
+    p.kind = kind;
+    p.index = index;
+    p.name = c.components[comp]->name() + "#" + std::to_string(index);
+    probes.push_back(p);
+  };
+  const auto& ci = c.components[cyl]->info();
+  const int n_obs = static_cast<int>(ci.observables.size());
+  const int n_load_obs = static_cast<int>(c.components[load]->info().observables.size());
+  for (int k = 0; k < std::max(n_obs, c.components[cyl]->n_local()); ++k) {
+    if (k < n_obs) add(cyl, Probe::Kind::observable, k);
+    if (k < c.components[cyl]->n_local()) add(cyl, Probe::Kind::local, k);
+    if (k < n_load_obs) add(load, Probe::Kind::observable, k);
+  }
+  int x_obs = -1;
+  for (int k = 0; k < n_obs; ++k)
+    if (ci.observables[k].name == "x") x_obs = k;
+  ASSERT_GE(x_obs, 0);
+  Probe x_probe;
+  x_probe.component = cyl;
+  x_probe.kind = Probe::Kind::observable;
+  x_probe.index = x_obs;
+
+  // The solver's state at the first output past mid-stroke (gas flowing,
+  // friction sliding: every term of the cylinder's state() in play).
+  double t_mid = -1;
+  std::vector<double> y_mid, yp_mid;
+  const OutputFn capture = [&](double t, const double* y, const double* yp) {
+    if (t_mid < 0 && system.probe(x_probe, t, y, yp) > 0.05) {
+      t_mid = t;
+      y_mid.assign(y, y + system.size());
+      yp_mid.assign(yp, yp + system.size());
+    }
+  };
+  ASSERT_TRUE(simulate(system, solver_options(nl.simulation), capture).ok);
+  ASSERT_GE(t_mid, 0.0);
+
+  const ProbeSet set = system.probe_set(probes);
+  std::vector<double> all(probes.size(), std::nan(""));
+  system.probe_all(set, t_mid, y_mid.data(), yp_mid.data(), all.data());
+  for (std::size_t i = 0; i < probes.size(); ++i)
+    EXPECT_EQ(all[i], system.probe(probes[i], t_mid, y_mid.data(), yp_mid.data())) << probes[i].name;
+  const auto x_slot = std::find_if(probes.begin(), probes.end(), [&](const Probe& p) {
+    return p.component == cyl && p.kind == Probe::Kind::observable && p.index == x_obs;
+  });
+  EXPECT_GT(all[x_slot - probes.begin()], 0.05);
+}
+
+}  // namespace
+}  // namespace pneumo

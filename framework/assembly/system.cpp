@@ -1522,4 +1522,44 @@ double System::probe(const Probe& p, double t, const double* y, const double* yp
   return b.component->observe(p.index, e);
 }
 
+ProbeSet System::probe_set(const std::vector<Probe>& probes) const {
+  ProbeSet set;
+  set.size = probes.size();
+  std::size_t widest = 0;
+  for (std::size_t i = 0; i < probes.size(); ++i) {
+    const Probe& p = probes[i];
+    const int slot = static_cast<int>(i);
+    if (p.kind == Probe::Kind::local) {
+      set.locals.push_back(p);
+      set.local_slots.push_back(slot);
+      continue;
+    }
+    auto g = std::find_if(set.groups.begin(), set.groups.end(),
+                          [&](const ProbeSet::Group& x) { return x.component == p.component; });
+    if (g == set.groups.end()) {
+      set.groups.push_back({p.component, {}, {}});
+      g = set.groups.end() - 1;
+    }
+    g->observables.push_back(p.index);
+    g->slots.push_back(slot);
+    widest = std::max(widest, g->observables.size());
+  }
+  set.scratch.resize(widest);
+  return set;
+}
+
+void System::probe_all(const ProbeSet& set, double t, const double* y, const double* yp, double* out) const {
+  for (std::size_t i = 0; i < set.locals.size(); ++i) out[set.local_slots[i]] = probe(set.locals[i], t, y, yp);
+  double ly[kMaxLocal], lyp[kMaxLocal];
+  bool invalid = false;
+  for (const auto& g : set.groups) {
+    const Block& b = *blocks_[g.component];  // component blocks come first, in order
+    gather(b, y, yp, ly, lyp);
+    Eval<double> e(*b.component, t, ly, lyp, modes_.data() + b.mode0, b.connected.get(), circuit_.gas, &invalid);
+    const int n = static_cast<int>(g.observables.size());
+    b.component->observe_all(g.observables.data(), n, e, set.scratch.data());
+    for (int k = 0; k < n; ++k) out[g.slots[k]] = set.scratch[k];
+  }
+}
+
 }  // namespace pneumo

@@ -102,6 +102,23 @@ struct AssemblyOptions {
 // text, e.g. "Pa", "kg"): scales absolute tolerances; 1 for other units.
 double nominal_floor(const std::string& unit);
 
+// A fixed list of probes grouped by component (System::probe_set), for
+// evaluating them all at many points (System::probe_all): outputs and
+// integrands then gather each component's variables and run its
+// observables' shared computation once per point, not once per probe.
+struct ProbeSet {
+  struct Group {
+    int component = -1;
+    std::vector<int> observables;  // observable indices of the component
+    std::vector<int> slots;        // where each value goes in the output
+  };
+  std::vector<Group> groups;       // components with observable probes
+  std::vector<Probe> locals;       // local-variable probes (no observe call)
+  std::vector<int> local_slots;
+  std::size_t size = 0;
+  mutable std::vector<double> scratch;  // one group's values
+};
+
 class System {
  public:
   // Takes ownership of the circuit. Throws InputError (dangling or
@@ -159,6 +176,11 @@ class System {
   // Number of Jacobian entries that AD found outside the structural pattern
   // (should stay 0; reported in the statistics).
   long pattern_misses() const { return pattern_misses_; }
+
+  // Group `probes` by component; out[i] of probe_all is probes[i]'s value,
+  // equal to probe(probes[i], t, y, yp).
+  ProbeSet probe_set(const std::vector<Probe>& probes) const;
+  void probe_all(const ProbeSet& set, double t, const double* y, const double* yp, double* out) const;
 
  private:
   void build_nodes();

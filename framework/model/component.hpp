@@ -310,6 +310,13 @@ class Component {
   // Initial values (fixed differential states) and guesses, in SI.
   virtual void start(StartValues& s, const GasModel& gas) const { (void)s; (void)gas; }
   virtual double observe(int k, const Eval<double>& e) const { (void)k; (void)e; return 0.0; }
+  // out[i] = observe(ks[i], e) for i < n. Outputs ask for several
+  // observables of one component at the same point: a component whose
+  // observables share an expensive computation (flows, friction) overrides
+  // this to do it once.
+  virtual void observe_all(const int* ks, int n, const Eval<double>& e, double* out) const {
+    for (int i = 0; i < n; ++i) out[i] = observe(ks[i], e);
+  }
 
   // Discrete modes and events. Time events are known in advance (the solver
   // stops there); roots are state events g(t, y, y') = 0 located by IDA.

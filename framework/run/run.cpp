@@ -36,12 +36,23 @@ RunResult run_system(System& system, const SolverOptions& options) {
       quad.atol.push_back(options.atol * nominal_floor(p.unit));
     }
   }
+  // The sampled outputs, evaluated together (one observe_all per component).
+  std::vector<Probe> sampled;
+  std::vector<int> sampled_column;
+  for (std::size_t i = 0; i < probes.size(); ++i)
+    if (slot[i] < 0) {
+      sampled.push_back(probes[i]);
+      sampled_column.push_back(static_cast<int>(i) + 1);
+    }
+  const ProbeSet sampled_set = system.probe_set(sampled);
+  std::vector<double> values(sampled.size());
   const OutputFn output = [&](double t, const double* y, const double* yp) {
-    std::vector<double> row;
-    row.reserve(probes.size() + 1);
-    row.push_back(t);
+    std::vector<double> row(probes.size() + 1);
+    row[0] = t;
+    system.probe_all(sampled_set, t, y, yp, values.data());
+    for (std::size_t i = 0; i < sampled.size(); ++i) row[sampled_column[i]] = values[i];
     for (std::size_t i = 0; i < probes.size(); ++i)
-      row.push_back(slot[i] >= 0 ? integrals[slot[i]] : system.probe(probes[i], t, y, yp));
+      if (slot[i] >= 0) row[i + 1] = integrals[slot[i]];
     out.table.add_row(std::move(row));
   };
   out.solver = simulate(system, options, output, quad.integrands.empty() ? nullptr : &quad);

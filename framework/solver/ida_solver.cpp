@@ -54,7 +54,7 @@ struct UserData {
   std::vector<sunindextype> col_ptr, row_idx;
   SUNLinearSolver klu = nullptr;
   void* ida = nullptr;
-  const std::vector<Probe>* integrands = nullptr;
+  const ProbeSet* integrands = nullptr;
   // IDA integrates scaled variables y / nominal: pressures (1e5 Pa) and
   // masses (1e-6 kg) in one Newton matrix would otherwise differ by 1e11 and
   // leave the sparse LU numerically singular.
@@ -124,8 +124,7 @@ int quadrature_cb(realtype t, N_Vector y, N_Vector yp, N_Vector q, void* user) {
   try {
     const double* py = u->physical_y(y);
     const double* pyp = u->physical_yp(yp);
-    double* out = N_VGetArrayPointer(q);
-    for (std::size_t i = 0; i < u->integrands->size(); ++i) out[i] = u->system->probe((*u->integrands)[i], t, py, pyp);
+    u->system->probe_all(*u->integrands, t, py, pyp, N_VGetArrayPointer(q));
     return 0;
   } catch (...) {
     u->error = std::current_exception();
@@ -201,8 +200,10 @@ SolverResult simulate(System& system, const SolverOptions& opt, const OutputFn& 
   if (system.n_roots() > 0) check(IDARootInit(ida, system.n_roots(), root_cb), "IDARootInit");
   const int n_quad = quad ? static_cast<int>(quad->integrands.size()) : 0;
   VectorPtr q;
+  ProbeSet integrands;
   if (n_quad > 0) {
-    user.integrands = &quad->integrands;
+    integrands = system.probe_set(quad->integrands);
+    user.integrands = &integrands;
     q.reset(N_VNew_Serial(n_quad, context.ctx));
     N_VConst(0.0, q.get());
     check(IDAQuadInit(ida, quadrature_cb, q.get()), "IDAQuadInit");
@@ -284,23 +285,56 @@ SolverResult simulate(System& system, const SolverOptions& opt, const OutputFn& 
   if (!consistent_ic()) return result;
   emit();
 
+  // Output times: the grid t_start + k * output_interval, then t_end.
   long k = 1;
   const long n_out = static_cast<long>(std::ceil(span / opt.output_interval - 1e-9));
+  auto grid_time = [&](long j) { return j >= n_out ? opt.t_end : opt.t_start + j * opt.output_interval; };
+  // IDA takes one step per call (IDA_ONE_STEP) and the output times the step
+  // passed are read off its interpolating polynomial: with IDA_NORMAL every
+  // output time would also cost a root-function evaluation (IDA checks the
+  // roots up to each tout), for outputs every ms about as many as the steps.
+  VectorPtr y_out(N_VClone(y.get())), yp_out(N_VClone(y.get()));
+  auto emit_interpolated = [&](double t_out) {
+    check(IDAGetDky(ida, t_out, 0, y_out.get()), "IDAGetDky");
+    check(IDAGetDky(ida, t_out, 1, yp_out.get()), "IDAGetDky");
+    if (n_quad > 0 && IDAGetQuadDky(ida, t_out, 0, q.get()) >= 0)
+      std::copy_n(N_VGetArrayPointer(q.get()), n_quad, quad->values->begin());
+    output(t_out, user.physical_y(y_out.get()), user.physical_yp(yp_out.get()));
+  };
   std::vector<int> root_info(std::max(1, system.n_roots()));
+  long steps_without_output = 0;
   while (t < opt.t_end - eps_t) {
-    const double t_out = k >= n_out ? opt.t_end : opt.t_start + k * opt.output_interval;
     const double t_event = next_event < events.size() ? events[next_event] : std::numeric_limits<double>::infinity();
     const double t_stop = std::min(t_event, opt.t_end);
     check(IDASetStopTime(ida, t_stop), "IDASetStopTime");
     double t_ret = t;
-    const int flag = IDASolve(ida, std::min(t_out, t_stop), &t_ret, y.get(), yp.get(), IDA_NORMAL);
+    // tout matters only for the first step after a (re)initialisation (its
+    // size), as it did with IDA_NORMAL.
+    const int flag = IDASolve(ida, std::min(grid_time(k), t_stop), &t_ret, y.get(), yp.get(), IDA_ONE_STEP);
     if (flag < 0) {
       t = t_ret;
       emit();  // the last state IDA reached, for the partial results
       fail("integration failed at t = " + std::to_string(t_ret) + " s: " + flag_text(flag, user));
       break;
     }
+    // Stopped at a root, a time event or t_end: an output time within eps_t
+    // of it is that row (below), emitted after the event is handled.
+    const bool stopped = flag == IDA_ROOT_RETURN || flag == IDA_TSTOP_RETURN;
+    const long k_before = k;
+    while (k <= n_out && (stopped ? grid_time(k) < t_ret - eps_t : grid_time(k) <= t_ret))
+      emit_interpolated(grid_time(k++));
     t = t_ret;
+    // IDA's own limit (IDASetMaxNumSteps) counts the steps of one IDASolve
+    // call, i.e. now one step: keep its meaning, at most max_steps steps
+    // between one output (or event) and the next.
+    steps_without_output = (stopped || k > k_before) ? 0 : steps_without_output + 1;
+    if (steps_without_output >= opt.max_steps) {
+      emit();  // the last state IDA reached, for the partial results
+      fail("integration failed at t = " + std::to_string(t) + " s: IDA_TOO_MUCH_WORK (" +
+           std::to_string(opt.max_steps) + " steps without reaching the next output time)");
+      break;
+    }
+    if (!stopped) continue;
     bool reinit = false;
     if (flag == IDA_ROOT_RETURN) {
       check(IDAGetRootInfo(ida, root_info.data()), "IDAGetRootInfo");
@@ -321,7 +355,7 @@ SolverResult simulate(System& system, const SolverOptions& opt, const OutputFn& 
       if (n_quad > 0) check(IDAQuadReInit(ida, q.get()), "IDAQuadReInit");
       if (!consistent_ic()) break;
     }
-    const bool at_output = std::abs(t - t_out) <= eps_t;
+    const bool at_output = k <= n_out && std::abs(t - grid_time(k)) <= eps_t;
     if (at_output) ++k;
     if (at_output || flag == IDA_ROOT_RETURN || reinit) emit();
   }
