@@ -1550,6 +1550,8 @@ ProbeSet System::probe_set(const std::vector<Probe>& probes) const {
 
 void System::probe_all(const ProbeSet& set, double t, const double* y, const double* yp, double* out) const {
   for (std::size_t i = 0; i < set.locals.size(); ++i) out[set.local_slots[i]] = probe(set.locals[i], t, y, yp);
+  y = block_y(t, y, yp);
+  yp = block_yp(yp);
   double ly[kMaxLocal], lyp[kMaxLocal];
   bool invalid = false;
   for (const auto& g : set.groups) {
