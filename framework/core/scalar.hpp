@@ -38,6 +38,15 @@ class Dual {
 
   Dual() = default;
   Dual(double value) : v(value), n(0) {}  // NOLINT: implicit from constants is intended
+  // Copies move only the active derivatives (a Dual is 0.5 kB; equations
+  // copy them through min/max/select and temporaries).
+  Dual(const Dual& o) : v(o.v), n(o.n) { std::copy_n(o.d.begin(), o.n, d.begin()); }
+  Dual& operator=(const Dual& o) {
+    v = o.v;
+    n = o.n;
+    std::copy_n(o.d.begin(), o.n, d.begin());
+    return *this;
+  }
 
   // A seeded variable: value and derivative `seed` in direction `slot`.
   static Dual variable(double value, int slot, double seed, int active) {
