@@ -107,17 +107,6 @@ int jacobian_cb(realtype t, realtype cj, N_Vector y, N_Vector yp, N_Vector, SUNM
   }
 }
 
-int root_cb(realtype t, N_Vector y, N_Vector yp, realtype* g, void* user) {
-  auto* u = static_cast<UserData*>(user);
-  try {
-    u->system->roots(t, u->physical_y(y), u->physical_yp(yp), g);
-    return 0;
-  } catch (...) {
-    u->error = std::current_exception();
-    return -1;
-  }
-}
-
 // Integrands of the quadratures (outputs declared as integrals).
 int quadrature_cb(realtype t, N_Vector y, N_Vector yp, N_Vector q, void* user) {
   auto* u = static_cast<UserData*>(user);
@@ -197,7 +186,6 @@ SolverResult simulate(System& system, const SolverOptions& opt, const OutputFn& 
   check(IDASetSuppressAlg(ida, SUNTRUE), "IDASetSuppressAlg");
   check(IDASetMaxNumSteps(ida, opt.max_steps), "IDASetMaxNumSteps");
   if (opt.max_step > 0) check(IDASetMaxStep(ida, opt.max_step), "IDASetMaxStep");
-  if (system.n_roots() > 0) check(IDARootInit(ida, system.n_roots(), root_cb), "IDARootInit");
   const int n_quad = quad ? static_cast<int>(quad->integrands.size()) : 0;
   VectorPtr q;
   ProbeSet integrands;
@@ -261,7 +249,6 @@ SolverResult simulate(System& system, const SolverOptions& opt, const OutputFn& 
     IDAGetNumNonlinSolvIters(ida, &v), s.nonlinear_iterations += v;
     IDAGetNumNonlinSolvConvFails(ida, &v), s.nonlinear_failures += v;
     IDAGetNumErrTestFails(ida, &v), s.error_test_failures += v;
-    if (system.n_roots() > 0) IDAGetNumGEvals(ida, &v), s.root_evals += v;
   };
   auto emit = [&]() {
     if (n_quad > 0) {
@@ -301,7 +288,77 @@ SolverResult simulate(System& system, const SolverOptions& opt, const OutputFn& 
       std::copy_n(N_VGetArrayPointer(q.get()), n_quad, quad->values->begin());
     output(t_out, user.physical_y(y_out.get()), user.physical_yp(yp_out.get()));
   };
-  std::vector<int> root_info(std::max(1, system.n_roots()));
+  // State events. The root functions are checked once per step at its end
+  // t_n, on the y(t_n) IDA returns; a sign change since the last check is
+  // located on IDA's interpolant (Illinois), and the event handled there. If
+  // the event re-initialises, IDA restarts from the event (the rest of the
+  // step is discarded); otherwise the search goes on to t_n. IDA's own
+  // root finding does the same but interpolates y(t_n) once more per step.
+  const int nr = system.n_roots();
+  std::vector<int> root_info(std::max(1, nr));
+  std::vector<double> g_lo(nr), g_hi(nr), g_c(nr);
+  double t_lo = t;
+  VectorPtr y_ev(N_VClone(y.get())), yp_ev(N_VClone(y.get()));
+  auto roots_at = [&](double tr, N_Vector yy, N_Vector yyp, std::vector<double>& g) {
+    system.roots(tr, user.physical_y(yy), user.physical_yp(yyp), g.data());
+    ++result.stats.root_evals;
+  };
+  auto interpolate = [&](double tr, N_Vector yy, N_Vector yyp) {
+    check(IDAGetDky(ida, tr, 0, yy), "IDAGetDky");
+    check(IDAGetDky(ida, tr, 1, yyp), "IDAGetDky");
+  };
+  // A root function exactly 0 at the start of an interval has no side yet:
+  // its first nonzero value sets it, without an event (as IDA does).
+  auto crosses = [](double a, double b) { return (a < 0 && b >= 0) || (a > 0 && b <= 0); };
+  auto restart_roots = [&](const std::vector<int>* fired) {
+    t_lo = t;
+    if (nr == 0) return;
+    roots_at(t, y.get(), yp.get(), g_lo);
+    // A root just handled counts as crossed, whatever rounding left at t.
+    if (fired)
+      for (int i = 0; i < nr; ++i)
+        if ((*fired)[i] != 0) g_lo[i] = (*fired)[i] > 0 ? std::max(g_lo[i], 1e-300) : std::min(g_lo[i], -1e-300);
+  };
+  restart_roots(nullptr);
+  // The earliest crossing in (t_lo, t_hi]; false if none.
+  auto locate = [&](double t_hi, double& t_root) -> bool {
+    double h_last = 0.0;
+    IDAGetLastStep(ida, &h_last);
+    const double ttol = 100.0 * std::numeric_limits<double>::epsilon() * (std::abs(t_hi) + std::abs(h_last));
+    bool any = false;
+    t_root = t_hi;
+    std::fill(root_info.begin(), root_info.end(), 0);
+    std::vector<double> t_of(nr, std::numeric_limits<double>::infinity());
+    for (int i = 0; i < nr; ++i) {
+      if (g_lo[i] == 0.0 || !crosses(g_lo[i], g_hi[i])) continue;
+      double a = t_lo, fa = g_lo[i], b = t_hi, fb = g_hi[i];
+      int side = 0;
+      for (int it = 0; it < 60 && b - a > ttol && fb != 0.0; ++it) {
+        double c = b - fb * (b - a) / (fb - fa);
+        c = std::min(std::max(c, a + 0.5 * ttol), b - 0.5 * ttol);
+        interpolate(c, y_ev.get(), yp_ev.get());
+        roots_at(c, y_ev.get(), yp_ev.get(), g_c);
+        const double fc = g_c[i];
+        if (crosses(fa, fc)) {  // the root lies in (a, c]
+          b = c, fb = fc;
+          if (side == -1) fa *= 0.5;
+          side = -1;
+        } else {
+          a = c, fa = fc;
+          if (side == 1) fb *= 0.5;
+          side = 1;
+        }
+      }
+      t_of[i] = b;  // the first point where g has crossed
+      if (b < t_root || !any) t_root = b;
+      any = true;
+    }
+    if (!any) return false;
+    for (int i = 0; i < nr; ++i)
+      if (t_of[i] <= t_root + ttol) root_info[i] = g_lo[i] < 0 ? 1 : -1;
+    return true;
+  };
+
   long steps_without_output = 0;
   while (t < opt.t_end - eps_t) {
     const double t_event = next_event < events.size() ? events[next_event] : std::numeric_limits<double>::infinity();
@@ -317,10 +374,53 @@ SolverResult simulate(System& system, const SolverOptions& opt, const OutputFn& 
       fail("integration failed at t = " + std::to_string(t_ret) + " s: " + flag_text(flag, user));
       break;
     }
-    // Stopped at a root, a time event or t_end: an output time within eps_t
-    // of it is that row (below), emitted after the event is handled.
-    const bool stopped = flag == IDA_ROOT_RETURN || flag == IDA_TSTOP_RETURN;
     const long k_before = k;
+    // State events in this step, in time order.
+    bool restarted = false;
+    if (nr > 0) {
+      roots_at(t_ret, y.get(), yp.get(), g_hi);
+      double t_root = t_ret;
+      while (!restarted && locate(t_ret, t_root)) {
+        while (k <= n_out && grid_time(k) < t_root - eps_t) emit_interpolated(grid_time(k++));
+        interpolate(t_root, y_ev.get(), yp_ev.get());
+        const std::vector<int> fired = root_info;
+        const bool reinit = system.handle_roots(t_root, user.physical_y(y_ev.get()), user.physical_yp(yp_ev.get()),
+                                                fired.data(), result.events);
+        if (k <= n_out && std::abs(t_root - grid_time(k)) <= eps_t) ++k;
+        if (reinit) {
+          // Restart from the event; IDA's step beyond it is discarded.
+          if (n_quad > 0) check(IDAGetQuadDky(ida, t_root, 0, q.get()), "IDAGetQuadDky");
+          N_VScale(1.0, y_ev.get(), y.get());
+          N_VScale(1.0, yp_ev.get(), yp.get());
+          t = t_root;
+          ++result.stats.reinitialisations;
+          accumulate_stats();
+          check(IDAReInit(ida, t, y.get(), yp.get()), "IDAReInit");
+          if (n_quad > 0) check(IDAQuadReInit(ida, q.get()), "IDAQuadReInit");
+          if (!consistent_ic()) break;
+          emit();
+          restart_roots(&fired);
+          restarted = true;
+        } else {
+          emit_interpolated(t_root);
+          // Go on searching (t_root, t_n].
+          t_lo = t_root;
+          roots_at(t_root, y_ev.get(), yp_ev.get(), g_lo);
+          for (int i = 0; i < nr; ++i)
+            if (fired[i] != 0) g_lo[i] = g_hi[i];
+        }
+      }
+      if (!result.message.empty()) break;
+      if (restarted) {
+        steps_without_output = 0;
+        continue;
+      }
+      g_lo = g_hi;
+      t_lo = t_ret;
+    }
+    // Stopped at a time event or t_end: an output time within eps_t of it is
+    // that row (below), emitted after the event is handled.
+    const bool stopped = flag == IDA_TSTOP_RETURN;
     while (k <= n_out && (stopped ? grid_time(k) < t_ret - eps_t : grid_time(k) <= t_ret))
       emit_interpolated(grid_time(k++));
     t = t_ret;
@@ -336,11 +436,7 @@ SolverResult simulate(System& system, const SolverOptions& opt, const OutputFn& 
     }
     if (!stopped) continue;
     bool reinit = false;
-    if (flag == IDA_ROOT_RETURN) {
-      check(IDAGetRootInfo(ida, root_info.data()), "IDAGetRootInfo");
-      reinit = system.handle_roots(t, user.physical_y(y.get()), user.physical_yp(yp.get()), root_info.data(),
-                                   result.events);
-    } else if (next_event < events.size() && std::abs(t - t_event) <= eps_t) {
+    if (next_event < events.size() && std::abs(t - t_event) <= eps_t) {
       reinit = system.handle_time_event(t, user.physical_y(y.get()), user.physical_yp(yp.get()), result.events);
       ++next_event;
     }
@@ -354,10 +450,11 @@ SolverResult simulate(System& system, const SolverOptions& opt, const OutputFn& 
       check(IDAReInit(ida, t, y.get(), yp.get()), "IDAReInit");
       if (n_quad > 0) check(IDAQuadReInit(ida, q.get()), "IDAQuadReInit");
       if (!consistent_ic()) break;
+      restart_roots(nullptr);
     }
     const bool at_output = k <= n_out && std::abs(t - grid_time(k)) <= eps_t;
     if (at_output) ++k;
-    if (at_output || flag == IDA_ROOT_RETURN || reinit) emit();
+    if (at_output || reinit) emit();
   }
   if (user.error) std::rethrow_exception(user.error);
   if (result.message.empty()) {
