@@ -27,6 +27,12 @@ TEST(AliasElimination, RigKeepsItsTrajectoryWithFewerUnknowns) {
   System reduced(elaborate(nl, builtin_registry()), opt);
   EXPECT_EQ(reduced.full_size(), full.size());
   EXPECT_LT(reduced.size(), full.size() * 2 / 3) << reduced.size() << " of " << full.size();
+  // With explicit elimination (the default) IDA integrates exactly the
+  // rig's states: x, v and (m, U) of the chambers A, EC, ch and line B; the
+  // other 41 unknowns are solved inside the residual.
+  EXPECT_EQ(reduced.size(), 10);
+  EXPECT_EQ(reduced.size() + reduced.explicit_size(), 22);
+  for (double d : reduced.differential()) EXPECT_EQ(d, 1.0);
   std::cout << "unknowns: " << full.size() << " -> " << reduced.size() << "\n";
 
   const RunResult a = run_system(full, solver_options(nl.simulation));
@@ -183,6 +189,64 @@ simulation: {t_end: 0.4 s, output_interval: 10 ms}
     if (std::abs(row[0] - 0.4) < 1e-9) m_04 = row[cm];
   }
   EXPECT_NEAR((m_04 - m0) / (m_02 - m0), 4.0, 1e-3);
+}
+
+// A signal whose equation changes its coefficient at a time event (y = 1,
+// then 2 y = 1): solved explicitly at assembly, it no longer may be after
+// the event, and the run stops with an error naming the equation instead of
+// going on with a wrong value.
+class SwitchingGain final : public ComponentT<SwitchingGain> {
+ public:
+  static ComponentInfo describe() {
+    ComponentInfo i;
+    i.type = "alias_test_switching_gain";
+    i.description = "y = 1, from t = 5 ms on 2 y = 1 (explicit elimination test)";
+    i.ports = {{"y", Domain::signal, Causality::output, "1, then 0.5"}};
+    i.equations = {"switching gain"};
+    i.modes = 1;
+    return i;
+  }
+  explicit SwitchingGain(const Construction& c) : ComponentT(c) {}
+  template <class T>
+  void equations(const Eval<T>& e, T* r) const { r[0] = (1.0 + e.mode(0)) * e.signal(0) - 1.0; }
+  std::vector<double> time_events() const override { return {0.005}; }
+  EventResult on_event(const Eval<double>&, double* modes, EventKind, int, int) const override {
+    modes[0] = 1.0;
+    return {true, "gain doubled"};
+  }
+};
+
+TEST(ExplicitElimination, ARowThatChangesAtAnEventIsAnError) {
+  const Registry reg = testkit::with_builtin([](Registry& r) { r.add<SwitchingGain>(); });
+  const Netlist nl = parse_netlist(R"(
+components:
+  source: {type: pressure_source, p: 6 bar, T: 300 K}
+  gain:   {type: alias_test_switching_gain}
+  valve:  {type: iso6358_throttle, C: 0.2 dm3/(s*bar), b: 0.3}
+  tank:   {type: volume, V: 1 L, p0: 1 bar, T0: 300 K}
+connections:
+  - [source.port, valve.a]
+  - [gain.y, valve.opening]
+  - [valve.b, tank.port]
+outputs: {m: tank.m}
+simulation: {t_end: 0.01 s, output_interval: 1 ms}
+)",
+                                   "gain.yaml");
+  System sys(elaborate(nl, reg));
+  try {
+    (void)run_system(sys, solver_options(nl.simulation));
+    FAIL() << "the changed equation went unnoticed";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("switching gain"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("no longer gives it linearly"), std::string::npos) << e.what();
+  }
+  // Without explicit elimination the signal is an unknown of IDA and the
+  // run goes through: the opening halves at 5 ms.
+  AssemblyOptions keep;
+  keep.eliminate_explicit = false;
+  System plain(elaborate(nl, reg), keep);
+  const RunResult r = run_system(plain, solver_options(nl.simulation));
+  EXPECT_TRUE(r.solver.ok) << r.solver.message;
 }
 
 // The reduced systems' AD Jacobians (one derivative direction per distinct

@@ -884,8 +884,10 @@ void System::eliminate_aliases() {
 // An equation qualifies for unknown v if it has no y', depends on v only
 // linearly through sums and constant factors (the Pattern scalar's `nonlin`
 // set, at three points) with the same nonzero dF/dv at those points and
-// three times, and belongs to a framework block or a component without
-// discrete modes. Every Jacobian evaluation re-checks the coefficient.
+// three times. Rows of components with discrete modes (a signal source's
+// output, a directional valve's flows) qualify too: when an event changes
+// their modes they are checked again (verify_explicit), and every Jacobian
+// evaluation re-checks the coefficient.
 void System::eliminate_explicit() {
   const int m = n_;
   // Structure at the alias-reduced level: y and y' dependencies of each
@@ -972,7 +974,6 @@ void System::eliminate_explicit() {
   for (int q = 0; q < m; ++q) {
     if (row_block[q] < 0 || !dyp[q].empty() || dy[q].empty()) continue;
     const Block& b = *blocks_[row_block[q]];
-    if (b.component && b.component->info().modes > 0) continue;
     // The mixed temperature at a node of three or more ports stays an
     // unknown of IDA: computed from the flows, its steep weights near zero
     // flow stalled the consistent-initialisation Newton on the flows.
@@ -1034,7 +1035,9 @@ void System::eliminate_explicit() {
     if (best < 0) break;
     known[best] = 1;  // torn: level 0, an unknown of IDA
   }
-  if (order_var.empty()) return;
+  // Nothing to do - or everything: a circuit without states (sources and
+  // flow elements only) keeps its unknowns, IDA needs at least one.
+  if (order_var.empty() || static_cast<int>(order_var.size()) == m) return;
 
   // Explicit unknowns in level order (stable).
   std::vector<int> idx(order_var.size());
@@ -1047,6 +1050,7 @@ void System::eliminate_explicit() {
     x.row = full_row[order_row[a]];
     x.coef = coef[order_row[a]][x.var];
     x.level = level[x.var];
+    x.deps.assign(dy[order_row[a]].begin(), dy[order_row[a]].end());
     explicit_of_m_[x.var] = static_cast<int>(explicit_.size());
     explicit_.push_back(std::move(x));
   }
@@ -1158,6 +1162,7 @@ void System::eliminate_explicit() {
     nominal.push_back(nominal_[v]);
   }
   m_start_ = start_value_;
+  m_names_ = var_names_;
   var_names_ = std::move(names);
   start_value_ = std::move(start);
   start_kind_ = std::move(kind);
@@ -1193,6 +1198,51 @@ void System::eliminate_explicit() {
   d_values_.assign(d_cols_.size(), 0.0);
   scatter_.assign(n, 0.0);
   cache_y_.assign(n, 0.0);
+}
+
+void System::verify_explicit(int block, double t) const {
+  const Block& b = *blocks_[block];
+  const int nl = static_cast<int>(b.vars.size());
+  std::vector<Pattern> py(nl), pyp(nl), pr(std::max(1, b.n_rows));
+  std::vector<Dual> dy(nl), dyp(nl), dr(std::max(1, b.n_rows));
+  for (int i = 0; i < nl; ++i) {
+    const int g = b.vars[i];
+    const double v = g >= 0 ? b.scale[i] * yw_[g] : b.offset[i];
+    const double vp = g >= 0 ? b.scale[i] * ypw_[g] : 0.0;
+    py[i] = Pattern(v);
+    pyp[i] = Pattern(vp);
+    if (g >= 0) {
+      py[i].deps.set(i);
+      pyp[i].deps.set(kMaxLocal + i);
+    }
+    dy[i] = Dual::variable(v, i, g >= 0 ? b.scale[i] : 0.0, nl);
+    dyp[i] = Dual(vp);
+  }
+  bool invalid = false;
+  EvalContext ctx{&circuit_.gas, modes_.data(), &invalid};
+  b.residual(t, py.data(), pyp.data(), pr.data(), ctx);
+  b.residual(t, dy.data(), dyp.data(), dr.data(), ctx);
+  for (const auto& x : explicit_) {
+    if (x.row < b.row0 || x.row >= b.row0 + b.n_rows) continue;
+    const int k = x.row - b.row0;
+    bool ok = true;
+    double c = 0.0;
+    for (int i = 0; i < nl; ++i) {
+      const int g = b.vars[i];
+      if (g < 0) continue;
+      if (pr[k].deps.test(kMaxLocal + i)) ok = false;
+      if (pr[k].deps.test(i) && !std::binary_search(x.deps.begin(), x.deps.end(), g)) ok = false;
+      if (g == x.var) {
+        if (pr[k].nonlin.test(i)) ok = false;
+        c += dr[k].deriv(i);
+      }
+    }
+    if (ok && c == x.coef) continue;
+    throw std::runtime_error("equation '" + b.row_names[k] + "' [" + b.where.to_string() + "] of " + b.label +
+                             ", solved explicitly for '" + m_names_[x.var] +
+                             "' at assembly, no longer gives it linearly with the same coefficient after an event "
+                             "changed the component's modes; assemble with eliminate_explicit = false");
+  }
 }
 
 bool System::expand(double t, const double* y, const double* yp) const {
@@ -1462,6 +1512,17 @@ std::vector<double> System::time_events() const {
   return out;
 }
 
+// Modes changed by an event: the explicit unknowns may take other values at
+// the same (t, y) - a signal source's step - and the rows that give them are
+// checked again.
+void System::after_event(const Block& b, const std::vector<double>& modes_before, double t) const {
+  if (std::equal(modes_before.begin(), modes_before.end(), modes_.begin() + b.mode0)) return;
+  if (explicit_.empty()) return;
+  for (std::size_t bi = 0; bi < blocks_.size(); ++bi)
+    if (blocks_[bi].get() == &b) verify_explicit(static_cast<int>(bi), t);
+  cache_valid_ = false;
+}
+
 bool System::handle_time_event(double t, const double* y, const double* yp, std::vector<EventLogEntry>& log) {
   y = block_y(t, y, yp);
   yp = block_yp(yp);
@@ -1476,7 +1537,9 @@ bool System::handle_time_event(double t, const double* y, const double* yp, std:
     if (!due) continue;
     gather(*b, y, yp, ly, lyp);
     Eval<double> e(*b->component, t, ly, lyp, modes_.data() + b->mode0, b->connected.get(), circuit_.gas, &invalid);
+    const std::vector<double> before(modes_.begin() + b->mode0, modes_.begin() + b->mode0 + b->component->info().modes);
     const EventResult res = b->component->on_event(e, modes_.data() + b->mode0, EventKind::time, -1, 0);
+    after_event(*b, before, t);
     changed |= res.changed;
     if (!res.message.empty()) log.push_back({t, b->component->name(), res.message});
   }
@@ -1499,7 +1562,10 @@ bool System::handle_roots(double t, const double* y, const double* yp, const int
       gather(*b, y, yp, ly, lyp);
       Eval<double> e(*b->component, t, ly, lyp, modes_.data() + b->mode0, b->connected.get(), circuit_.gas,
                      &invalid);
+      const std::vector<double> before(modes_.begin() + b->mode0,
+                                       modes_.begin() + b->mode0 + b->component->info().modes);
       const EventResult res = b->component->on_event(e, modes_.data() + b->mode0, EventKind::root, k, dir);
+      after_event(*b, before, t);
       changed |= res.changed;
       if (!res.message.empty()) log.push_back({t, b->component->name(), res.message});
     }

@@ -234,7 +234,13 @@ class System {
     int level = 0;   // 1 + the highest level among the unknowns the row reads
     std::vector<std::pair<long, int>> entries;  // (j1 position, m-level column) of the row
     int d0 = 0, dn = 0;  // its derivative d var / d y_IDA: d_cols_[d0, d0 + dn)
+    std::vector<int> deps;  // m-level unknowns the row may read (its level's basis)
   };
+  // After an event changed the modes of a component that gives explicit
+  // unknowns: its rows must still give them linearly, with the same
+  // coefficient and no new dependencies (throws otherwise).
+  void verify_explicit(int block, double t) const;
+  void after_event(const Block& b, const std::vector<double>& modes_before, double t) const;
   struct KeptRow {
     int row = -1;  // full row
     std::vector<std::pair<long, int>> entries;  // (j1 position, m-level column)
@@ -250,6 +256,7 @@ class System {
   std::vector<std::pair<int, int>> kept_full_rows_;  // (full row, IDA row) of IDA's rows
   std::vector<int> checked_aliases_;        // indices into eliminated_ of rows evaluated per residual
   std::vector<double> m_start_;
+  std::vector<std::string> m_names_;
   std::vector<long> j1_col_ptr_, j1_row_idx_;
   std::vector<int> d_cols_;
   std::vector<KeptRow> kept_rows_;
