@@ -340,11 +340,21 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
     open = min(max(z, T(0.0)), T(1.0));
     // Bore opening and cushion throttle in parallel, the check valve
     // (channel -> cushion volume) opening linearly above its cracking pressure.
-    const T m_bore = iso6358_mass_flow(p_EC, p_ch, T_EC, T_ch, T(c.C_bore * open), c.b_bore, 0.999, gas);
+    // A path whose conductance is exactly 0 (the bore closed by the plug,
+    // the check valve shut: clamped, so with zero derivative too) carries
+    // no flow and is not evaluated, except for the structural pattern.
+    constexpr bool structural = std::is_same_v<T, Pattern>;
+    const T zero = 0.0 * x;
+    const T m_bore = structural || value(open) > 0.0
+                         ? iso6358_mass_flow(p_EC, p_ch, T_EC, T_ch, T(c.C_bore * open), c.b_bore, 0.999, gas)
+                         : zero;
     const T m_throttle =
         iso6358_mass_flow(p_EC, p_ch, T_EC, T_ch, T(c.C_cushion + 0.0 * x), c.b_cushion, 0.999, gas);
     const T check_open = min(max(T((p_ch - p_EC - c.crack) / c.check_ramp), T(0.0)), T(1.0));
-    const T m_check = iso6358_mass_flow(p_EC, p_ch, T_EC, T_ch, T(c.C_check * check_open), c.b_check, 0.999, gas);
+    const T m_check =
+        structural || value(check_open) > 0.0
+            ? iso6358_mass_flow(p_EC, p_ch, T_EC, T_ch, T(c.C_check * check_open), c.b_check, 0.999, gas)
+            : zero;
     return m_bore + m_throttle + m_check;
   }
 
