@@ -632,7 +632,7 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
 
   // A stop contact makes the force jump (the stop's damping term d v acts
   // from the first contact on): IDA is re-initialised there, so that no step
-  // straddles it. The ends of a bore-opening ramp are kinks of a flow area
+  // straddles it. Leaving a stop is continuous (see below). The ends of a bore-opening ramp are kinks of a flow area
   // only (continuous flows): they are logged at their exact times and IDA's
   // error control steps over them, as over any steep part of a flow law
   // (re-initialising there cost 6 % more work for the same trajectory).
@@ -643,8 +643,10 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
       case kRampStart: return {false, dir > 0 ? "bore opening starts to close" + vs : "bore opening fully open" + vs};
       case kCushionEntry:
         return {false, dir > 0 ? "enters the cushioning zone" + vs : "leaves the cushioning zone" + vs};
-      case kStopRod: return {true, dir < 0 ? "contact with the rod-end stop" + vs : "leaves the rod-end stop" + vs};
-      case kStopCap: return {true, dir > 0 ? "impact on the cap-end stop" + vs : "leaves the cap-end stop" + vs};
+      // Only a contact starts with a jump; leaving, the stop force has
+      // already fallen to 0 (k pen - d v reaches 0 before pen does).
+      case kStopRod: return {dir < 0, dir < 0 ? "contact with the rod-end stop" + vs : "leaves the rod-end stop" + vs};
+      case kStopCap: return {dir > 0, dir > 0 ? "impact on the cap-end stop" + vs : "leaves the cap-end stop" + vs};
       case kRodRampStart:
         return {false, dir < 0 ? "rod-end bore opening starts to close" + vs : "rod-end bore opening fully open" + vs};
       case kRodCushionEntry:
