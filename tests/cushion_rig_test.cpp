@@ -518,6 +518,22 @@ TEST(CushionRigOutputs, ProbeSetEqualsProbeForEveryCylinderQuantity) {
     return p.component == cyl && p.kind == Probe::Kind::observable && p.index == x_obs;
   });
   EXPECT_GT(all[x_slot - probes.begin()], 0.05);
+  // The port variables among them are unknowns solved inside the residual:
+  // this set needs them solved before it is evaluated.
+  EXPECT_TRUE(set.reads_explicit);
+
+  // The netlist's outputs (x, v and the chambers' pressures and
+  // temperatures) come from the cylinder's states alone and read no y': they
+  // are evaluated without solving the explicit unknowns and without y', and
+  // give the same values.
+  const ProbeSet outputs = system.probe_set(system.circuit().probes);
+  EXPECT_FALSE(outputs.reads_explicit);
+  EXPECT_FALSE(outputs.reads_yp);
+  std::vector<double> out(outputs.size), zero_yp(yp_mid.size(), 0.0);
+  system.probe_all(outputs, t_mid, y_mid.data(), zero_yp.data(), out.data());
+  for (std::size_t i = 0; i < out.size(); ++i)
+    EXPECT_EQ(out[i], system.probe(system.circuit().probes[i], t_mid, y_mid.data(), yp_mid.data()))
+        << system.circuit().probes[i].name;
 }
 
 }  // namespace

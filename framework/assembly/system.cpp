@@ -1245,6 +1245,14 @@ void System::verify_explicit(int block, double t) const {
   }
 }
 
+void System::load_states(const double* y, const double* yp) const {
+  for (int i = 0; i < n_; ++i) {
+    yw_[ida_to_m_[i]] = y[i];
+    ypw_[ida_to_m_[i]] = yp[i];
+  }
+  cache_valid_ = false;
+}
+
 bool System::expand(double t, const double* y, const double* yp) const {
   for (int i = 0; i < n_; ++i) ypw_[ida_to_m_[i]] = yp[i];
   if (cache_valid_ && t == cache_t_ && std::equal(y, y + n_, cache_y_.begin())) return cache_invalid_;
@@ -1480,12 +1488,7 @@ void System::jacobian_parts(double t, const double* y, const double* yp, std::ve
 
 void System::roots(double t, const double* y, const double* yp, double* g) const {
   if (!explicit_.empty() && !any_roots_read_explicit_) {
-    // The states alone (the explicit unknowns keep stale values nobody reads).
-    for (int i = 0; i < n_; ++i) {
-      yw_[ida_to_m_[i]] = y[i];
-      ypw_[ida_to_m_[i]] = yp[i];
-    }
-    cache_valid_ = false;
+    load_states(y, yp);  // the explicit unknowns keep stale values nobody reads
     y = yw_.data();
     yp = ypw_.data();
   } else {
@@ -1611,13 +1614,52 @@ ProbeSet System::probe_set(const std::vector<Probe>& probes) const {
     widest = std::max(widest, g->observables.size());
   }
   set.scratch.resize(widest);
+  // Which inputs the probes read: evaluated at the start values and two
+  // perturbations of them, once with every explicit unknown NaN, once with
+  // every y' NaN; a probe that stays finite does not read them.
+  bool explicit_read = false, yp_read = false;
+  for (const auto& lp : set.locals) {
+    const int v = blocks_[lp.component]->vars[lp.index];
+    explicit_read |= v >= 0 && explicit_of_m_[v] >= 0;
+  }
+  std::mt19937 rng(97531);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  bool invalid = false;
+  double ly[kMaxLocal], lyp[kMaxLocal];
+  for (int pass = 0; pass < 3; ++pass)
+    for (int poison = 0; poison < 2; ++poison)
+      for (const auto& g : set.groups) {
+        const Block& b = *blocks_[g.component];
+        for (std::size_t i = 0; i < b.vars.size(); ++i) {
+          const int v = b.vars[i];
+          const double y0 = v >= 0 ? b.scale[i] * m_start_[v] * (1.0 + 0.01 * pass * u(rng)) : b.offset[i];
+          const bool is_explicit = v >= 0 && explicit_of_m_[v] >= 0;
+          ly[i] = poison == 0 && is_explicit ? nan : y0;
+          lyp[i] = poison == 1 ? nan : 0.0;
+        }
+        Eval<double> e(*b.component, 0.1 * pass, ly, lyp, modes_.data() + b.mode0, b.connected.get(), circuit_.gas,
+                       &invalid);
+        b.component->observe_all(g.observables.data(), static_cast<int>(g.observables.size()), e,
+                                 set.scratch.data());
+        for (std::size_t k = 0; k < g.observables.size(); ++k)
+          if (!std::isfinite(set.scratch[k])) (poison == 0 ? explicit_read : yp_read) = true;
+      }
+  set.reads_explicit = explicit_read && !explicit_.empty();
+  set.reads_yp = yp_read;
   return set;
 }
 
 void System::probe_all(const ProbeSet& set, double t, const double* y, const double* yp, double* out) const {
   for (std::size_t i = 0; i < set.locals.size(); ++i) out[set.local_slots[i]] = probe(set.locals[i], t, y, yp);
-  y = block_y(t, y, yp);
-  yp = block_yp(yp);
+  if (set.reads_explicit || explicit_.empty()) {
+    y = block_y(t, y, yp);
+    yp = block_yp(yp);
+  } else {
+    load_states(y, yp);
+    y = yw_.data();
+    yp = ypw_.data();
+  }
   double ly[kMaxLocal], lyp[kMaxLocal];
   bool invalid = false;
   for (const auto& g : set.groups) {

@@ -117,6 +117,12 @@ struct ProbeSet {
   std::vector<int> local_slots;
   std::size_t size = 0;
   mutable std::vector<double> scratch;  // one group's values
+  // Found at probe_set() by evaluating the probes with the explicitly solved
+  // unknowns (then all y') set to NaN at three points: whether the values
+  // need expand() (or only the states), and whether they read any y' (the
+  // solver then interpolates y' for outputs too).
+  bool reads_explicit = true;
+  bool reads_yp = true;
 };
 
 class System {
@@ -200,6 +206,8 @@ class System {
     return yw_.data();
   }
   const double* block_yp(const double* yp) const { return explicit_.empty() ? yp : ypw_.data(); }
+  // The states alone into yw_/ypw_ (for readers of no explicit unknown).
+  void load_states(const double* y, const double* yp) const;
   // AD Jacobian over the alias-reduced unknowns into values (pattern j1_*).
   int jacobian_blocks(double t, const double* y, const double* yp, double cj, double* values) const;
 

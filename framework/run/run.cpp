@@ -55,7 +55,9 @@ RunResult run_system(System& system, const SolverOptions& options) {
       if (slot[i] >= 0) row[i + 1] = integrals[slot[i]];
     out.table.add_row(std::move(row));
   };
-  out.solver = simulate(system, options, output, quad.integrands.empty() ? nullptr : &quad);
+  SolverOptions opt = options;
+  opt.outputs_read_yp = sampled_set.reads_yp;
+  out.solver = simulate(system, opt, output, quad.integrands.empty() ? nullptr : &quad);
   return out;
 }
 

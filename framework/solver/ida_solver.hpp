@@ -23,6 +23,9 @@ struct SolverOptions {
   double output_interval = 1e-3;
   double max_step = 0.0;  // 0: no limit
   long max_steps = 1000000;
+  // Whether the outputs read y' (run_system sets it from its ProbeSet):
+  // without, the output rows skip interpolating y'.
+  bool outputs_read_yp = true;
 };
 
 struct SolverStats {
