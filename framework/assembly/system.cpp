@@ -1297,7 +1297,10 @@ double nominal_floor(const std::string& unit) {
   return it == floors.end() ? 1.0 : it->second;
 }
 
-std::string System::row_name(int row) const {
+std::string System::row_name(int ida_row) const {
+  int row = ida_row;  // the full row behind IDA's row
+  for (const auto& [r, q] : kept_full_rows_)
+    if (q == ida_row) row = r;
   for (const auto& b : blocks_)
     if (row >= b->row0 && row < b->row0 + b->n_rows)
       return row - b->row0 < static_cast<int>(b->row_names.size()) ? b->row_names[row - b->row0] : b->label;

@@ -159,7 +159,7 @@ class System {
   // Typical magnitude of each variable, for absolute tolerances.
   const std::vector<double>& nominal() const { return nominal_; }
   const std::vector<std::string>& variable_names() const { return var_names_; }
-  // The equation behind residual row `row` ("component: equation name").
+  // The equation behind IDA's residual row `row` ("component: equation name").
   std::string row_name(int row) const;
 
   void start_values(std::vector<double>& y0, std::vector<double>& yp0) const;
