@@ -13,7 +13,9 @@ namespace pneumo::components {
 template <class T>
 T enthalpy_inflow(const T& m_flow, const T& T_in, const T& T_own, const GasModel& gas) {
   const double eps = gas.m_flow_small;
-  return gas.cp() * (smooth_pos(m_flow, eps) * T_in - smooth_pos(T(-m_flow), eps) * T_own);
+  T in, out;
+  smooth_pos_pair(m_flow, eps, in, out);
+  return gas.cp() * (in * T_in - out * T_own);
 }
 
 }  // namespace pneumo::components

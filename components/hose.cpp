@@ -119,7 +119,9 @@ class Hose final : public ComponentT<Hose> {
       const T& w = e.var(var_w(j));
       const T& T_left = j == 0 ? a.T_in : Tg[j - 1];
       const T& T_right = j == N_ ? b.T_in : Tg[j];
-      return T(gas.cp() * (smooth_pos(w, gas.m_flow_small) * T_left - smooth_pos(T(-w), gas.m_flow_small) * T_right));
+      T right, left;
+      smooth_pos_pair(w, gas.m_flow_small, right, left);
+      return T(gas.cp() * (right * T_left - left * T_right));
     };
     r[0] = a.m_flow - e.var(var_w(0));
     r[1] = b.m_flow + e.var(var_w(N_));

@@ -27,6 +27,16 @@ inline T smooth_pos(const T& x, double eps) {
   return select(value(x) >= 0.0, T(0.5 * (x + s)), T(0.5 * eps * eps / (s - x)));
 }
 
+// smooth_pos(x) and smooth_pos(-x) together, with one smooth_abs (the same
+// values, bit for bit: sqrt((-x)^2 + eps^2) is sqrt(x^2 + eps^2)).
+template <class T>
+inline void smooth_pos_pair(const T& x, double eps, T& pos, T& neg) {
+  const T s = smooth_abs(x, eps);
+  const T mx = -x;
+  pos = select(value(x) >= 0.0, T(0.5 * (x + s)), T(0.5 * eps * eps / (s - x)));
+  neg = select(value(mx) >= 0.0, T(0.5 * (mx + s)), T(0.5 * eps * eps / (s - mx)));
+}
+
 // sign(x) regularised with tanh over the scale eps.
 template <class T>
 inline T smooth_sign(const T& x, double eps) {
