@@ -114,6 +114,34 @@ void gather(const Block& b, const double* y, const double* yp, double* ly, doubl
   }
 }
 
+// A block's rows at one point, with the Pattern scalar (which locals each
+// row reads, and which of them nonlinearly) and with Dual numbers, one
+// direction per local (dF/d local, times the local's alias sign). y and yp
+// are the unknowns the blocks read (after alias elimination).
+void evaluate_structure(const Block& b, double t, const double* y, const double* yp, const EvalContext& ctx,
+                        std::vector<Pattern>& pr, std::vector<Dual>& dr) {
+  const int nl = static_cast<int>(b.vars.size());
+  std::vector<Pattern> py(nl), pyp(nl);
+  std::vector<Dual> dy(nl), dyp(nl);
+  for (int i = 0; i < nl; ++i) {
+    const int g = b.vars[i];
+    const double v = g >= 0 ? b.scale[i] * y[g] : b.offset[i];
+    const double vp = g >= 0 ? b.scale[i] * yp[g] : 0.0;
+    py[i] = Pattern(v);
+    pyp[i] = Pattern(vp);
+    if (g >= 0) {
+      py[i].deps.set(i);
+      pyp[i].deps.set(kMaxLocal + i);
+    }
+    dy[i] = Dual::variable(v, i, g >= 0 ? b.scale[i] : 0.0, nl);
+    dyp[i] = Dual(vp);
+  }
+  pr.assign(std::max(1, b.n_rows), Pattern(0.0));
+  dr.assign(std::max(1, b.n_rows), Dual(0.0));
+  b.residual(t, py.data(), pyp.data(), pr.data(), ctx);
+  b.residual(t, dy.data(), dyp.data(), dr.data(), ctx);
+}
+
 std::string node_text(const Circuit& c, const std::vector<PortId>& ports) {
   std::string s = "{";
   for (std::size_t i = 0; i < ports.size(); ++i) s += (i ? ", " : "") + c.port_name(ports[i]);
@@ -910,8 +938,8 @@ void System::eliminate_explicit() {
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   bool invalid = false;
   EvalContext ctx{&circuit_.gas, modes_.data(), &invalid};
-  std::vector<Pattern> py(kMaxLocal), pyp(kMaxLocal), pr(kMaxLocal * 2);
-  std::vector<Dual> dyv(kMaxLocal), dypv(kMaxLocal), dr(kMaxLocal * 2);
+  std::vector<Pattern> pr;
+  std::vector<Dual> dr;
   for (int pass = 0; pass < 3; ++pass) {
     std::vector<double> y0(start_value_), yp0(m, 0.0);
     if (pass > 0)
@@ -923,23 +951,7 @@ void System::eliminate_explicit() {
       const Block& b = *bp;
       if (b.all_eliminated) continue;
       const int nl = static_cast<int>(b.vars.size());
-      for (int i = 0; i < nl; ++i) {
-        const int g = b.vars[i];
-        const double v = g >= 0 ? b.scale[i] * y0[g] : b.offset[i];
-        const double vp = g >= 0 ? b.scale[i] * yp0[g] : 0.0;
-        py[i] = Pattern(v);
-        pyp[i] = Pattern(vp);
-        if (g >= 0) {
-          py[i].deps.set(i);
-          pyp[i].deps.set(kMaxLocal + i);
-        }
-        dyv[i] = Dual::variable(v, i, g >= 0 ? b.scale[i] : 0.0, nl);
-        dypv[i] = Dual(vp);
-      }
-      if (static_cast<int>(pr.size()) < b.n_rows) pr.resize(b.n_rows), dr.resize(b.n_rows);
-      std::fill_n(pr.begin(), b.n_rows, Pattern(0.0));
-      b.residual(kCheckTimes[pass], py.data(), pyp.data(), pr.data(), ctx);
-      b.residual(kCheckTimes[pass], dyv.data(), dypv.data(), dr.data(), ctx);
+      evaluate_structure(b, kCheckTimes[pass], y0.data(), yp0.data(), ctx, pr, dr);
       for (int k = 0; k < b.n_rows; ++k) {
         const int q = row_of_[b.row0 + k];
         if (q < 0) continue;
@@ -1203,25 +1215,11 @@ void System::eliminate_explicit() {
 void System::verify_explicit(int block, double t) const {
   const Block& b = *blocks_[block];
   const int nl = static_cast<int>(b.vars.size());
-  std::vector<Pattern> py(nl), pyp(nl), pr(std::max(1, b.n_rows));
-  std::vector<Dual> dy(nl), dyp(nl), dr(std::max(1, b.n_rows));
-  for (int i = 0; i < nl; ++i) {
-    const int g = b.vars[i];
-    const double v = g >= 0 ? b.scale[i] * yw_[g] : b.offset[i];
-    const double vp = g >= 0 ? b.scale[i] * ypw_[g] : 0.0;
-    py[i] = Pattern(v);
-    pyp[i] = Pattern(vp);
-    if (g >= 0) {
-      py[i].deps.set(i);
-      pyp[i].deps.set(kMaxLocal + i);
-    }
-    dy[i] = Dual::variable(v, i, g >= 0 ? b.scale[i] : 0.0, nl);
-    dyp[i] = Dual(vp);
-  }
   bool invalid = false;
   EvalContext ctx{&circuit_.gas, modes_.data(), &invalid};
-  b.residual(t, py.data(), pyp.data(), pr.data(), ctx);
-  b.residual(t, dy.data(), dyp.data(), dr.data(), ctx);
+  std::vector<Pattern> pr;
+  std::vector<Dual> dr;
+  evaluate_structure(b, t, yw_.data(), ypw_.data(), ctx, pr, dr);
   for (const auto& x : explicit_) {
     if (x.row < b.row0 || x.row >= b.row0 + b.n_rows) continue;
     const int k = x.row - b.row0;
