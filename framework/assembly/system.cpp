@@ -1348,6 +1348,19 @@ int System::jacobian(double t, const double* y, const double* yp, double cj, dou
   if (explicit_.empty()) return jacobian_blocks(t, y, yp, cj, values);
   const bool invalid = expand(t, y, yp);
   const int flag = jacobian_blocks(t, yw_.data(), ypw_.data(), cj, j1_values_.data());
+  // Adds a dF/d(column c) entry to the row being reduced (scatter_, over
+  // IDA's columns): directly for an unknown of IDA, through dc/dy for an
+  // explicit one.
+  auto accumulate = [&](double a, int c) {
+    if (a == 0.0) return;
+    const int j = explicit_of_m_[c];
+    if (j < 0) {
+      scatter_[m_to_ida_[c]] += a;
+      return;
+    }
+    const auto& xj = explicit_[j];
+    for (int k = 0; k < xj.dn; ++k) scatter_[d_cols_[xj.d0 + k]] += a * d_values_[xj.d0 + k];
+  };
   // d var / d y_IDA of each explicit unknown, in level order:
   //   coef dvar + sum_c F_row,c dc = 0, dc of an explicit c known already.
   for (const auto& x : explicit_) {
@@ -1366,14 +1379,7 @@ int System::jacobian(double t, const double* y, const double* yp, double cj, dou
         }
         continue;
       }
-      if (a == 0.0) continue;
-      const int j = explicit_of_m_[c];
-      if (j < 0) {
-        scatter_[m_to_ida_[c]] += a;
-        continue;
-      }
-      const auto& xj = explicit_[j];
-      for (int k = 0; k < xj.dn; ++k) scatter_[d_cols_[xj.d0 + k]] += a * d_values_[xj.d0 + k];
+      accumulate(a, c);
     }
     for (int k = 0; k < x.dn; ++k) d_values_[x.d0 + k] = -scatter_[d_cols_[x.d0 + k]] / x.coef;
   }
@@ -1381,17 +1387,7 @@ int System::jacobian(double t, const double* y, const double* yp, double cj, dou
   std::fill(values, values + nnz(), 0.0);
   for (const auto& kr : kept_rows_) {
     for (const auto& [c, p] : kr.out) scatter_[c] = 0.0;
-    for (const auto& [p, c] : kr.entries) {
-      const double a = j1_values_[p];
-      if (a == 0.0) continue;
-      const int j = explicit_of_m_[c];
-      if (j < 0) {
-        scatter_[m_to_ida_[c]] += a;
-        continue;
-      }
-      const auto& xj = explicit_[j];
-      for (int k = 0; k < xj.dn; ++k) scatter_[d_cols_[xj.d0 + k]] += a * d_values_[xj.d0 + k];
-    }
+    for (const auto& [p, c] : kr.entries) accumulate(j1_values_[p], c);
     for (const auto& [c, p] : kr.out) values[p] = scatter_[c];
   }
   return invalid || flag ? 1 : 0;
