@@ -1152,13 +1152,6 @@ void System::eliminate_explicit() {
   }
   for (int q = 0; q < m; ++q)
     if (!used[q] && row_block[q] >= 0) keeps[row_block[q]] = 1;
-  if (getenv("PNEUMO_DEBUG_EXPLICIT"))
-    for (std::size_t L = 0; L < stages_.size(); ++L)
-      for (const auto& [bi, list] : stages_[L]) {
-        fprintf(stderr, "stage %zu block %s:", L + 1, blocks_[bi]->label.c_str());
-        for (int e : list) fprintf(stderr, " %s", var_names_[explicit_[e].var].c_str());
-        fprintf(stderr, "\n");
-      }
   final_blocks_.clear();
   for (std::size_t bi = 0; bi < blocks_.size(); ++bi)
     if (keeps[bi]) final_blocks_.push_back(static_cast<int>(bi));
