@@ -1,5 +1,7 @@
 #include "framework/solver/ida_solver.hpp"
 
+#include "framework/solver/serial_vector_ops.hpp"
+
 // IDAS (not IDA): the same integrator plus quadratures, which integrate
 // requested outputs (energy accounts) to the solver's accuracy.
 #include <idas/idas.h>
@@ -147,11 +149,12 @@ SolverResult simulate(System& system, const SolverOptions& opt, const OutputFn& 
 
   VectorPtr y(N_VNew_Serial(n, context.ctx)), yp(N_VNew_Serial(n, context.ctx));
   VectorPtr atol(N_VNew_Serial(n, context.ctx)), id(N_VNew_Serial(n, context.ctx));
-  // Fused vector operations: IDA's predictor, interpolation (every output
-  // and root check) and error norms then combine k vectors in one pass
-  // instead of k - 1 N_VLinearSum calls; IDA clones y for its own vectors.
-  N_VEnableFusedOps_Serial(y.get(), SUNTRUE);
-  N_VEnableFusedOps_Serial(yp.get(), SUNTRUE);
+  // Compiled vector kernels (serial_vector_ops.hpp: Debian's serial N_Vector
+  // is built unoptimised) with the fused operations: IDA's predictor,
+  // interpolation and error norms combine k vectors in one pass. IDA clones
+  // y for its own vectors, which inherit the kernels.
+  use_compiled_serial_ops(y.get());
+  use_compiled_serial_ops(yp.get());
   std::vector<double> y0, yp0;
   system.reset_modes();
   system.start_values(y0, yp0);
