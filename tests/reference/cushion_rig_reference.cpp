@@ -465,7 +465,8 @@ double initial_position(const RigParams& params) {
     return initial_state(params, M)[IX];
 }
 
-RigResult simulate(const RigParams& P, double t_end, double rtol, double output_interval) {
+RigResult simulate(const RigParams& P, double t_end, double rtol, double output_interval,
+                   void (*prepare_vector)(_generic_N_Vector*)) {
     if (!(t_end > 0.0) || !(output_interval > 0.0) || !(rtol > 0.0))
         throw std::runtime_error("pneumo_reference::simulate: invalid t_end/rtol/output_interval");
 
@@ -483,6 +484,8 @@ RigResult simulate(const RigParams& P, double t_end, double rtol, double output_
     check_ptr(y.get(), "N_VNew_Serial");
     check_ptr(yp.get(), "N_VNew_Serial");
     check_ptr(atol.get(), "N_VNew_Serial");
+    if (prepare_vector)
+        for (N_Vector v : {y.get(), yp.get(), atol.get()}) prepare_vector(v);
     double* yd = N_VGetArrayPointer(y.get());
     double* ypd = N_VGetArrayPointer(yp.get());
     double* ad = N_VGetArrayPointer(atol.get());

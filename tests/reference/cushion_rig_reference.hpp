@@ -39,6 +39,8 @@
 #include <utility>
 #include <vector>
 
+struct _generic_N_Vector;  // SUNDIALS' N_Vector
+
 namespace pneumo_reference {
 
 struct RigParams {
@@ -115,8 +117,12 @@ struct RigResult {
 // itself if it is not on the grid). Absolute tolerances are rtol times a
 // nominal scale per variable (x: 0.01 m, v: 0.1 m/s, p: 1e5 Pa, T: 300 K).
 // Throws std::runtime_error (with the IDA flag name) on failure.
+// `prepare_vector`, if given, is called on each vector before IDA sees it
+// (IDA's own vectors are clones of y): the benchmark passes pneumo's
+// compiled vector kernels through it to time the floor like for like; the
+// reference itself shares no code with pneumo.
 RigResult simulate(const RigParams& params, double t_end = 1.2, double rtol = 1e-6,
-                   double output_interval = 1e-3);
+                   double output_interval = 1e-3, void (*prepare_vector)(_generic_N_Vector*) = nullptr);
 
 // Cushion throttle conductance C(z_EC) in dm^3/(s bar) (piecewise-linear table).
 double cushion_throttle_C(const RigParams& params, double z_EC);
