@@ -304,7 +304,7 @@ SolverResult simulate(System& system, const SolverOptions& opt, const OutputFn& 
   // root finding does the same but interpolates y(t_n) once more per step.
   const int nr = system.n_roots();
   std::vector<int> root_info(std::max(1, nr));
-  std::vector<double> g_lo(nr), g_hi(nr), g_c(nr);
+  std::vector<double> g_lo(nr), g_hi(nr), g_c(nr), t_of(nr);
   double t_lo = t;
   VectorPtr y_ev(N_VClone(y.get())), yp_ev(N_VClone(y.get()));
   auto roots_at = [&](double tr, N_Vector yy, N_Vector yyp, std::vector<double>& g) {
@@ -336,7 +336,7 @@ SolverResult simulate(System& system, const SolverOptions& opt, const OutputFn& 
     bool any = false;
     t_root = t_hi;
     std::fill(root_info.begin(), root_info.end(), 0);
-    std::vector<double> t_of(nr, std::numeric_limits<double>::infinity());
+    std::fill(t_of.begin(), t_of.end(), std::numeric_limits<double>::infinity());
     for (int i = 0; i < nr; ++i) {
       if (g_lo[i] == 0.0 || !crosses(g_lo[i], g_hi[i])) continue;
       double a = t_lo, fa = g_lo[i], b = t_hi, fb = g_hi[i];
