@@ -18,6 +18,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <ctime>
+#include <sys/resource.h>
 #include <string>
 #include <vector>
 
@@ -180,5 +181,12 @@ int main(int argc, char** argv) {
   std::printf("per residual evaluation: framework %.2f us, floor %.2f us (whole run / residual evaluations)\n",
               1e3 * solve.median / std::max(1L, s.residual_evals),
               1e3 * floor.median / std::max(1L, rs.residual_evals));
+  // Memory: the results table of one run, and the whole process's peak.
+  const std::size_t table_bytes = first.table.rows.size() * (first.table.names.size() * sizeof(double) + 24);
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  std::printf("memory: results of one run %zu rows x %zu columns (~%.0f kB); peak resident set of this process "
+              "%.1f MB\n",
+              first.table.rows.size(), first.table.names.size(), table_bytes / 1024.0, usage.ru_maxrss / 1024.0);
   return 0;
 }
