@@ -71,6 +71,9 @@ void print_component(const ComponentInfo& info, std::ostream& out) {
 void print_stats(const SolverResult& r, double seconds, std::ostream& out) {
   const auto& s = r.stats;
   out << "solver: IDA + KLU, " << s.variables << " variables, " << s.nonzeros << " Jacobian nonzeros\n"
+      << "  (the netlist's " << s.netlist_variables << " unknowns: " << s.explicit_variables
+      << " solved inside the residual, " << s.netlist_variables - s.explicit_variables - s.variables
+      << " substituted as aliases or constants)\n"
       << "  steps " << s.steps << ", residual evaluations " << s.residual_evals << ", Jacobian evaluations "
       << s.jacobian_evals << "\n"
       << "  nonlinear iterations " << s.nonlinear_iterations << ", convergence failures " << s.nonlinear_failures

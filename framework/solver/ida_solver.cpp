@@ -474,6 +474,8 @@ SolverResult simulate(System& system, const SolverOptions& opt, const OutputFn& 
   auto& s = result.stats;
   s.pattern_misses = system.pattern_misses();
   s.variables = n;
+  s.netlist_variables = system.full_size();
+  s.explicit_variables = system.explicit_size();
   s.nonzeros = system.nnz();
   return result;
 }

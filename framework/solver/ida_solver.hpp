@@ -38,7 +38,9 @@ struct SolverStats {
   long root_evals = 0;
   long reinitialisations = 0;
   long pattern_misses = 0;
-  int variables = 0;
+  int variables = 0;           // unknowns IDA integrates
+  int netlist_variables = 0;   // unknowns of the netlist's equations
+  int explicit_variables = 0;  // of those, solved inside the residual
   long nonzeros = 0;
 };
 
