@@ -536,17 +536,11 @@ void System::build_pattern() {
   dep_yp_.assign(n_, {});
   std::vector<std::set<int>> sy(n_), syp(n_);
   std::mt19937 rng(12345);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
   // Evaluate at the start point and at two perturbed points; the union of
   // the dependencies is the structural pattern.
   for (int pass = 0; pass < 3; ++pass) {
-    std::vector<double> y0(n_), yp0(n_);
-    start_values(y0, yp0);
-    if (pass > 0)
-      for (int i = 0; i < n_; ++i) {
-        y0[i] += 0.05 * nominal_[i] * u(rng) + 0.01 * y0[i] * u(rng);
-        yp0[i] = 0.1 * nominal_[i] * u(rng);
-      }
+    std::vector<double> y0, yp0;
+    check_point(pass, rng, y0, yp0);
     bool invalid = false;
     EvalContext ctx{&circuit_.gas, modes_.data(), &invalid};
     std::vector<Pattern> ly(kMaxLocal), lyp(kMaxLocal), r(kMaxLocal * 2);
@@ -647,17 +641,11 @@ void System::check_structure() const {
       if (match_row[r] >= 0) stack.push_back(match_row[r]);
     }
   }
-  auto row_name = [&](int r) {
-    for (const auto& b : blocks_)
-      if (r >= b->row0 && r < b->row0 + b->n_rows)
-        return b->row_names[r - b->row0] + " [" + b->where.to_string() + "]";
-    return std::string("?");
-  };
   std::string msg = "the circuit's equations are structurally singular (or of index > 1): " +
                     std::to_string(free_rows.size()) + " equation(s) cannot be paired with an unknown.\n";
   msg += "  over-determined - these " + std::to_string(over_rows.size()) + " equations constrain only " +
          std::to_string(over_cols.size()) + " unknown(s):\n";
-  for (int r : over_rows) msg += "    equation  " + row_name(r) + "\n";
+  for (int r : over_rows) msg += "    equation  " + equation_name(r) + "\n";
   for (int c : over_cols) msg += "    unknown   " + var_names_[c] + "\n";
   msg += "  under-determined - these unknowns are not fixed by any remaining equation:\n";
   for (int c : under_cols) msg += "    unknown   " + var_names_[c] + "\n";
@@ -717,18 +705,12 @@ void System::eliminate_aliases() {
   // Check linearity at the start point and two perturbed points.
   constexpr double kCheckTimes[3] = {0.0, 0.3711, 97.13};
   std::mt19937 rng(54321);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
   bool invalid = false;
   EvalContext ctx{&circuit_.gas, modes_.data(), &invalid};
   std::vector<Dual> ly(kMaxLocal), lyp(kMaxLocal), res(kMaxLocal * 2);
   for (int pass = 0; pass < 3 && !cand.empty(); ++pass) {
     std::vector<double> y0, yp0;
-    start_values(y0, yp0);
-    if (pass > 0)
-      for (int i = 0; i < n; ++i) {
-        y0[i] += 0.05 * nominal_[i] * u(rng) + 0.01 * y0[i] * u(rng);
-        yp0[i] = 0.1 * nominal_[i] * u(rng);
-      }
+    check_point(pass, rng, y0, yp0);
     const Block* evaluated = nullptr;
     for (auto& c : cand) {
       const Block& b = *c.block;
@@ -935,18 +917,13 @@ void System::eliminate_explicit() {
   }
   constexpr double kCheckTimes[3] = {0.0, 0.3711, 97.13};
   std::mt19937 rng(24680);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
   bool invalid = false;
   EvalContext ctx{&circuit_.gas, modes_.data(), &invalid};
   std::vector<Pattern> pr;
   std::vector<Dual> dr;
   for (int pass = 0; pass < 3; ++pass) {
-    std::vector<double> y0(start_value_), yp0(m, 0.0);
-    if (pass > 0)
-      for (int i = 0; i < m; ++i) {
-        y0[i] += 0.05 * nominal_[i] * u(rng) + 0.01 * y0[i] * u(rng);
-        yp0[i] = 0.1 * nominal_[i] * u(rng);
-      }
+    std::vector<double> y0, yp0;
+    check_point(pass, rng, y0, yp0);
     for (const auto& bp : blocks_) {
       const Block& b = *bp;
       if (b.all_eliminated) continue;
@@ -1092,18 +1069,23 @@ void System::eliminate_explicit() {
     for (long p = j1_col_ptr_[c]; p < j1_col_ptr_[c + 1]; ++p) j1_rows[j1_row_idx_[p]].push_back({p, c});
   // Symbolic Schur complement: d var / d y_IDA of each explicit unknown.
   std::vector<std::vector<int>> d_pattern(explicit_.size());
-  d_cols_.clear();
-  for (std::size_t e = 0; e < explicit_.size(); ++e) {
-    auto& x = explicit_[e];
-    const int q = row_of_[x.row];
-    x.entries = j1_rows[q];
+  // IDA's columns a row reaches through its entries (as accumulate() in
+  // jacobian()), leaving out column `skip`.
+  auto ida_columns = [&](const std::vector<std::pair<long, int>>& entries, int skip) {
     std::set<int> cols;
-    for (const auto& [p, c] : x.entries) {
-      if (c == x.var) continue;
+    for (const auto& [p, c] : entries) {
+      if (c == skip) continue;
       const int j = explicit_of_m_[c];
       if (j >= 0) cols.insert(d_pattern[j].begin(), d_pattern[j].end());
       else cols.insert(m_to_ida_[c]);
     }
+    return cols;
+  };
+  d_cols_.clear();
+  for (std::size_t e = 0; e < explicit_.size(); ++e) {
+    auto& x = explicit_[e];
+    x.entries = j1_rows[row_of_[x.row]];
+    const std::set<int> cols = ida_columns(x.entries, x.var);
     d_pattern[e].assign(cols.begin(), cols.end());
     x.d0 = static_cast<int>(d_cols_.size());
     x.dn = static_cast<int>(cols.size());
@@ -1114,12 +1096,7 @@ void System::eliminate_explicit() {
   std::vector<double> id(n, 0.0);
   for (int q = 0; q < m; ++q) {
     if (used[q]) continue;
-    std::set<int> cs;
-    for (const auto& [p, c] : j1_rows[q]) {
-      const int j = explicit_of_m_[c];
-      if (j >= 0) cs.insert(d_pattern[j].begin(), d_pattern[j].end());
-      else cs.insert(m_to_ida_[c]);
-    }
+    const std::set<int> cs = ida_columns(j1_rows[q], -1);
     for (int c : cs) cols[c].insert(ida_row_of_m[q]);
     kept_cols[q].assign(cs.begin(), cs.end());
     for (int v : dyp[q]) id[m_to_ida_[v]] = 1.0;
@@ -1136,15 +1113,13 @@ void System::eliminate_explicit() {
   }
 
   // Evaluation plan: per level the blocks giving its unknowns; at the end
-  // the blocks with rows for IDA (and components with neither, for the
-  // alias checks).
+  // the blocks with rows for IDA.
   int max_level = 0;
   for (const auto& x : explicit_) max_level = std::max(max_level, x.level);
   stages_.assign(max_level, {});
-  std::vector<char> gives(blocks_.size(), 0), keeps(blocks_.size(), 0);
+  std::vector<char> keeps(blocks_.size(), 0);
   for (std::size_t e = 0; e < explicit_.size(); ++e) {
     const int bi = row_block[row_of_[explicit_[e].row]];
-    gives[bi] = 1;
     auto& stage = stages_[explicit_[e].level - 1];
     auto it = std::find_if(stage.begin(), stage.end(), [&](const auto& s) { return s.first == bi; });
     if (it == stage.end()) stage.push_back({bi, {static_cast<int>(e)}});
@@ -1186,12 +1161,7 @@ void System::eliminate_explicit() {
     std::vector<double> g(b.component->info().roots);
     double ly[kMaxLocal], lyp[kMaxLocal];
     for (int pass = 0; pass < 3 && !roots_read_explicit_[bi]; ++pass) {
-      for (std::size_t i = 0; i < b.vars.size(); ++i) {
-        const int v = b.vars[i];
-        const double y0 = v >= 0 ? b.scale[i] * m_start_[v] * (1.0 + 0.01 * pass * u(rng2)) : b.offset[i];
-        ly[i] = v >= 0 && explicit_of_m_[v] >= 0 ? std::numeric_limits<double>::quiet_NaN() : y0;
-        lyp[i] = 0.0;
-      }
+      poisoned_locals(b, pass, rng2, true, false, ly, lyp);
       Eval<double> e(*b.component, 0.1 * pass, ly, lyp, modes_.data() + b.mode0, b.connected.get(), circuit_.gas,
                      &invalid);
       b.component->roots(e, g.data());
@@ -1229,19 +1199,25 @@ void System::verify_explicit(int block, double t) const {
       }
     }
     if (ok && c == x.coef) continue;
-    throw std::runtime_error("equation '" + b.row_names[k] + "' [" + b.where.to_string() + "] of " + b.label +
-                             ", solved explicitly for '" + m_names_[x.var] +
+    throw std::runtime_error("equation '" + equation_name(x.row) + "' of " + b.label + ", solved explicitly for '" + m_names_[x.var] +
                              "' at assembly, no longer gives it linearly with the same coefficient after an event "
                              "changed the component's modes; assemble with eliminate_explicit = false");
   }
 }
 
-void System::load_states(const double* y, const double* yp) const {
-  for (int i = 0; i < n_; ++i) {
-    yw_[ida_to_m_[i]] = y[i];
-    ypw_[ida_to_m_[i]] = yp[i];
+void System::block_inputs(double t, const double*& y, const double*& yp, bool read_explicit) const {
+  if (explicit_.empty()) return;
+  if (read_explicit) {
+    expand(t, y, yp);
+  } else {
+    for (int i = 0; i < n_; ++i) {
+      yw_[ida_to_m_[i]] = y[i];
+      ypw_[ida_to_m_[i]] = yp[i];
+    }
+    cache_valid_ = false;  // yw_'s states no longer match the cached expansion
   }
-  cache_valid_ = false;
+  y = yw_.data();
+  yp = ypw_.data();
 }
 
 bool System::expand(double t, const double* y, const double* yp) const {
@@ -1274,6 +1250,28 @@ bool System::expand(double t, const double* y, const double* yp) const {
   return invalid;
 }
 
+void System::check_point(int pass, std::mt19937& rng, std::vector<double>& y0, std::vector<double>& yp0) const {
+  start_values(y0, yp0);
+  if (pass == 0) return;
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int i = 0; i < n_; ++i) {
+    y0[i] += 0.05 * nominal_[i] * u(rng) + 0.01 * y0[i] * u(rng);
+    yp0[i] = 0.1 * nominal_[i] * u(rng);
+  }
+}
+
+void System::poisoned_locals(const Block& b, int pass, std::mt19937& rng, bool nan_explicit, bool nan_yp, double* ly,
+                             double* lyp) const {
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (std::size_t i = 0; i < b.vars.size(); ++i) {
+    const int v = b.vars[i];
+    const double y0 = v >= 0 ? b.scale[i] * m_start_[v] * (1.0 + 0.01 * pass * u(rng)) : b.offset[i];
+    ly[i] = nan_explicit && v >= 0 && explicit_of_m_[v] >= 0 ? nan : y0;
+    lyp[i] = nan_yp ? nan : 0.0;
+  }
+}
+
 void System::start_values(std::vector<double>& y0, std::vector<double>& yp0) const {
   y0 = start_value_;
   yp0.assign(n_, 0.0);
@@ -1286,6 +1284,13 @@ double nominal_floor(const std::string& unit) {
       {"m", 1e-3}, {"m/s", 1e-3}, {"N", 1e-1}, {"m3", 1e-9}, {"1", 1e-3}};
   auto it = floors.find(unit);
   return it == floors.end() ? 1.0 : it->second;
+}
+
+std::string System::equation_name(int row) const {
+  for (const auto& b : blocks_)
+    if (row >= b->row0 && row < b->row0 + b->n_rows)
+      return b->row_names[row - b->row0] + " [" + b->where.to_string() + "]";
+  return "?";
 }
 
 std::string System::row_name(int ida_row) const {
@@ -1323,10 +1328,7 @@ int System::residual(double t, const double* y, const double* yp, double* F) con
   for (int e : checked_aliases_) {
     const int r = eliminated_[e];
     if (std::abs(Ff[r]) > 1e-10 * eliminated_nominal_[e] && std::isfinite(Ff[r])) {
-      std::string name = "?";
-      for (const auto& b : blocks_)
-        if (r >= b->row0 && r < b->row0 + b->n_rows) name = b->row_names[r - b->row0] + " [" + b->where.to_string() + "]";
-      throw std::runtime_error("equation '" + name + "', substituted as an alias at assembly, no longer holds at t = " +
+      throw std::runtime_error("equation '" + equation_name(r) + "', substituted as an alias at assembly, no longer holds at t = " +
                                std::to_string(t) + " (residual " + std::to_string(Ff[r]) +
                                "); a component must not change such an equation at an event");
     }
@@ -1362,11 +1364,7 @@ int System::jacobian(double t, const double* y, const double* yp, double cj, dou
       const double a = j1_values_[p];
       if (c == x.var) {
         if (std::abs(a - x.coef) > 1e-9 * std::abs(x.coef)) {
-          std::string name = "?";
-          for (const auto& b : blocks_)
-            if (x.row >= b->row0 && x.row < b->row0 + b->n_rows)
-              name = b->row_names[x.row - b->row0] + " [" + b->where.to_string() + "]";
-          throw std::runtime_error("equation '" + name + "', solved explicitly at assembly (linear, dF/dy " +
+          throw std::runtime_error("equation '" + equation_name(x.row) + "', solved explicitly at assembly (linear, dF/dy " +
                                    std::to_string(x.coef) + "), now has dF/dy " + std::to_string(a) + " at t = " +
                                    std::to_string(t) + "; assemble with eliminate_explicit = false");
         }
@@ -1477,14 +1475,7 @@ void System::jacobian_parts(double t, const double* y, const double* yp, std::ve
 }
 
 void System::roots(double t, const double* y, const double* yp, double* g) const {
-  if (!explicit_.empty() && !any_roots_read_explicit_) {
-    load_states(y, yp);  // the explicit unknowns keep stale values nobody reads
-    y = yw_.data();
-    yp = ypw_.data();
-  } else {
-    y = block_y(t, y, yp);
-    yp = block_yp(yp);
-  }
+  block_inputs(t, y, yp, any_roots_read_explicit_);
   bool invalid = false;
   double ly[kMaxLocal], lyp[kMaxLocal];
   for (const auto& b : blocks_) {
@@ -1517,8 +1508,7 @@ void System::after_event(const Block& b, const std::vector<double>& modes_before
 }
 
 bool System::handle_time_event(double t, const double* y, const double* yp, std::vector<EventLogEntry>& log) {
-  y = block_y(t, y, yp);
-  yp = block_yp(yp);
+  block_inputs(t, y, yp);
   bool changed = false;
   bool invalid = false;
   double ly[kMaxLocal], lyp[kMaxLocal];
@@ -1541,8 +1531,7 @@ bool System::handle_time_event(double t, const double* y, const double* yp, std:
 
 bool System::handle_roots(double t, const double* y, const double* yp, const int* root_info,
                           std::vector<EventLogEntry>& log) {
-  y = block_y(t, y, yp);
-  yp = block_yp(yp);
+  block_inputs(t, y, yp);
   bool changed = false;
   bool invalid = false;
   double ly[kMaxLocal], lyp[kMaxLocal];
@@ -1567,8 +1556,7 @@ bool System::handle_roots(double t, const double* y, const double* yp, const int
 }
 
 double System::probe(const Probe& p, double t, const double* y, const double* yp) const {
-  y = block_y(t, y, yp);
-  yp = block_yp(yp);
+  block_inputs(t, y, yp);
   const Block& b = *blocks_[p.component];  // component blocks come first, in order
   if (p.kind == Probe::Kind::local) {
     const int g = b.vars[p.index];
@@ -1613,21 +1601,13 @@ ProbeSet System::probe_set(const std::vector<Probe>& probes) const {
     explicit_read |= v >= 0 && explicit_of_m_[v] >= 0;
   }
   std::mt19937 rng(97531);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  const double nan = std::numeric_limits<double>::quiet_NaN();
   bool invalid = false;
   double ly[kMaxLocal], lyp[kMaxLocal];
   for (int pass = 0; pass < 3; ++pass)
     for (int poison = 0; poison < 2; ++poison)
       for (const auto& g : set.groups) {
         const Block& b = *blocks_[g.component];
-        for (std::size_t i = 0; i < b.vars.size(); ++i) {
-          const int v = b.vars[i];
-          const double y0 = v >= 0 ? b.scale[i] * m_start_[v] * (1.0 + 0.01 * pass * u(rng)) : b.offset[i];
-          const bool is_explicit = v >= 0 && explicit_of_m_[v] >= 0;
-          ly[i] = poison == 0 && is_explicit ? nan : y0;
-          lyp[i] = poison == 1 ? nan : 0.0;
-        }
+        poisoned_locals(b, pass, rng, poison == 0, poison == 1, ly, lyp);
         Eval<double> e(*b.component, 0.1 * pass, ly, lyp, modes_.data() + b.mode0, b.connected.get(), circuit_.gas,
                        &invalid);
         b.component->observe_all(g.observables.data(), static_cast<int>(g.observables.size()), e,
@@ -1642,14 +1622,7 @@ ProbeSet System::probe_set(const std::vector<Probe>& probes) const {
 
 void System::probe_all(const ProbeSet& set, double t, const double* y, const double* yp, double* out) const {
   for (std::size_t i = 0; i < set.locals.size(); ++i) out[set.local_slots[i]] = probe(set.locals[i], t, y, yp);
-  if (set.reads_explicit || explicit_.empty()) {
-    y = block_y(t, y, yp);
-    yp = block_yp(yp);
-  } else {
-    load_states(y, yp);
-    y = yw_.data();
-    yp = ypw_.data();
-  }
+  block_inputs(t, y, yp, set.reads_explicit);
   double ly[kMaxLocal], lyp[kMaxLocal];
   bool invalid = false;
   for (const auto& g : set.groups) {

@@ -15,6 +15,7 @@
 #pragma once
 
 #include <memory>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -200,14 +201,21 @@ class System {
   // unknowns into yw_/ypw_ (cached for the last t and y). Returns true if a
   // component rejected the point.
   bool expand(double t, const double* y, const double* yp) const;
-  const double* block_y(double t, const double* y, const double* yp) const {
-    if (explicit_.empty()) return y;
-    expand(t, y, yp);
-    return yw_.data();
-  }
-  const double* block_yp(const double* yp) const { return explicit_.empty() ? yp : ypw_.data(); }
-  // The states alone into yw_/ypw_ (for readers of no explicit unknown).
-  void load_states(const double* y, const double* yp) const;
+  // Points y and yp at the unknowns the blocks read: expanded, or with
+  // `read_explicit` false the states alone (the explicit unknowns then keep
+  // stale values the caller promises not to read). Unchanged without
+  // explicit elimination.
+  void block_inputs(double t, const double*& y, const double*& yp, bool read_explicit = true) const;
+  // "component: equation [file:line]" of full row `row`.
+  std::string equation_name(int row) const;
+  // The start values (pass 0) or a random perturbation of them (passes 1,
+  // 2): the points at which assembly probes the equations' structure.
+  void check_point(int pass, std::mt19937& rng, std::vector<double>& y0, std::vector<double>& yp0) const;
+  // Block b's locals at the start values (perturbed by pass), with the
+  // explicit unknowns and/or all y' set to NaN: a root function or probe that
+  // stays finite does not read them.
+  void poisoned_locals(const Block& b, int pass, std::mt19937& rng, bool nan_explicit, bool nan_yp, double* ly,
+                       double* lyp) const;
   // AD Jacobian over the alias-reduced unknowns into values (pattern j1_*).
   int jacobian_blocks(double t, const double* y, const double* yp, double cj, double* values) const;
 
