@@ -289,12 +289,20 @@ SolverResult simulate(System& system, const SolverOptions& opt, const OutputFn& 
   // roots up to each tout), for outputs every ms about as many as the steps.
   VectorPtr y_out(N_VClone(y.get())), yp_out(N_VClone(y.get()));
   N_VConst(0.0, yp_out.get());  // stays 0 when the outputs read no y
-  auto emit_interpolated = [&](double t_out) {
-    check(IDAGetDky(ida, t_out, 0, y_out.get()), "IDAGetDky");
-    if (opt.outputs_read_yp) check(IDAGetDky(ida, t_out, 1, yp_out.get()), "IDAGetDky");
+  // y (and y') at tr in the last step, from IDA's interpolant.
+  auto interpolate = [&](double tr, N_Vector yy, N_Vector yyp, bool with_yp) {
+    check(IDAGetDky(ida, tr, 0, yy), "IDAGetDky");
+    if (with_yp) check(IDAGetDky(ida, tr, 1, yyp), "IDAGetDky");
+  };
+  // An output row at t_out inside the last step, from the state yy, yyp there.
+  auto emit_at = [&](double t_out, N_Vector yy, N_Vector yyp) {
     if (n_quad > 0 && IDAGetQuadDky(ida, t_out, 0, q.get()) >= 0)
       std::copy_n(N_VGetArrayPointer(q.get()), n_quad, quad->values->begin());
-    output(t_out, user.physical_y(y_out.get()), user.physical_yp(yp_out.get()));
+    output(t_out, user.physical_y(yy), user.physical_yp(yyp));
+  };
+  auto emit_interpolated = [&](double t_out) {
+    interpolate(t_out, y_out.get(), yp_out.get(), opt.outputs_read_yp);
+    emit_at(t_out, y_out.get(), yp_out.get());
   };
   // State events. The root functions are checked once per step at its end
   // t_n, on the y(t_n) IDA returns; a sign change since the last check is
@@ -311,10 +319,6 @@ SolverResult simulate(System& system, const SolverOptions& opt, const OutputFn& 
     system.roots(tr, user.physical_y(yy), user.physical_yp(yyp), g.data());
     ++result.stats.root_evals;
   };
-  auto interpolate = [&](double tr, N_Vector yy, N_Vector yyp) {
-    check(IDAGetDky(ida, tr, 0, yy), "IDAGetDky");
-    check(IDAGetDky(ida, tr, 1, yyp), "IDAGetDky");
-  };
   // A root function exactly 0 at the start of an interval has no side yet:
   // its first nonzero value sets it, without an event (as IDA does).
   auto crosses = [](double a, double b) { return (a < 0 && b >= 0) || (a > 0 && b <= 0); };
@@ -328,6 +332,19 @@ SolverResult simulate(System& system, const SolverOptions& opt, const OutputFn& 
         if ((*fired)[i] != 0) g_lo[i] = (*fired)[i] > 0 ? std::max(g_lo[i], 1e-300) : std::min(g_lo[i], -1e-300);
   };
   restart_roots(nullptr);
+  // Restart IDA from (t, y, yp) after an event that changed the modes: the
+  // integrals so far, consistent values, the root functions' sides (`fired`:
+  // the roots just handled, counted as crossed).
+  auto restart = [&](const std::vector<int>* fired) -> bool {
+    if (n_quad > 0) check(IDAGetQuadDky(ida, t, 0, q.get()), "IDAGetQuadDky");
+    ++result.stats.reinitialisations;
+    accumulate_stats();
+    check(IDAReInit(ida, t, y.get(), yp.get()), "IDAReInit");
+    if (n_quad > 0) check(IDAQuadReInit(ida, q.get()), "IDAQuadReInit");
+    if (!consistent_ic()) return false;
+    restart_roots(fired);
+    return true;
+  };
   // The earliest crossing in (t_lo, t_hi]; false if none.
   auto locate = [&](double t_hi, double& t_root) -> bool {
     double h_last = 0.0;
@@ -344,7 +361,7 @@ SolverResult simulate(System& system, const SolverOptions& opt, const OutputFn& 
       for (int it = 0; it < 60 && b - a > ttol && fb != 0.0; ++it) {
         double c = b - fb * (b - a) / (fb - fa);
         c = std::min(std::max(c, a + 0.5 * ttol), b - 0.5 * ttol);
-        interpolate(c, y_ev.get(), yp_ev.get());
+        interpolate(c, y_ev.get(), yp_ev.get(), true);
         roots_at(c, y_ev.get(), yp_ev.get(), g_c);
         const double fc = g_c[i];
         if (crosses(fa, fc)) {  // the root lies in (a, c]
@@ -390,27 +407,21 @@ SolverResult simulate(System& system, const SolverOptions& opt, const OutputFn& 
       double t_root = t_ret;
       while (!restarted && locate(t_ret, t_root)) {
         while (k <= n_out && grid_time(k) < t_root - eps_t) emit_interpolated(grid_time(k++));
-        interpolate(t_root, y_ev.get(), yp_ev.get());
+        interpolate(t_root, y_ev.get(), yp_ev.get(), true);
         const std::vector<int> fired = root_info;
         const bool reinit = system.handle_roots(t_root, user.physical_y(y_ev.get()), user.physical_yp(yp_ev.get()),
                                                 fired.data(), result.events);
         if (k <= n_out && std::abs(t_root - grid_time(k)) <= eps_t) ++k;
         if (reinit) {
           // Restart from the event; IDA's step beyond it is discarded.
-          if (n_quad > 0) check(IDAGetQuadDky(ida, t_root, 0, q.get()), "IDAGetQuadDky");
           N_VScale(1.0, y_ev.get(), y.get());
           N_VScale(1.0, yp_ev.get(), yp.get());
           t = t_root;
-          ++result.stats.reinitialisations;
-          accumulate_stats();
-          check(IDAReInit(ida, t, y.get(), yp.get()), "IDAReInit");
-          if (n_quad > 0) check(IDAQuadReInit(ida, q.get()), "IDAQuadReInit");
-          if (!consistent_ic()) break;
+          if (!restart(&fired)) break;
           emit();
-          restart_roots(&fired);
           restarted = true;
         } else {
-          emit_interpolated(t_root);
+          emit_at(t_root, y_ev.get(), yp_ev.get());
           // Go on searching (t_root, t_n].
           t_lo = t_root;
           roots_at(t_root, y_ev.get(), yp_ev.get(), g_lo);
@@ -448,18 +459,7 @@ SolverResult simulate(System& system, const SolverOptions& opt, const OutputFn& 
       reinit = system.handle_time_event(t, user.physical_y(y.get()), user.physical_yp(yp.get()), result.events);
       ++next_event;
     }
-    if (reinit) {
-      ++result.stats.reinitialisations;
-      accumulate_stats();
-      if (n_quad > 0) {
-        double tq = t;
-        check(IDAGetQuad(ida, &tq, q.get()), "IDAGetQuad");
-      }
-      check(IDAReInit(ida, t, y.get(), yp.get()), "IDAReInit");
-      if (n_quad > 0) check(IDAQuadReInit(ida, q.get()), "IDAQuadReInit");
-      if (!consistent_ic()) break;
-      restart_roots(nullptr);
-    }
+    if (reinit && !restart(nullptr)) break;
     const bool at_output = k <= n_out && std::abs(t - grid_time(k)) <= eps_t;
     if (at_output) ++k;
     if (at_output || reinit) emit();
