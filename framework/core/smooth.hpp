@@ -22,9 +22,12 @@ inline T smooth_abs(const T& x, double eps) {
 // so did their derivatives); there the same value is computed as
 // eps^2 / (2 (smooth_abs(x) - x)), which is exact algebra and stable.
 template <class T>
-inline T smooth_pos(const T& x, double eps) {
-  const T s = smooth_abs(x, eps);
+inline T smooth_pos_given_abs(const T& x, const T& s, double eps) {  // s = smooth_abs(x, eps)
   return select(value(x) >= 0.0, T(0.5 * (x + s)), T(0.5 * eps * eps / (s - x)));
+}
+template <class T>
+inline T smooth_pos(const T& x, double eps) {
+  return smooth_pos_given_abs(x, smooth_abs(x, eps), eps);
 }
 
 // smooth_pos(x) and smooth_pos(-x) together, with one smooth_abs (the same
@@ -32,9 +35,8 @@ inline T smooth_pos(const T& x, double eps) {
 template <class T>
 inline void smooth_pos_pair(const T& x, double eps, T& pos, T& neg) {
   const T s = smooth_abs(x, eps);
-  const T mx = -x;
-  pos = select(value(x) >= 0.0, T(0.5 * (x + s)), T(0.5 * eps * eps / (s - x)));
-  neg = select(value(mx) >= 0.0, T(0.5 * (mx + s)), T(0.5 * eps * eps / (s - mx)));
+  pos = smooth_pos_given_abs(x, s, eps);
+  neg = smooth_pos_given_abs(T(-x), s, eps);
 }
 
 // sign(x) regularised with tanh over the scale eps.
