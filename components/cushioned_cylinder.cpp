@@ -54,6 +54,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 #include <type_traits>
 
 #include "components/builtin.hpp"
@@ -321,6 +322,8 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
                              "the cushioning zones (with their bore-opening ramps) at both ends overlap");
     }
     z_var_ = rod_ ? 8 : 6;
+    if (2 + static_cast<int>(info().variables.size()) > kMemoKey)
+      throw std::logic_error("cushioned_cylinder: the state memo's key is too short for its variables");
   }
 
   // Everything derived from the local variables, for equations and outputs.
@@ -632,10 +635,11 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
 
   // A stop contact makes the force jump (the stop's damping term d v acts
   // from the first contact on): IDA is re-initialised there, so that no step
-  // straddles it. Leaving a stop is continuous (see below). The ends of a bore-opening ramp are kinks of a flow area
-  // only (continuous flows): they are logged at their exact times and IDA's
-  // error control steps over them, as over any steep part of a flow law
-  // (re-initialising there cost 6 % more work for the same trajectory).
+  // straddles it. Leaving a stop is continuous (see below). The ends of a
+  // bore-opening ramp are kinks of a flow area only (continuous flows): they
+  // are logged at their exact times and IDA's error control steps over them,
+  // as over any steep part of a flow law (re-initialising there cost 6 % more
+  // work for the same trajectory).
   EventResult on_event(const Eval<double>& e, double*, EventKind, int root, int dir) const override {
     const double v = e.flange(kFlange).v;
     const std::string vs = " at v = " + std::to_string(v) + " m/s";
