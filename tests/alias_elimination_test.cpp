@@ -11,6 +11,7 @@
 #include "framework/netlist/netlist.hpp"
 #include "framework/run/run.hpp"
 #include "framework/testkit/testkit.hpp"
+#include "tests/test_support.hpp"
 
 namespace pneumo {
 namespace {
@@ -254,37 +255,8 @@ simulation: {t_end: 0.01 s, output_interval: 1 ms}
 // with a three-port mixing node (its stream temperatures kept) and a heat
 // path (heat-port temperatures folded into the gas temperature).
 TEST(AliasElimination, ReducedJacobiansOfMixingAndHeatCircuits) {
-  const std::vector<std::string> circuits = {R"(
-components:
-  a:  {type: volume, V: 1 L, p0: 6 bar, T0: 350 K}
-  b:  {type: volume, V: 0.5 L, p0: 2 bar, T0: 300 K}
-  c:  {type: volume, V: 2 L, p0: 1 bar, T0: 260 K}
-  va: {type: iso6358_throttle, C: 0.2 dm3/(s*bar), b: 0.3}
-  vb: {type: iso6358_throttle, C: 0.1 dm3/(s*bar), b: 0.4}
-  vc: {type: iso6358_throttle, C: 0.3 dm3/(s*bar), b: 0.2}
-connections:
-  - [a.port, va.a]
-  - [b.port, vb.a]
-  - [c.port, vc.a]
-  - [va.b, vb.b, vc.b]
-)",
-                                             R"(
-components:
-  source: {type: pressure_source, p: 6 bar, T: 300 K}
-  inlet:  {type: iso6358_throttle, C: 0.3 dm3/(s*bar), b: 0.3}
-  tank:   {type: volume, V: 0.5 L, p0: 2 bar, T0: 293.15 K}
-  outlet: {type: iso6358_throttle, C: 0.2 dm3/(s*bar), b: 0.5}
-  air:    {type: atmosphere}
-  film:   {type: heat_convection, alpha: 50 W/(m2*K), A: 0.02 m2}
-  wall:   {type: thermal_mass, C: 200 J/K, T0: 330 K}
-connections:
-  - [source.port, inlet.a]
-  - [inlet.b, tank.port]
-  - [tank.port, outlet.a]
-  - [outlet.b, air.port]
-  - [tank.heat, film.a]
-  - [film.b, wall.port]
-)"};
+  const std::vector<std::string> circuits = {test_support::kThreePortMixingCircuit,
+                                             test_support::kTankWithWallCircuit};
   for (const auto& text : circuits) {
     const Netlist nl = parse_netlist(text, "reduced.yaml");
     AssemblyOptions keep;

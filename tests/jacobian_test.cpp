@@ -56,23 +56,7 @@ const std::vector<Snippet>& snippets() {
       {"tank_with_wall",
        // Filling from a source and venting to the atmosphere at once, the gas
        // exchanging heat with a wall that starts warmer than the gas.
-       R"(
-components:
-  source: {type: pressure_source, p: 6 bar, T: 300 K}
-  inlet:  {type: iso6358_throttle, C: 0.3 dm3/(s*bar), b: 0.3}
-  tank:   {type: volume, V: 0.5 L, p0: 2 bar, T0: 293.15 K}
-  outlet: {type: iso6358_throttle, C: 0.2 dm3/(s*bar), b: 0.5}
-  air:    {type: atmosphere}
-  film:   {type: heat_convection, alpha: 50 W/(m2*K), A: 0.02 m2}
-  wall:   {type: thermal_mass, C: 200 J/K, T0: 330 K}
-connections:
-  - [source.port, inlet.a]
-  - [inlet.b, tank.port]
-  - [tank.port, outlet.a]
-  - [outlet.b, air.port]
-  - [tank.heat, film.a]
-  - [film.b, wall.port]
-)",
+       test_support::kTankWithWallCircuit,
        0.05,
        {"pressure_source", "iso6358_throttle", "volume", "atmosphere", "heat_convection", "thermal_mass"}},
       {"tank_to_reservoir",
@@ -133,20 +117,7 @@ connections:
       {"three_port_node",
        // Not a component: the framework's stream mixing at a node of three
        // pneumatic ports, with flows in both directions.
-       R"(
-components:
-  a:  {type: volume, V: 1 L, p0: 6 bar, T0: 350 K}
-  b:  {type: volume, V: 0.5 L, p0: 2 bar, T0: 300 K}
-  c:  {type: volume, V: 2 L, p0: 1 bar, T0: 260 K}
-  va: {type: iso6358_throttle, C: 0.2 dm3/(s*bar), b: 0.3}
-  vb: {type: iso6358_throttle, C: 0.1 dm3/(s*bar), b: 0.4}
-  vc: {type: iso6358_throttle, C: 0.3 dm3/(s*bar), b: 0.2}
-connections:
-  - [a.port, va.a]
-  - [b.port, vb.a]
-  - [c.port, vc.a]
-  - [va.b, vb.b, vc.b]
-)",
+       test_support::kThreePortMixingCircuit,
        0.2,
        {}},
       {"cushion_rig",

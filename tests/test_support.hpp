@@ -28,6 +28,43 @@
 
 namespace pneumo::test_support {
 
+// Small circuits several test files check from different sides.
+// Three tanks at different pressures and temperatures joined by throttles
+// at one node: the framework's stream mixing, with flows both ways.
+inline const std::string kThreePortMixingCircuit = R"(
+components:
+  a:  {type: volume, V: 1 L, p0: 6 bar, T0: 350 K}
+  b:  {type: volume, V: 0.5 L, p0: 2 bar, T0: 300 K}
+  c:  {type: volume, V: 2 L, p0: 1 bar, T0: 260 K}
+  va: {type: iso6358_throttle, C: 0.2 dm3/(s*bar), b: 0.3}
+  vb: {type: iso6358_throttle, C: 0.1 dm3/(s*bar), b: 0.4}
+  vc: {type: iso6358_throttle, C: 0.3 dm3/(s*bar), b: 0.2}
+connections:
+  - [a.port, va.a]
+  - [b.port, vb.a]
+  - [c.port, vc.a]
+  - [va.b, vb.b, vc.b]
+)";
+// A tank filled from a source and vented to the atmosphere at once, its gas
+// exchanging heat with a wall that starts warmer.
+inline const std::string kTankWithWallCircuit = R"(
+components:
+  source: {type: pressure_source, p: 6 bar, T: 300 K}
+  inlet:  {type: iso6358_throttle, C: 0.3 dm3/(s*bar), b: 0.3}
+  tank:   {type: volume, V: 0.5 L, p0: 2 bar, T0: 293.15 K}
+  outlet: {type: iso6358_throttle, C: 0.2 dm3/(s*bar), b: 0.5}
+  air:    {type: atmosphere}
+  film:   {type: heat_convection, alpha: 50 W/(m2*K), A: 0.02 m2}
+  wall:   {type: thermal_mass, C: 200 J/K, T0: 330 K}
+connections:
+  - [source.port, inlet.a]
+  - [inlet.b, tank.port]
+  - [tank.port, outlet.a]
+  - [outlet.b, air.port]
+  - [tank.heat, film.a]
+  - [film.b, wall.port]
+)";
+
 // The whole file as text ("" if it cannot be read).
 inline std::string read_file(const std::filesystem::path& path) {
   std::ifstream in(path);
