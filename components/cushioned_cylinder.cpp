@@ -387,11 +387,12 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
     }
   }
 
+  // The position, velocity and the chambers' volumes, pressures and
+  // temperatures: all that the gas observables need.
   template <class T>
-  State<T> compute_state(const Eval<T>& e) const {
+  void gas_state(const Eval<T>& e, State<T>& s) const {
     const GasModel& gas = e.gas();
     const auto fl = e.flange(kFlange);
-    State<T> s;
     s.x = fl.s;
     s.v = fl.v;
     s.V_A = V0_A_ + A_colr_ * s.x;
@@ -401,25 +402,40 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
     s.T_A = e.var(kUA) / (e.var(kMA) * gas.cv());
     s.T_EC = e.var(kUEC) / (e.var(kMEC) * gas.cv());
     s.T_ch = e.var(kUch) / (e.var(kMch) * gas.cv());
-    const T& T_EC = s.T_EC;
-    const T& T_ch = s.T_ch;
     s.p_EC = (gas.kappa - 1.0) * e.var(kUEC) / s.V_EC;
     s.p_ch = (gas.kappa - 1.0) * e.var(kUch) / s.V_ch;
+    if (rod_) {
+      s.T_ECr = e.var(kUECr) / (e.var(kMECr) * gas.cv());
+      s.V_ECr = V0_ECr_ + (A_B_ - A_CPr_) * s.x;
+      s.p_ECr = (gas.kappa - 1.0) * e.var(kUECr) / s.V_ECr;
+    } else {
+      s.p_ECr = s.V_ECr = s.T_ECr = 0.0 * s.x;
+    }
+  }
+  // Observables read off gas_state() alone.
+  static bool gas_observable(int k) {
+    return (k >= kX && k <= kTcho) || k == kUgas || k == kPECr || k == kTECro;
+  }
+
+  template <class T>
+  State<T> compute_state(const Eval<T>& e) const {
+    const GasModel& gas = e.gas();
+    State<T> s;
+    gas_state(e, s);
+    const T& T_EC = s.T_EC;
+    const T& T_ch = s.T_ch;
     const T gap = stroke_ - L_ - s.x;
     s.m_x = cushion_flow(cap_, gap, s.p_EC, s.p_ch, T_EC, T_ch, s.x, gas, s.open);  // EC -> ch
     s.H_x = enthalpy_inflow(s.m_x, T_EC, T_ch, gas);
     const T zero = 0.0 * s.x;
     s.z = friction_.has_state() ? e.var(z_var_) : zero;
     if (rod_) {
-      s.T_ECr = e.var(kUECr) / (e.var(kMECr) * gas.cv());
       const T& T_ECr = s.T_ECr;
-      s.V_ECr = V0_ECr_ + (A_B_ - A_CPr_) * s.x;
-      s.p_ECr = (gas.kappa - 1.0) * e.var(kUECr) / s.V_ECr;
       const T gap_r = s.x - L_r_;
       s.m_xr = cushion_flow(rodc_, gap_r, s.p_ECr, s.p_A, T_ECr, s.T_A, s.x, gas, s.open_r);  // ECr -> A
       s.H_xr = enthalpy_inflow(s.m_xr, T_ECr, s.T_A, gas);
     } else {
-      s.p_ECr = s.V_ECr = s.m_xr = s.H_xr = s.T_ECr = zero;
+      s.m_xr = s.H_xr = zero;
       s.open_r = zero + 1.0;
     }
     // Friction.
@@ -450,8 +466,10 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
     }
     // Elastic end stops (never pulling).
     const T pen_rod = -s.x, pen_cap = s.x - stroke_;
-    const T F_rod = select(value(pen_rod) > 0, max(T(k_stop_ * pen_rod - d_stop_ * s.v), T(0.0)), T(0.0 * s.x));
-    const T F_cap = select(value(pen_cap) > 0, max(T(k_stop_ * pen_cap + d_stop_ * s.v), T(0.0)), T(0.0 * s.x));
+    const T F_rod = select_lazy<T>(
+        value(pen_rod) > 0, [&] { return max(T(k_stop_ * pen_rod - d_stop_ * s.v), T(0.0)); }, [&] { return zero; });
+    const T F_cap = select_lazy<T>(
+        value(pen_cap) > 0, [&] { return max(T(k_stop_ * pen_cap + d_stop_ * s.v), T(0.0)); }, [&] { return zero; });
     s.F_stop = F_rod - F_cap;
     if (!rod_)
       s.F_pressure = s.p_A * A_A_ + gas.p_ambient * A_R_ - s.p_EC * (A_B_ - A_CP_) - s.p_ch * A_CP_;
@@ -563,7 +581,13 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
 
   double observe(int k, const Eval<double>& e) const override { return observe(k, state(e), e); }
   void observe_all(const int* ks, int n, const Eval<double>& e, double* out) const override {
-    const State<double> s = state(e);
+    // Result files usually ask for positions, pressures and temperatures
+    // only: those skip the flows and forces (most of state()'s work).
+    State<double> s{};
+    if (std::all_of(ks, ks + n, gas_observable))
+      gas_state(e, s);
+    else
+      s = state(e);
     for (int i = 0; i < n; ++i) out[i] = observe(ks[i], s, e);
   }
 

@@ -13,12 +13,16 @@ namespace pneumo::components {
 //   phi(r_lam) (1 - r)/(1 - r_lam)     r > r_lam       (laminar continuation)
 template <class T>
 T iso6358_phi(const T& r, double b, double r_lam) {
-  const T x = (min(r, T(r_lam)) - b) / (1.0 - b);
-  const T subsonic = sqrt(1.0 - max(x, T(0.0)) * max(x, T(0.0)));
-  const double x_lam = (r_lam - b) / (1.0 - b);
-  const double phi_lam = std::sqrt(1.0 - x_lam * x_lam);
-  const T laminar = phi_lam * (1.0 - r) / (1.0 - r_lam);
-  return select(value(r) <= r_lam, subsonic, laminar);
+  auto subsonic = [&] {
+    const T x = (min(r, T(r_lam)) - b) / (1.0 - b);
+    return sqrt(1.0 - max(x, T(0.0)) * max(x, T(0.0)));
+  };
+  auto laminar = [&] {
+    const double x_lam = (r_lam - b) / (1.0 - b);
+    const double phi_lam = std::sqrt(1.0 - x_lam * x_lam);
+    return phi_lam * (1.0 - r) / (1.0 - r_lam);
+  };
+  return select_lazy<T>(value(r) <= r_lam, subsonic, laminar);
 }
 
 // Mass flow from port a to port b (negative for reverse flow). T_a and T_b are

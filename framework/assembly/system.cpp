@@ -432,6 +432,7 @@ void System::build_nodes() {
     mode += info.modes;
     b->root0 = root;
     root += info.roots;
+    if (info.roots > 0) root_blocks_.push_back(static_cast<int>(blocks_.size()));
     blocks_.push_back(std::move(b));
   }
   modes_.assign(mode, 0.0);
@@ -1408,8 +1409,9 @@ int System::jacobian_blocks(double t, const double* y, const double* yp, double 
       const double s = b->scale[i];
       a.v = s * y[g];
       ap.v = s * yp[g];
-      // Only the directions up to its own are active (see build_slots).
-      const int active = b->slot[i] + 1;
+      // Only the directions up to its own are active (see build_slots), in
+      // whole groups (Dual::padded).
+      const int active = Dual::padded(b->slot[i] + 1);
       a.n = ap.n = active;
       std::fill_n(a.d.begin(), active, 0.0);
       std::fill_n(ap.d.begin(), active, 0.0);
@@ -1421,7 +1423,8 @@ int System::jacobian_blocks(double t, const double* y, const double* yp, double 
     for (int k = 0; k < b->n_rows; ++k) {
       if (row_of_[b->row0 + k] < 0) continue;
       const Dual& f = r[k];
-      for (int i = 0; i < f.n; ++i) {
+      const int directions = std::min(f.n, static_cast<int>(b->slot_local.size()));  // without the padding
+      for (int i = 0; i < directions; ++i) {
         const double d = f.d[i];
         if (d == 0.0) continue;
         const int p = b->jac_pos[static_cast<std::size_t>(k) * nl + b->slot_local[i]];
@@ -1478,11 +1481,11 @@ void System::roots(double t, const double* y, const double* yp, double* g) const
   block_inputs(t, y, yp, any_roots_read_explicit_);
   bool invalid = false;
   double ly[kMaxLocal], lyp[kMaxLocal];
-  for (const auto& b : blocks_) {
-    if (!b->component || b->component->info().roots == 0) continue;
-    gather(*b, y, yp, ly, lyp);
-    Eval<double> e(*b->component, t, ly, lyp, modes_.data() + b->mode0, b->connected.get(), circuit_.gas, &invalid);
-    b->component->roots(e, g + b->root0);
+  for (int bi : root_blocks_) {
+    const Block& b = *blocks_[bi];
+    gather(b, y, yp, ly, lyp);
+    Eval<double> e(*b.component, t, ly, lyp, modes_.data() + b.mode0, b.connected.get(), circuit_.gas, &invalid);
+    b.component->roots(e, g + b.root0);
   }
 }
 

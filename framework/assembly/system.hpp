@@ -231,6 +231,7 @@ class System {
   std::vector<std::vector<int>> dep_y_, dep_yp_;  // per row: structural columns
   std::vector<double> modes_;
   int n_roots_ = 0;
+  std::vector<int> root_blocks_;  // the blocks of components with root functions
   mutable long pattern_misses_ = 0;
   // Alias elimination: rows solved by substitution (y_b = +-y_a, or a node
   // with one port: flow = 0, an unconnected input = its default) are still

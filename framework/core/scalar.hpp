@@ -20,6 +20,7 @@
 #include <array>
 #include <bitset>
 #include <cmath>
+#include <type_traits>
 
 namespace pneumo {
 
@@ -30,29 +31,38 @@ inline constexpr int kMaxLocal = 64;
 
 // ---------------------------------------------------------------------------
 // Dual: value + gradient with respect to the component's local variables.
+// The active slots come in whole groups of four (`n` is a multiple of 4;
+// the padding carries derivatives that are exactly 0, as any inactive
+// direction does), so that every loop below runs over whole groups, which
+// the compiler vectorises without remainder code, and copies stay inline.
 class Dual {
  public:
   double v = 0.0;
-  int n = 0;  // number of active derivative slots
+  int n = 0;  // number of active derivative slots, a multiple of kGroup
   std::array<double, kMaxLocal> d;
+
+  static constexpr int kGroup = 4;
+  static_assert(kMaxLocal % kGroup == 0);
+  static constexpr int padded(int active) { return (active + kGroup - 1) / kGroup * kGroup; }
 
   Dual() = default;
   Dual(double value) : v(value), n(0) {}  // NOLINT: implicit from constants is intended
   // Copies move only the active derivatives (a Dual is 0.5 kB; equations
   // copy them through min/max/select and temporaries).
-  Dual(const Dual& o) : v(o.v), n(o.n) { std::copy_n(o.d.begin(), o.n, d.begin()); }
+  Dual(const Dual& o) : v(o.v), n(o.n) { copy_groups(o); }
   Dual& operator=(const Dual& o) {
     v = o.v;
     n = o.n;
-    std::copy_n(o.d.begin(), o.n, d.begin());
+    copy_groups(o);
     return *this;
   }
 
-  // A seeded variable: value and derivative `seed` in direction `slot`.
+  // A seeded variable: value and derivative `seed` in direction `slot`,
+  // directions [0, active) active.
   static Dual variable(double value, int slot, double seed, int active) {
     Dual r(value);
-    r.n = active;
-    std::fill_n(r.d.begin(), active, 0.0);
+    r.n = padded(active);
+    std::fill_n(r.d.begin(), r.n, 0.0);
     if (slot >= 0 && slot < active) r.d[slot] = seed;
     return r;
   }
@@ -66,21 +76,32 @@ class Dual {
   // r.d = ca * a.d + cb * b.d over the union of active slots.
   static Dual combine(double value, const Dual& a, double ca, const Dual& b, double cb) {
     Dual r(value);
-    r.n = std::max(a.n, b.n);
     const int common = std::min(a.n, b.n);
-    for (int i = 0; i < common; ++i) r.d[i] = ca * a.d[i] + cb * b.d[i];
-    for (int i = common; i < a.n; ++i) r.d[i] = ca * a.d[i];
-    for (int i = common; i < b.n; ++i) r.d[i] = cb * b.d[i];
+    r.n = std::max(a.n, b.n);
+    for (int i = 0; i < common; i += kGroup)
+      for (int k = 0; k < kGroup; ++k) r.d[i + k] = ca * a.d[i + k] + cb * b.d[i + k];
+    for (int i = common; i < a.n; i += kGroup)
+      for (int k = 0; k < kGroup; ++k) r.d[i + k] = ca * a.d[i + k];
+    for (int i = common; i < b.n; i += kGroup)
+      for (int k = 0; k < kGroup; ++k) r.d[i + k] = cb * b.d[i + k];
     return r;
   }
   // Chain rule for a unary function with derivative `slope`.
   static Dual chain(double value, const Dual& a, double slope) {
     Dual r(value);
     r.n = a.n;
-    for (int i = 0; i < a.n; ++i) r.d[i] = slope * a.d[i];
+    for (int i = 0; i < a.n; i += kGroup)
+      for (int k = 0; k < kGroup; ++k) r.d[i + k] = slope * a.d[i + k];
     return r;
   }
 
+ private:
+  void copy_groups(const Dual& o) {
+    for (int i = 0; i < o.n; i += kGroup)
+      for (int k = 0; k < kGroup; ++k) d[i + k] = o.d[i + k];
+  }
+
+ public:
   friend Dual operator+(const Dual& a, const Dual& b) { return combine(a.v + b.v, a, 1.0, b, 1.0); }
   friend Dual operator-(const Dual& a, const Dual& b) { return combine(a.v - b.v, a, 1.0, b, -1.0); }
   friend Dual operator*(const Dual& a, const Dual& b) { return combine(a.v * b.v, a, b.v, b, a.v); }
@@ -218,6 +239,17 @@ inline double select(bool c, double a, double b) { return c ? a : b; }
 inline Dual select(bool c, const Dual& a, const Dual& b) { return c ? a : b; }
 inline Pattern select(bool c, const Pattern& a, const Pattern& b) {
   return Pattern::join_nonlinear(c ? a.v : b.v, a, b);
+}
+
+// select() of two branches given as callables: double and Dual evaluate only
+// the branch taken (a Dual branch is a whole gradient's work), Pattern both
+// (the structure must hold the dependencies of either).
+template <class T, class A, class B>
+inline T select_lazy(bool c, A&& a, B&& b) {
+  if constexpr (std::is_same_v<T, Pattern>)
+    return select(c, T(a()), T(b()));
+  else
+    return c ? T(a()) : T(b());
 }
 
 template <class T>

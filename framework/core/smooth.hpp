@@ -23,7 +23,7 @@ inline T smooth_abs(const T& x, double eps) {
 // eps^2 / (2 (smooth_abs(x) - x)), which is exact algebra and stable.
 template <class T>
 inline T smooth_pos_given_abs(const T& x, const T& s, double eps) {  // s = smooth_abs(x, eps)
-  return select(value(x) >= 0.0, T(0.5 * (x + s)), T(0.5 * eps * eps / (s - x)));
+  return select_lazy<T>(value(x) >= 0.0, [&] { return 0.5 * (x + s); }, [&] { return 0.5 * eps * eps / (s - x); });
 }
 template <class T>
 inline T smooth_pos(const T& x, double eps) {
