@@ -370,7 +370,7 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
   // twice at the same state (the explicitly solved unknowns first, then
   // IDA's rows), and outputs observe it at a point just evaluated.
   template <class T>
-  State<T> state(const Eval<T>& e) const {
+  std::conditional_t<std::is_same_v<T, double>, const State<double>&, State<T>> state(const Eval<T>& e) const {
     if constexpr (std::is_same_v<T, double>) {
       const int n = static_cast<int>(info().variables.size());
       double key[kMemoKey];
@@ -505,7 +505,7 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
       e.reject_unless_positive(e.var(kMECr));
       e.reject_unless_positive(e.var(kUECr));
     }
-    const State<T> s = state(e);
+    const auto& s = state(e);  // the memo itself for double
     // Rod-side chamber A (volume grows with x); with rod cushioning the
     // rod-side channel, fed from ECr, adiabatic.
     // Port outflows carry the port's T_out, the value the connected side

@@ -228,7 +228,8 @@ inline Pattern abs(const Pattern& a) { return Pattern::keep(std::abs(a.v), a); }
 inline double pow(double x, double a) { return std::pow(x, a); }
 inline Dual pow(const Dual& b, double a) {
   const double f = std::pow(b.v, a);
-  return Dual::chain(f, b, a == 0.0 ? 0.0 : a * std::pow(b.v, a - 1.0));
+  // a b^(a-1) = a f / b without a second pow where b != 0.
+  return Dual::chain(f, b, a == 0.0 ? 0.0 : b.v != 0.0 ? a * f / b.v : a * std::pow(b.v, a - 1.0));
 }
 inline Pattern pow(const Pattern& b, double a) { return Pattern::keep(std::pow(b.v, a), b); }
 
