@@ -525,7 +525,8 @@ TEST(CushionRigOutputs, ProbeSetEqualsProbeForEveryCylinderQuantity) {
   // The netlist's outputs (x, v and the chambers' pressures and
   // temperatures) come from the cylinder's states alone and read no y': they
   // are evaluated without solving the explicit unknowns and without y', and
-  // give the same values.
+  // give the same values (the cylinder answers this set from its gas states
+  // alone; system.probe() goes through its full state()).
   const ProbeSet outputs = system.probe_set(system.circuit().probes);
   EXPECT_FALSE(outputs.reads_explicit);
   EXPECT_FALSE(outputs.reads_yp);
