@@ -75,7 +75,9 @@ void print_stats(const SolverResult& r, double seconds, std::ostream& out) {
       << " solved inside the residual, " << s.netlist_variables - s.explicit_variables - s.variables
       << " substituted as aliases or constants)\n"
       << "  steps " << s.steps << ", residual evaluations " << s.residual_evals << ", Jacobian evaluations "
-      << s.jacobian_evals << "\n"
+      << s.jacobian_evals;
+  if (s.jacobian_recombinations > 0) out << " (and " << s.jacobian_recombinations << " recombined from the last one's parts)";
+  out << "\n"
       << "  nonlinear iterations " << s.nonlinear_iterations << ", convergence failures " << s.nonlinear_failures
       << ", error test failures " << s.error_test_failures << "\n"
       << "  root function evaluations " << s.root_evals << ", re-initialisations " << s.reinitialisations

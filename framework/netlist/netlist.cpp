@@ -439,10 +439,15 @@ Netlist parse_netlist(const std::string& text, const std::string& file_name) {
       else if (e.key == "atol") s.atol = r.quantity(e.value, a, none, "1", "", p);
       else if (e.key == "output_interval") s.output_interval = r.quantity(e.value, a, time, "s", "", p);
       else if (e.key == "max_step") s.max_step = r.quantity(e.value, a, time, "s", "", p);
-      else
+      else if (e.key == "jacobian_reuse") {
+        const std::string text = r.scalar_text(e.value, "", p, "jacobian_reuse");
+        if (text == "true") s.jacobian_reuse = true;
+        else if (text == "false") s.jacobian_reuse = false;
+        else r.fail(e.value, "", p, "jacobian_reuse must be true or false, not '" + text + "'");
+      } else
         r.fail(e.key_node, "", p,
                "unknown key '" + e.key + "' in simulation; " +
-                   choices_hint(e.key, {"t_start", "t_end", "rtol", "atol", "output_interval", "max_step"}));
+                   choices_hint(e.key, {"t_start", "t_end", "rtol", "atol", "output_interval", "max_step", "jacobian_reuse"}));
     }
     auto at_key = [&](const char* k) { return value_of.count(k) ? value_of[k] : top["simulation"]; };
     if (!(s.t_end > s.t_start))

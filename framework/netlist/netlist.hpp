@@ -83,6 +83,9 @@ struct SimulationSettings {
   double atol = 1e-6;
   double output_interval = 1e-3;
   double max_step = 0.0;  // 0 = solver's choice
+  // Recombine the last Newton matrix's parts when only cj changed (see
+  // SolverOptions::reuse_jacobian); false reproduces IDA's own behaviour.
+  bool jacobian_reuse = true;
 };
 
 struct Netlist {

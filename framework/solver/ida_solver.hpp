@@ -26,12 +26,19 @@ struct SolverOptions {
   // Whether the outputs read y' (run_system sets it from its ProbeSet):
   // without, the output rows skip interpolating y'.
   bool outputs_read_yp = true;
+  // Answer IDA's requests for a new Newton matrix that only follow a change
+  // of cj (step size or order) by recombining the parts dF/dy and dF/dy' of
+  // the last evaluation (see NewtonMatrixParts in ida_solver.cpp), when IDA
+  // integrates no algebraic unknown. Off: every request is a fresh
+  // evaluation, as IDA alone does.
+  bool reuse_jacobian = true;
 };
 
 struct SolverStats {
   long steps = 0;
   long residual_evals = 0;
-  long jacobian_evals = 0;
+  long jacobian_evals = 0;           // fresh evaluations (of both parts when reused)
+  long jacobian_recombinations = 0;  // IDA's requests answered from the last evaluation's parts
   long nonlinear_iterations = 0;
   long nonlinear_failures = 0;
   long error_test_failures = 0;

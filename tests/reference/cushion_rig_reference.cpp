@@ -367,8 +367,23 @@ std::array<double, NX> initial_state(const RigParams& P, const Model& M) {
 
 // ---------------------------------------------------------------------------
 // SUNDIALS callbacks
+
+// What the callbacks share: the model and, when the Newton matrix is reused
+// the way pneumo reuses it (SolverOptions::reuse_jacobian), the df/dy of its
+// last evaluation. Here F = y' - f(y), so the matrix is cj I - df/dy and a
+// request that only follows a change of cj needs no evaluation.
+struct Session {
+    Model model;
+    void* ida = nullptr;
+    bool reuse_jacobian = false;
+    bool jac_valid = false;
+    long steps_at = 0, conv_failures_at = 0, recombined = 0;
+    double J[NX][NX];
+};
+constexpr long kMaxJacobianAgeSteps = 50;  // as pneumo's NewtonMatrixParts
+
 int residual(sunrealtype /*t*/, N_Vector yy, N_Vector yp, N_Vector rr, void* user) {
-    const Model& M = *static_cast<const Model*>(user);
+    const Model& M = static_cast<const Session*>(user)->model;
     const double* y = N_VGetArrayPointer(yy);
     const double* ydot = N_VGetArrayPointer(yp);
     double* r = N_VGetArrayPointer(rr);
@@ -380,11 +395,23 @@ int residual(sunrealtype /*t*/, N_Vector yy, N_Vector yp, N_Vector rr, void* use
 
 int jacobian(sunrealtype /*t*/, sunrealtype cj, N_Vector yy, N_Vector /*yp*/, N_Vector /*rr*/,
              SUNMatrix Jm, void* user, N_Vector, N_Vector, N_Vector) {
-    const Model& M = *static_cast<const Model*>(user);
+    Session& S = *static_cast<Session*>(user);
     const double* y = N_VGetArrayPointer(yy);
     double f[NX];
-    double J[NX][NX];
-    if (!M.eval<true>(y, f, J)) return 1;
+    auto& J = S.J;
+    long steps = 0, conv_failures = 0;
+    IDAGetNumSteps(S.ida, &steps);
+    IDAGetNumNonlinSolvConvFails(S.ida, &conv_failures);
+    if (S.reuse_jacobian && S.jac_valid && conv_failures == S.conv_failures_at && steps >= S.steps_at &&
+        steps - S.steps_at < kMaxJacobianAgeSteps) {
+        ++S.recombined;
+    } else {
+        S.jac_valid = false;
+        if (!S.model.eval<true>(y, f, J)) return 1;
+        S.jac_valid = true;
+        S.steps_at = steps;
+        S.conv_failures_at = conv_failures;
+    }
     // IDA zeroes the sparse matrix (including its pattern) before each call,
     // so the (constant) CSC pattern is rewritten every time.
     sunindextype* colptr = SUNSparseMatrix_IndexPointers(Jm);
@@ -466,11 +493,14 @@ double initial_position(const RigParams& params) {
 }
 
 RigResult simulate(const RigParams& P, double t_end, double rtol, double output_interval,
-                   void (*prepare_vector)(_generic_N_Vector*)) {
+                   void (*prepare_vector)(_generic_N_Vector*), bool reuse_jacobian) {
     if (!(t_end > 0.0) || !(output_interval > 0.0) || !(rtol > 0.0))
         throw std::runtime_error("pneumo_reference::simulate: invalid t_end/rtol/output_interval");
 
-    Model model = make_model(P);
+    Session session;
+    session.model = make_model(P);
+    session.reuse_jacobian = reuse_jacobian;
+    Model& model = session.model;
     model.valves_open = P.t_switch <= 0.0;
 
     SUNContext raw_ctx = nullptr;
@@ -511,7 +541,8 @@ RigResult simulate(const RigParams& P, double t_end, double rtol, double output_
     void* ida = mem.get();
     check(IDAInit(ida, residual, 0.0, y.get(), yp.get()), "IDAInit");
     check(IDASVtolerances(ida, rtol, atol.get()), "IDASVtolerances");
-    check(IDASetUserData(ida, &model), "IDASetUserData");
+    session.ida = ida;
+    check(IDASetUserData(ida, &session), "IDASetUserData");
     check(IDASetLinearSolver(ida, LS.get(), A.get()), "IDASetLinearSolver");
     check(IDASetJacFn(ida, jacobian), "IDASetJacFn");
     check(IDASetMaxNumSteps(ida, 200000), "IDASetMaxNumSteps");
@@ -534,6 +565,7 @@ RigResult simulate(const RigParams& P, double t_end, double rtol, double output_
             check(IDASolve(ida, P.t_switch, &t, y.get(), yp.get(), IDA_NORMAL), "IDASolve");
             add_stats(ida, res.stats);
             model.valves_open = true;
+            session.jac_valid = false;
             consistent_yp();
             t = P.t_switch;
             check(IDAReInit(ida, t, y.get(), yp.get()), "IDAReInit");
@@ -544,6 +576,8 @@ RigResult simulate(const RigParams& P, double t_end, double rtol, double output_
         record(tout);
     }
     add_stats(ida, res.stats);
+    res.stats.jacobian_evals -= session.recombined;
+    res.stats.jacobian_recombinations = session.recombined;
     return res;
 }
 

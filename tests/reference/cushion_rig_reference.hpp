@@ -105,7 +105,7 @@ struct RigSample {
 
 struct RigStats {
     long steps = 0, residual_evals = 0, jacobian_evals = 0, error_test_failures = 0,
-         nonlinear_conv_failures = 0;
+         nonlinear_conv_failures = 0, jacobian_recombinations = 0;
 };
 
 struct RigResult {
@@ -120,9 +120,12 @@ struct RigResult {
 // `prepare_vector`, if given, is called on each vector before IDA sees it
 // (IDA's own vectors are clones of y): the benchmark passes pneumo's
 // compiled vector kernels through it to time the floor like for like; the
-// reference itself shares no code with pneumo.
+// reference itself shares no code with pneumo. `reuse_jacobian` answers
+// IDA's requests for a Newton matrix that only follow a change of cj from
+// the last df/dy, with pneumo's rule (SolverOptions::reuse_jacobian).
 RigResult simulate(const RigParams& params, double t_end = 1.2, double rtol = 1e-6,
-                   double output_interval = 1e-3, void (*prepare_vector)(_generic_N_Vector*) = nullptr);
+                   double output_interval = 1e-3, void (*prepare_vector)(_generic_N_Vector*) = nullptr,
+                   bool reuse_jacobian = false);
 
 // Cushion throttle conductance C(z_EC) in dm^3/(s bar) (piecewise-linear table).
 double cushion_throttle_C(const RigParams& params, double z_EC);
