@@ -312,6 +312,7 @@ TEST(BadNetlists, OddShapesAreInputErrors) {
       {"components:\n  tank: {type: volume, V: 1 L}\nsimulation: {t_end: 1 bar}\n", 3},
       {"components:\n  tank: {type: volume, V: 1 L}\nsimulation: {dt: 1 s}\n", 3},
       {"components:\n  tank: {type: volume, V: 1 L}\nsimulation:\n  rtol: 2\n", 4},
+      {"components:\n  tank: {type: volume, V: 1 L}\nsimulation:\n  jacobian_reuse: maybe\n", 4},
       {"components:\n  tank: {type: volume, V: 1 L}\ngas:\n  kappa: 0.9\n", 4},
       {"components:\n  tank: {type: volume, V: 1 L}\nambient:\n  T: -300 degC\n", 4},
       {"parameters: {p: 5 blorp}\ncomponents:\n  tank: {type: volume, V: 1 L}\n", 1},

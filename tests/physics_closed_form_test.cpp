@@ -94,6 +94,31 @@ TEST(ClosedForm, AdiabaticTankFillingThroughApi) {
   EXPECT_GT(T, 325.0);
 }
 
+// The Newton matrix reuse (SolverOptions::reuse_jacobian) changes how IDA's
+// Newton iteration converges, not what it converges to: with and without it
+// the filling ends at the closed form within the bounds above. The run with
+// reuse must actually have recombined matrices (else this checks nothing),
+// and must have evaluated fewer.
+TEST(ClosedForm, AdiabaticTankFillingWithAndWithoutNewtonMatrixReuse) {
+  Netlist nl = load_netlist(kTankFilling);
+  const FillingClosedForm cf = filling_closed_form(nl);
+  SolverStats stats[2];
+  for (const bool reuse : {true, false}) {
+    nl.simulation.jacobian_reuse = reuse;
+    const RunResult r = run_simulation(nl, builtin_registry());
+    ASSERT_TRUE(r.solver.ok) << r.solver.message;
+    const auto& last = r.table.rows.back();
+    const double p = last[r.table.column("p")], T = last[r.table.column("T")], m = last[r.table.column("m")];
+    EXPECT_LT(rel_err(p, cf.p2), 1e-6) << "reuse " << reuse;
+    EXPECT_LT(rel_err(m, cf.m_end), 1e-4) << "reuse " << reuse << ": m = " << m << ", closed form " << cf.m_end;
+    EXPECT_LT(rel_err(T, cf.T_end), 1e-4) << "reuse " << reuse << ": T = " << T << ", closed form " << cf.T_end;
+    stats[reuse ? 0 : 1] = r.solver.stats;
+  }
+  EXPECT_GT(stats[0].jacobian_recombinations, 0);
+  EXPECT_LT(stats[0].jacobian_evals, stats[1].jacobian_evals);
+  EXPECT_EQ(stats[1].jacobian_recombinations, 0);
+}
+
 TEST(ClosedForm, AdiabaticTankFillingThroughCli) {
   const fs::path dir = fs::temp_directory_path() / ("pneumo_closed_form_" + std::to_string(::getpid()));
   fs::create_directories(dir);
