@@ -1436,20 +1436,26 @@ int System::jacobian_blocks(double t, const double* y, const double* yp, double 
   return invalid ? 1 : 0;
 }
 
+int System::newton_matrix_parts(double t, const double* y, const double* yp, double* dFdy, double* dFdyp) const {
+  // The explicit unknowns have no y': dF/dy' = J(cj = 1) - J(cj = 0).
+  int flag = jacobian(t, y, yp, 0.0, dFdy);
+  flag |= jacobian(t, y, yp, 1.0, dFdyp);
+  for (long p = 0; p < nnz(); ++p) dFdyp[p] -= dFdy[p];
+  return flag;
+}
+
 void System::jacobian_parts(double t, const double* y, const double* yp, std::vector<double>& dFdy,
                             std::vector<double>& dFdyp) const {
   dFdy.assign(static_cast<std::size_t>(n_) * n_, 0.0);
   dFdyp.assign(static_cast<std::size_t>(n_) * n_, 0.0);
   if (!explicit_.empty()) {
-    // The explicit unknowns have no y': dF/dy' = J(cj = 1) - J(cj = 0).
     std::vector<double> j0(nnz()), j1(nnz());
-    jacobian(t, y, yp, 0.0, j0.data());
-    jacobian(t, y, yp, 1.0, j1.data());
+    newton_matrix_parts(t, y, yp, j0.data(), j1.data());
     for (int c = 0; c < n_; ++c)
       for (long p = col_ptr_[c]; p < col_ptr_[c + 1]; ++p) {
         const std::size_t k = static_cast<std::size_t>(row_idx_[p]) * n_ + c;
         dFdy[k] = j0[p];
-        dFdyp[k] = j1[p] - j0[p];
+        dFdyp[k] = j1[p];
       }
     return;
   }

@@ -148,6 +148,10 @@ class System {
   int residual(double t, const double* y, const double* yp, double* F) const;
   // dF/dy + cj dF/dy' into `values` (CSC order of col_ptr/row_idx).
   int jacobian(double t, const double* y, const double* yp, double cj, double* values) const;
+  // The two parts of that matrix (CSC order), so that jacobian(cj) =
+  // dFdy + cj dFdyp for every cj: the matrix is linear in cj, F being linear
+  // in y' and the explicit unknowns having no y'. Returns as jacobian().
+  int newton_matrix_parts(double t, const double* y, const double* yp, double* dFdy, double* dFdyp) const;
   // dF/dy and dF/dy' separately (dense, row-major n x n), for tests.
   void jacobian_parts(double t, const double* y, const double* yp, std::vector<double>& dFdy,
                       std::vector<double>& dFdyp) const;

@@ -56,7 +56,7 @@ using IdaPtr = std::unique_ptr<void, IdaDeleter>;
 // IDA asks for a new matrix once cj is more than 25 % off the one the
 // factorisation used; most of its requests are these, while the state has
 // hardly moved. Recombining is exact in cj, since F is linear in y' and the
-// explicitly solved unknowns have no y' (System::jacobian_parts). The parts
+// explicitly solved unknowns have no y' (System::newton_matrix_parts). The parts
 // are evaluated afresh when they may be too old for the Newton iteration:
 // after a nonlinear convergence failure, after kMaxAgeSteps steps (CVODE's
 // limit), after an event or a re-initialisation, after KLU rejected a
@@ -119,10 +119,10 @@ int jacobian_cb(realtype t, realtype cj, N_Vector y, N_Vector yp, N_Vector, SUNM
     // - e.g. a throttle that went choked has dm/dp_down == 0. After such a
     // failure, ask for a fresh factorisation with new pivots.
     long last = 0;
-    if (u->klu && u->ida && IDAGetLastLinFlag(u->ida, &last) == IDA_SUCCESS && last == SUNLS_PACKAGE_FAIL_REC)
-      SUNLinSol_KLUReInit(u->klu, J, SUNSparseMatrix_NNZ(J), SUNKLU_REINIT_PARTIAL);
+    const bool klu_rejected =
+        u->klu && u->ida && IDAGetLastLinFlag(u->ida, &last) == IDA_SUCCESS && last == SUNLS_PACKAGE_FAIL_REC;
+    if (klu_rejected) SUNLinSol_KLUReInit(u->klu, J, SUNSparseMatrix_NNZ(J), SUNKLU_REINIT_PARTIAL);
     double* values = SUNSparseMatrix_Data(J);
-    const bool klu_rejected = last == SUNLS_PACKAGE_FAIL_REC;
     auto& parts = u->parts;
     const std::size_t nz = u->row_idx.size();
     long steps = 0, convergence_failures = 0;
@@ -149,17 +149,12 @@ int jacobian_cb(realtype t, realtype cj, N_Vector y, N_Vector yp, N_Vector, SUNM
       scale_columns(values);
       return flag;
     }
-    // dF/dy = J(cj = 0), dF/dy' = J(cj = 1) - J(cj = 0).
     parts.dFdy.resize(nz);
     parts.dFdyp.resize(nz);
-    int flag = u->system->jacobian(t, py, pyp, 0.0, parts.dFdy.data());
-    flag |= u->system->jacobian(t, py, pyp, 1.0, parts.dFdyp.data());
+    const int flag = u->system->newton_matrix_parts(t, py, pyp, parts.dFdy.data(), parts.dFdyp.data());
     scale_columns(parts.dFdy.data());
     scale_columns(parts.dFdyp.data());
-    for (std::size_t k = 0; k < nz; ++k) {
-      parts.dFdyp[k] -= parts.dFdy[k];
-      values[k] = parts.dFdy[k] + cj * parts.dFdyp[k];
-    }
+    for (std::size_t k = 0; k < nz; ++k) values[k] = parts.dFdy[k] + cj * parts.dFdyp[k];
     parts.valid = flag == 0;
     parts.steps_at = steps;
     parts.convergence_failures_at = convergence_failures;
