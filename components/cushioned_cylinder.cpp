@@ -667,18 +667,28 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
   EventResult on_event(const Eval<double>& e, double*, EventKind, int root, int dir) const override {
     const double v = e.flange(kFlange).v;
     const std::string vs = " at v = " + std::to_string(v) + " m/s";
+    const bool up = dir > 0;  // x growing: toward the cap
     switch (root) {
-      case kRampStart: return {false, dir > 0 ? "bore opening starts to close" + vs : "bore opening fully open" + vs};
+      case kRampStart:
+        return up ? EventResult{false, "bore opening starts to close" + vs, "bore_closing"}
+                  : EventResult{false, "bore opening fully open" + vs, "bore_open"};
       case kCushionEntry:
-        return {false, dir > 0 ? "enters the cushioning zone" + vs : "leaves the cushioning zone" + vs};
+        return up ? EventResult{false, "enters the cushioning zone" + vs, "cushion_entry"}
+                  : EventResult{false, "leaves the cushioning zone" + vs, "cushion_exit"};
       // Only a contact starts with a jump; leaving, the stop force has
       // already fallen to 0 (k pen - d v reaches 0 before pen does).
-      case kStopRod: return {dir < 0, dir < 0 ? "contact with the rod-end stop" + vs : "leaves the rod-end stop" + vs};
-      case kStopCap: return {dir > 0, dir > 0 ? "impact on the cap-end stop" + vs : "leaves the cap-end stop" + vs};
+      case kStopRod:
+        return up ? EventResult{false, "leaves the rod-end stop" + vs, "rod_stop_left"}
+                  : EventResult{true, "contact with the rod-end stop" + vs, "rod_stop_contact"};
+      case kStopCap:
+        return up ? EventResult{true, "impact on the cap-end stop" + vs, "cap_impact"}
+                  : EventResult{false, "leaves the cap-end stop" + vs, "cap_stop_left"};
       case kRodRampStart:
-        return {false, dir < 0 ? "rod-end bore opening starts to close" + vs : "rod-end bore opening fully open" + vs};
+        return up ? EventResult{false, "rod-end bore opening fully open" + vs, "rod_bore_open"}
+                  : EventResult{false, "rod-end bore opening starts to close" + vs, "rod_bore_closing"};
       case kRodCushionEntry:
-        return {false, dir < 0 ? "enters the rod-end cushioning zone" + vs : "leaves the rod-end cushioning zone" + vs};
+        return up ? EventResult{false, "leaves the rod-end cushioning zone" + vs, "rod_cushion_exit"}
+                  : EventResult{false, "enters the rod-end cushioning zone" + vs, "rod_cushion_entry"};
     }
     return {};
   }

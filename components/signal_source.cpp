@@ -68,7 +68,7 @@ class SignalSource final : public ComponentT<SignalSource> {
   EventResult on_event(const Eval<double>& e, double* modes, EventKind, int, int) const override {
     if (kind_ == "step" && modes[0] < 0.5 && e.t() >= t_start_) {
       modes[0] = 1.0;
-      return {true, "step to " + std::to_string(value_ + height_)};
+      return {true, "step to " + std::to_string(value_ + height_), "step"};
     }
     return {};
   }

@@ -62,11 +62,13 @@ class SpoolDrive {
       }
       const double t_next = i + 1 < rows.size() ? rows[i + 1][0] : std::numeric_limits<double>::infinity();
       const double rate = s == x ? 0.0 : (s > x ? 1.0 : -1.0) / t_switch_;
-      add(t, rate, "command " + std::to_string(static_cast<int>(s)) + " (" + (s == 1.0 ? actuated : rest) + ")");
+      add(t, rate, "command " + std::to_string(static_cast<int>(s)) + " (" + (s == 1.0 ? actuated : rest) + ")",
+          s == 1.0 ? "command_on" : "command_off");
       const double t_end = t + std::abs(s - x) * t_switch_;
       if (s != x && t_end <= t_next) {
         add(t_end, 0.0,
-            "spool at " + std::to_string(static_cast<int>(s)) + ": " + (s == 1.0 ? actuated : rest) + " fully open");
+            "spool at " + std::to_string(static_cast<int>(s)) + ": " + (s == 1.0 ? actuated : rest) + " fully open",
+            s == 1.0 ? "switched_on" : "switched_off");
         x = s;
       } else if (s != x) {
         x += rate * (t_next - t);  // turned around by the next command
@@ -103,6 +105,7 @@ class SpoolDrive {
     while (k < times_.size() && times_[k] <= e.t() + tol) {
       if (!res.message.empty()) res.message += "; ";
       res.message += messages_[k];
+      res.tag = tags_[k];  // of coinciding events, the last
       ++k;
       res.changed = true;
     }
@@ -111,15 +114,16 @@ class SpoolDrive {
   }
 
  private:
-  void add(double t, double rate_after, std::string message) {
+  void add(double t, double rate_after, std::string message, std::string tag) {
     times_.push_back(t);
     rates_.push_back(rate_after);
     messages_.push_back(std::move(message));
+    tags_.push_back(std::move(tag));
   }
 
   double t_switch_, x0_;
   std::vector<double> times_, rates_;  // event k at times_[k]; dx/dt = rates_[k] after it
-  std::vector<std::string> messages_;
+  std::vector<std::string> messages_, tags_;
 };
 
 // Base of the directional valves: the spool variable, its start value, the

@@ -1533,7 +1533,7 @@ bool System::handle_time_event(double t, const double* y, const double* yp, std:
     const EventResult res = b->component->on_event(e, modes_.data() + b->mode0, EventKind::time, -1, 0);
     after_event(*b, before, t);
     changed |= res.changed;
-    if (!res.message.empty()) log.push_back({t, b->component->name(), res.message});
+    if (!res.message.empty() || !res.tag.empty()) log.push_back({t, b->component->name(), res.message, res.tag});
   }
   return changed;
 }
@@ -1558,7 +1558,7 @@ bool System::handle_roots(double t, const double* y, const double* yp, const int
       const EventResult res = b->component->on_event(e, modes_.data() + b->mode0, EventKind::root, k, dir);
       after_event(*b, before, t);
       changed |= res.changed;
-      if (!res.message.empty()) log.push_back({t, b->component->name(), res.message});
+      if (!res.message.empty() || !res.tag.empty()) log.push_back({t, b->component->name(), res.message, res.tag});
     }
   }
   return changed;

@@ -73,6 +73,7 @@ struct EventLogEntry {
   double t = 0.0;
   std::string component;
   std::string message;
+  std::string tag;  // EventResult::tag
 };
 
 struct AssemblyOptions {

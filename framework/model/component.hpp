@@ -133,6 +133,10 @@ struct ObservableSpec {
   std::string name;
   std::string unit;
   std::string description;
+  // What the framework may use the observable for without knowing the
+  // component: "kinetic_energy" (J) marks the energy a mass stores, which an
+  // energy audit counts for every mass on the audited flange's node.
+  std::string role = {};
 };
 
 struct ComponentInfo {
@@ -281,6 +285,39 @@ enum class EventKind { time, root };
 struct EventResult {
   bool changed = false;  // discrete modes changed: the solver re-initialises
   std::string message;   // for the event log ("" = not worth logging)
+  // What happened, as a name netlist metrics, energy audits and diagnosis
+  // phases refer to ("cushion_entry", "cap_impact"; written COMPONENT.TAG).
+  // Empty: the event is only told to people.
+  std::string tag = {};
+};
+
+// An energy balance a component declares over a window of its motion, so
+// that `--energy-audit` and the audit metrics work on any component that
+// has one. Each term is a sum of its observables' changes over the window
+// and of their time integrals (IDAS quadratures), scaled by coefficients:
+//   term = sum c_i (q_i(t_close) - q_i(t_open)) + sum d_j int q_j dt
+// plus, where `kinetic` says so, the kinetic energy of the masses on the
+// node of `kinetic_port` (observables of role "kinetic_energy") at the
+// window's start or end. In a correct model the terms in and out balance;
+// the residual is the solver's error.
+struct EnergyTerm {
+  enum class Kinetic { none, at_open, at_close };
+  std::string name;         // machine name (YAML key, metric lookup)
+  std::string description;  // for the printed table
+  bool in = false;          // energy brought in (else where it went)
+  std::vector<std::pair<std::string, double>> changes;
+  std::vector<std::pair<std::string, double>> integrals;
+  Kinetic kinetic = Kinetic::none;
+};
+struct EnergyAuditSpec {
+  std::string title;             // "cap-end cushioning"
+  std::string opens_at;          // tag of this component's event; "" = the run's start
+  std::string open_description;  // "cushion entry"
+  // The window closes when this observable first falls to 0 or below after
+  // opening (a velocity: first standstill or reversal); "" = the run's end.
+  std::string closes_when_not_positive;
+  std::string kinetic_port;      // translational port whose node's masses count
+  std::vector<EnergyTerm> terms;
 };
 
 struct Construction {
@@ -316,6 +353,12 @@ class Component {
   // this to do it once.
   virtual void observe_all(const int* ks, int n, const Eval<double>& e, double* out) const {
     for (int i = 0; i < n; ++i) out[i] = observe(ks[i], e);
+  }
+
+  // The energy balance this instance offers for auditing (none by default).
+  virtual std::optional<EnergyAuditSpec> energy_audit(const GasModel& gas) const {
+    (void)gas;
+    return std::nullopt;
   }
 
   // Discrete modes and events. Time events are known in advance (the solver
