@@ -103,13 +103,13 @@ std::uint64_t fnv1a(std::uint64_t h, const std::string& s) {
 }
 
 std::string sweep_identity(const std::string& netlist_text, const Design& d,
-                           const std::vector<const Metric*>& metrics, bool eliminate) {
+                           const std::vector<Metric>& metrics, bool eliminate) {
   std::uint64_t h = 14695981039346656037ull;
   h = fnv1a(h, netlist_text);
   for (const auto& p : d.parameters) h = fnv1a(fnv1a(h, "|"), p.name);
   for (const auto& s : d.samples)
     for (double v : s) h = fnv1a(fnv1a(h, ","), number(v));
-  for (const auto* m : metrics) h = fnv1a(fnv1a(h, "|"), m->name);
+  for (const auto& m : metrics) h = fnv1a(fnv1a(h, "|"), m.name);
   if (eliminate) h = fnv1a(h, "|eliminate_aliases");
   char buf[64];
   std::snprintf(buf, sizeof buf, "# pneumo sweep journal %016llx runs %zu", static_cast<unsigned long long>(h),
@@ -228,7 +228,7 @@ class Progress {
   long last_done_ = -1;
 };
 
-void write_results(const std::string& output, const Design& d, const std::vector<const Metric*>& metrics,
+void write_results(const std::string& output, const Design& d, const std::vector<Metric>& metrics,
                    const std::vector<RunRecord>& records) {
   const fs::path target(output);
   const fs::path tmp = target.string() + ".writing";
@@ -237,7 +237,7 @@ void write_results(const std::string& output, const Design& d, const std::vector
     if (!out) throw std::runtime_error("cannot write results file '" + output + "'");
     out << "run,status";
     for (const auto& p : d.parameters) out << "," << p.name << " [" << p.unit << "]";
-    for (const auto* m : metrics) out << "," << m->name << " [" << m->unit << "]";
+    for (const auto& m : metrics) out << "," << m.name << " [" << m.unit << "]";
     out << ",steps,reason\n";
     for (const auto& r : records) {
       out << r.index << (r.ok ? ",ok" : ",failed");
@@ -260,19 +260,14 @@ void write_results(const std::string& output, const Design& d, const std::vector
 }  // namespace
 
 RunRecord run_one(Netlist& nl, const Registry& registry, const std::vector<StudyParameter>& parameters,
-                  const Sample& sample, const std::vector<const Metric*>& metrics,
+                  const Sample& sample, const std::vector<Metric>& metrics,
                   const AssemblyOptions& assembly) {
   RunRecord rec;
   try {
     for (std::size_t j = 0; j < parameters.size(); ++j) assign(nl, parameters[j], sample[j]);
-    // The energy audit's accounts are extra (solver-integrated) outputs.
-    Netlist audited;
-    const bool audit = needs_audit(metrics);
-    if (audit) {
-      audited = nl;
-      prepare_energy_audit(audited);
-    }
-    const Netlist& run_nl = audit ? audited : nl;
+    // Integral metrics and energy audits read extra (solver-integrated) outputs.
+    Netlist run_nl = nl;
+    const MetricPlan plan = prepare_metrics(run_nl, registry, metrics);
     System system(elaborate(run_nl, registry), assembly);
     const RunResult run = run_system(system, solver_options(run_nl.simulation));
     rec.steps = run.solver.stats.steps;
@@ -280,7 +275,7 @@ RunRecord run_one(Netlist& nl, const Registry& registry, const std::vector<Study
       rec.reason = run.solver.message;
       return rec;
     }
-    rec.metrics = compute_metrics(metrics, run_nl, run);
+    rec.metrics = compute_metrics(metrics, plan, run_nl, run);
     rec.ok = true;
   } catch (const InputError& e) {
     rec.reason = e.what();
@@ -300,7 +295,7 @@ SweepSummary run_sweep(const std::string& netlist_path, const Design& design, co
     text.assign((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   }
   const Netlist base = parse_netlist(text, netlist_path);
-  const auto metrics = select_metrics(base, opt.metrics);
+  const auto metrics = select_metrics(base, builtin_registry(), opt.metrics);
   const long n = static_cast<long>(design.samples.size());
   const std::string identity = sweep_identity(text, design, metrics, opt.assembly.eliminate_aliases);
   if (const auto parent = fs::path(output).parent_path(); !parent.empty()) fs::create_directories(parent);
