@@ -108,6 +108,7 @@ TEST(NetlistMetrics, SweepOnACircuitWithoutCylinderMovesWithSupply) {
   std::ifstream in(out);
   std::string line;
   std::getline(in, line);
+  EXPECT_NE(line.find("p_supply [bar]"), std::string::npos) << line;  // as written in --grid
   EXPECT_NE(line.find("t_half [s]"), std::string::npos) << line;
   EXPECT_NE(line.find("p_end [Pa]"), std::string::npos) << line;
   std::vector<std::vector<double>> rows;
@@ -121,7 +122,8 @@ TEST(NetlistMetrics, SweepOnACircuitWithoutCylinderMovesWithSupply) {
   }
   ASSERT_EQ(rows.size(), 5u);
   for (std::size_t i = 0; i < rows.size(); ++i) {
-    EXPECT_NEAR(rows[i][2], rows[i][0], 1e-3 * rows[i][0]);  // the tank levels off at the supply
+    EXPECT_DOUBLE_EQ(rows[i][0], 2.0 + i);                        // bar, shortest form
+    EXPECT_NEAR(rows[i][2], 1e5 * rows[i][0], 1e2 * rows[i][0]);  // the tank levels off at the supply
     if (i > 0) EXPECT_LT(rows[i][1], rows[i - 1][1]);        // a higher supply fills to 1.5 bar sooner
   }
 }

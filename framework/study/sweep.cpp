@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -24,11 +25,21 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
+// All 17 digits: the journal must give back the exact double on resume.
 std::string number(double v) {
   if (std::isnan(v)) return "nan";
   char buf[40];
   std::snprintf(buf, sizeof buf, "%.17g", v);
   return buf;
+}
+
+// The shortest text that reads back as the same double (0.05, not
+// 0.050000000000000003): what people read in the results.
+std::string shortest(double v) {
+  if (std::isnan(v)) return "nan";
+  char buf[40];
+  const auto end = std::to_chars(buf, buf + sizeof buf, v).ptr;
+  return std::string(buf, end);
 }
 
 std::string quoted(const std::string& s) {
@@ -236,13 +247,13 @@ void write_results(const std::string& output, const Design& d, const std::vector
     std::ofstream out(tmp);
     if (!out) throw std::runtime_error("cannot write results file '" + output + "'");
     out << "run,status";
-    for (const auto& p : d.parameters) out << "," << p.name << " [" << p.unit << "]";
+    for (const auto& p : d.parameters) out << "," << p.name << " [" << p.display_unit << "]";
     for (const auto& m : metrics) out << "," << m.name << " [" << m.unit << "]";
     out << ",steps,reason\n";
     for (const auto& r : records) {
       out << r.index << (r.ok ? ",ok" : ",failed");
-      for (double v : d.samples[r.index]) out << "," << number(v);
-      for (std::size_t k = 0; k < metrics.size(); ++k) out << "," << (r.ok ? number(r.metrics[k]) : "");
+      for (std::size_t j = 0; j < d.parameters.size(); ++j) out << "," << shortest(d.parameters[j].shown(d.samples[r.index][j]));
+      for (std::size_t k = 0; k < metrics.size(); ++k) out << "," << (r.ok ? shortest(r.metrics[k]) : "");
       out << "," << r.steps << "," << quoted(r.reason) << "\n";
     }
     out.flush();
