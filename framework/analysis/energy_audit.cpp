@@ -80,19 +80,7 @@ std::vector<AuditPlan> prepare_energy_audit(Netlist& nl, const Registry& registr
   return plans;
 }
 
-void drop_audit_columns(ResultsTable& table) {
-  std::vector<std::size_t> keep;
-  for (std::size_t i = 0; i < table.names.size(); ++i)
-    if (table.names[i].rfind(kPrefix, 0) != 0) keep.push_back(i);
-  auto filter = [&](auto& v) {
-    std::remove_reference_t<decltype(v)> out;
-    for (std::size_t i : keep) out.push_back(v[i]);
-    v = std::move(out);
-  };
-  filter(table.names);
-  filter(table.units);
-  for (auto& row : table.rows) filter(row);
-}
+void drop_audit_columns(ResultsTable& table) { table.drop_columns(kPrefix); }
 
 namespace {
 
@@ -182,6 +170,7 @@ std::vector<EnergyAudit> energy_audit(const std::vector<AuditPlan>& plans, const
 }
 
 void print_audit(const EnergyAudit& a, std::ostream& out) {
+  const auto precision = out.precision();
   out << "energy audit of " << a.component << " (" << a.title << ")";
   if (!a.opened) {
     out << ": no " << a.open_description << " by t = " << a.t_close << " s\n";
@@ -200,9 +189,9 @@ void print_audit(const EnergyAudit& a, std::ostream& out) {
   for (const auto& t : a.in) line(t);
   out << "  out:\n";
   for (const auto& t : a.out) line(t);
-  out << "  balance: in " << a.total_in << " J, out " << a.total_out << " J, residual " << a.residual() << " J ("
+  out << std::setprecision(6) << "  balance: in " << a.total_in << " J, out " << a.total_out << " J, residual " << a.residual() << " J ("
       << std::setprecision(3) << 100.0 * a.residual() / base << " % of the input)\n"
-      << std::defaultfloat;
+      << std::defaultfloat << std::setprecision(precision);
 }
 
 void write_audit_yaml(const std::vector<EnergyAudit>& audits, std::ostream& out) {

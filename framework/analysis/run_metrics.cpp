@@ -121,7 +121,7 @@ class Evaluator {
       case Kind::min: return extreme(tab, c, from, to, false);
       case Kind::value: return value_at(tab, c, time_of(run_, *m.at));
       case Kind::final_value: return c < 0 || tab.rows.empty() ? kNaN : tab.rows.back()[c];
-      case Kind::crossing: return crossing(tab, c, m.level, m.direction, m.occurrence, from, to);
+      case Kind::crossing: return crossing(tab, c, m.level.si_value, m.direction, m.occurrence, from, to);
       case Kind::event_time: return time_of(run_, m.event);
       case Kind::integral: {
         const int q = tab.column(kPrefix + m.name);
@@ -176,20 +176,7 @@ void add_metric_outputs(Netlist& nl, const std::vector<bool>& marked) {
   }
 }
 
-void drop_metric_columns(ResultsTable& table) {
-  std::vector<std::size_t> keep;
-  for (std::size_t i = 0; i < table.names.size(); ++i)
-    if (table.names[i].rfind(kPrefix, 0) != 0) keep.push_back(i);
-  if (keep.size() == table.names.size()) return;
-  auto filter = [&](auto& v) {
-    std::remove_reference_t<decltype(v)> out;
-    for (std::size_t i : keep) out.push_back(v[i]);
-    v = std::move(out);
-  };
-  filter(table.names);
-  filter(table.units);
-  for (auto& row : table.rows) filter(row);
-}
+void drop_metric_columns(ResultsTable& table) { table.drop_columns(kPrefix); }
 
 std::vector<std::string> metric_units(const Netlist& nl, const Circuit& circuit) {
   std::map<std::string, std::string> unit_of;
@@ -203,9 +190,9 @@ std::vector<std::string> metric_units(const Netlist& nl, const Circuit& circuit)
       case Kind::final_value: out.push_back(unit_of[m.output]); break;
       case Kind::crossing: {
         const units::Dimension d = units::dimension_of(unit_of[m.output]);
-        if (m.level_had_unit && !(m.level_dim == d))
+        if (m.level.had_unit && !(m.level.dim == d))
           throw InputError(m.where, "", "metrics." + m.name,
-                           "metric '" + m.name + "': the level has dimension " + m.level_dim.to_string() +
+                           "metric '" + m.name + "': the level has dimension " + m.level.dim.to_string() +
                                " but output '" + m.output + "' is in " + unit_of[m.output]);
         out.push_back("s");
         break;

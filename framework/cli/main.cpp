@@ -94,7 +94,7 @@ using pneumo::cli::split_list;
 void print_metrics(const Netlist& nl, const std::vector<double>& values, const std::vector<std::string>& units,
                    std::ostream& out) {
   for (std::size_t i = 0; i < nl.metrics.size(); ++i)
-    out << "metric " << nl.metrics[i].name << " = " << values[i] << (units[i].empty() ? "" : " ") << units[i] << "\n";
+    out << "metric " << nl.metrics[i].name << " = " << std::setprecision(6) << values[i] << (units[i].empty() ? "" : " ") << units[i] << "\n";
 }
 
 void write_metrics_csv(const std::string& path, const Netlist& nl, const std::vector<double>& values,

@@ -175,10 +175,7 @@ class MetricReader {
   void read_level(const YAML::Node& n, MetricDecl& m) const {
     const std::string s = text(n, "the level");
     try {
-      const auto q = units::parse_quantity(s, nl_.gas.p_ambient);
-      m.level = q.si_value;
-      m.level_dim = q.dim;
-      m.level_had_unit = q.had_unit;
+      m.level = units::parse_quantity(s, nl_.gas.p_ambient);
     } catch (const units::ParseError& e) {
       fail(n, "cannot read the level '" + s + "': " + e.what());
     }

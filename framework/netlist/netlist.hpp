@@ -96,9 +96,7 @@ struct MetricDecl {
   Kind kind = Kind::max;
   std::string output;  // column; for integral and audit: COMPONENT.QUANTITY / COMPONENT.TERM
   std::optional<TimeRef> from, to, at;
-  double level = 0.0;  // SI
-  units::Dimension level_dim;
-  bool level_had_unit = false;
+  units::Quantity level{};  // SI
   int direction = 0;  // +1 rising, -1 falling, 0 either
   int occurrence = 1;
   TimeRef event;
