@@ -22,6 +22,7 @@
 #include "framework/core/version.hpp"
 #include "framework/io/plot.hpp"
 #include "framework/plugin/plugin.hpp"
+#include "framework/cli/optimize.hpp"
 #include "framework/cli/study_commands.hpp"
 #include "framework/cli/split_list.hpp"
 #include "framework/run/run.hpp"
@@ -233,6 +234,7 @@ int main(int argc, char** argv) {
 
   int study_status = -1;  // set by `sweep` / `sensitivity` (framework/cli/study_commands.cpp)
   pneumo::cli::add_study_commands(app, study_status);
+  pneumo::cli::add_optimize_command(app, study_status);
 
   auto* comps = app.add_subcommand("components", "list component types, or show one");
   std::string type;

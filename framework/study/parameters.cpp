@@ -23,6 +23,8 @@ const ComponentDecl* find_component(const Netlist& nl, const std::string& name) 
 
 }  // namespace
 
+void set_display_unit(StudyParameter& p, const std::string& unit_text, double ambient);
+
 StudyParameter resolve_parameter(const Netlist& nl, const Registry& registry, const std::string& name) {
   StudyParameter p;
   p.name = name;
@@ -39,6 +41,7 @@ StudyParameter resolve_parameter(const Netlist& nl, const Registry& registry, co
     }
     p.parameter = name;
     p.unit = units::si_unit_name(tp->dim);
+    set_display_unit(p, "", nl.gas.p_ambient);
     return p;
   }
   p.component = name.substr(0, dot);
@@ -52,6 +55,7 @@ StudyParameter resolve_parameter(const Netlist& nl, const Registry& registry, co
                      "component type '" + decl->type + "' has no scalar parameter '" + p.parameter +
                          "' (see 'pneumo components " + decl->type + "')");
   p.unit = spec->unit;
+  set_display_unit(p, "", nl.gas.p_ambient);
   return p;
 }
 
@@ -219,10 +223,11 @@ Design samples_design(const Netlist& nl, const Registry& registry, const std::st
   return d;
 }
 
-std::vector<Range> parse_ranges(const Netlist& nl, const Registry& registry, const std::vector<std::string>& specs) {
+std::vector<Range> parse_ranges(const Netlist& nl, const Registry& registry, const std::vector<std::string>& specs,
+                                const std::string& flag) {
   std::vector<Range> out;
   for (const auto& spec : specs) {
-    const std::string option = "--param " + spec;
+    const std::string option = flag + " " + spec;
     const auto eq = spec.find('=');
     const auto parts = eq == std::string::npos ? std::vector<std::string>{} : split_trimmed(spec.substr(eq + 1), ':');
     if (eq == std::string::npos || eq == 0 || parts.size() != 2)

@@ -65,6 +65,6 @@ struct Range {
   double lo = 0.0, hi = 0.0;
 };
 std::vector<Range> parse_ranges(const Netlist& netlist, const Registry& registry,
-                                const std::vector<std::string>& specs);
+                                const std::vector<std::string>& specs, const std::string& flag = "--param");
 
 }  // namespace pneumo::study
