@@ -76,7 +76,7 @@ void print_result(const OptimizeProblem& p, const OptimizeOptions& o, const Opti
   if (o.auto_adjust)
     std::cout << "  every constraint holds for " << p.design[0].parameter.name << " from "
               << p.design[0].parameter.shown(r.feasible_lo) << " to " << p.design[0].parameter.shown(r.feasible_hi)
-              << " " << p.design[0].parameter.display_unit << "\n";
+              << (p.design[0].parameter.display_unit == "1" ? "" : " " + p.design[0].parameter.display_unit) << "\n";
   std::cout << r.evaluations << " design points, " << r.runs << " runs";
   if (r.runs_resumed) std::cout << " (+" << r.runs_resumed << " from the journal)";
   std::cout << "\n";
