@@ -155,3 +155,26 @@ TEST(EnergyAudit, CliPrintsAndWritesTheAuditAndKeepsTheCsvClean) {
 
 }  // namespace
 }  // namespace pneumo
+
+#include "framework/study/sweep.hpp"
+
+namespace pneumo {
+namespace {
+
+// Issue #23: on the full rig at this operating point the audit's
+// quadratures, when they steered the step size, drove IDA to a 3e-10 s step
+// at the impact and the run failed only because it was audited. The audit
+// now integrates on the trajectory's own steps: the audited run succeeds,
+// and closes.
+TEST(EnergyAudit, AuditingNeverTurnsAGoodRunIntoAFailure) {
+  Netlist nl = load_netlist(std::string(PNEUMO_SOURCE_DIR) + "/netlists/cushion_rig_full.yaml");
+  for (const char* s : {"p_supply=716666.66666666663", "m_load=5.6444444444444439", "z_EC=2"}) apply_override(nl, s);
+  const auto metrics = study::select_metrics(nl, builtin_registry(), {"v_impact", "E_compression", "audit_residual"});
+  const study::RunRecord r = study::run_one(nl, builtin_registry(), {}, {}, metrics);
+  ASSERT_TRUE(r.ok) << r.reason;
+  EXPECT_GT(r.metrics[0], 0.0);
+  EXPECT_LT(std::abs(r.metrics[2]), 1e-4);
+}
+
+}  // namespace
+}  // namespace pneumo

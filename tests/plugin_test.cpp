@@ -7,6 +7,7 @@
 // (tests/plugins/plugins.cmake); the out-of-tree build against an installed
 // pneumo is tests/plugins/example_test.cpp.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <sys/wait.h>
 #include <unistd.h>
@@ -137,6 +138,19 @@ INSTANTIATE_TEST_SUITE_P(
         Refusal{"NoEntryPoint", "not_a_plugin.so", "not a pneumo plugin: it exports no pneumo_plugin_info()"},
         Refusal{"MissingFile", "no_such_plugin.so", "no such file"}),
     [](const ::testing::TestParamInfo<Refusal>& info) { return std::string(info.param.name); });
+
+// A FIFO named as a plugin made dlopen block forever (issue #23): now it is
+// refused before it is opened.
+TEST(Plugin, AFifoIsRefusedNotOpened) {
+  TempDir dir;
+  const fs::path fifo = dir.path() / "plugin.so";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  const fs::path net = write(dir.path() / "net.yaml", netlist_text({fifo.string()}));
+  const LoadOutcome r = load(net);
+  ASSERT_TRUE(r.failed);
+  EXPECT_EQ(r.where.line, 2);
+  EXPECT_NE(r.message.find("not a regular file"), std::string::npos) << r.message;
+}
 
 TEST(Plugin, ATypeRegisteredByAnotherPluginIsAClashNamingBoth) {
   TempDir dir;

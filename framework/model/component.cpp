@@ -2,6 +2,9 @@
 
 #include <cmath>
 #include <sstream>
+#include <vector>
+
+#include "framework/core/units.hpp"
 
 namespace pneumo {
 
@@ -41,19 +44,83 @@ static std::string num(double v) {
   return s.str();
 }
 
+namespace {
+
+// What is plausible in a pneumatic drive, by dimension (SI): at most
+// `ceiling` in magnitude, never negative where physics says so, and for a
+// parameter that must be positive at least `floor`. A value outside is a
+// typing slip (1e308 Pa, 9.2e18 dm3/(s*bar), 1e-320 Pa), which the solver
+// would only report as "cannot find consistent initial values".
+struct Plausible {
+  units::Dimension dim;
+  double floor, ceiling;
+  bool non_negative;
+};
+
+const Plausible* plausible_for(const std::string& unit) {
+  using namespace units::dims;
+  static const std::vector<Plausible> table = {
+      {pressure, 1.0, 1e8, false},                 // 1 Pa .. 1000 bar
+      {volume, 1e-12, 1e2, true},                  // m3
+      {length, 1e-9, 1e3, false},                  // m
+      {area, 1e-14, 1e2, false},                   // m2 (also N/bar friction slopes)
+      {mass, 1e-9, 1e6, true},                     // kg
+      {temperature, 1.0, 5000.0, true},            // K
+      {time, 1e-12, 1e7, false},                   // s
+      {sonic_conductance, 1e-20, 1e-3, true},      // m3/(s*Pa): up to 1e5 dm3/(s*bar)
+      {force, 1e-12, 1e8, false},                  // N
+      {velocity, 1e-12, 1e3, false},               // m/s
+      {mass_flow, 1e-15, 1e9, false},              // kg/s, also damping N*s/m
+      {{.kg = 1, .s = -2}, 1e-9, 1e12, false},     // stiffness N/m
+      {energy, 1e-12, 1e12, false},                // J
+      {power, 1e-12, 1e9, false},                  // W
+      {{.m = 2, .kg = 1, .s = -2, .K = -1}, 1e-9, 1e9, true},  // heat capacity J/K
+      {{.kg = 1, .s = -3, .K = -1}, 1e-9, 1e6, true},         // heat transfer coefficient W/(m2*K)
+  };
+  units::Dimension d;
+  try {
+    d = units::dimension_of(unit);
+  } catch (const units::ParseError&) {
+    return nullptr;
+  }
+  for (const auto& p : table)
+    if (p.dim == d) return &p;
+  return nullptr;
+}
+
+struct Bounds {
+  double lo, hi;
+  bool lo_open, hi_open;
+};
+
+// The spec's own range narrowed to what is plausible for its unit.
+Bounds bounds_of(const ParameterSpec& s) {
+  Bounds b{s.min, s.max, s.min_exclusive, s.max_exclusive};
+  const Plausible* p = plausible_for(s.unit);
+  if (!p) return b;
+  if (b.lo == 0 && b.lo_open) b = {p->floor, b.hi, false, b.hi_open};  // positive: at least the floor
+  const double lo = p->non_negative ? 0.0 : -p->ceiling;
+  if (lo > b.lo) b.lo = lo, b.lo_open = false;
+  if (p->ceiling < b.hi) b.hi = p->ceiling, b.hi_open = false;
+  return b;
+}
+
+}  // namespace
+
 std::string ParameterSpec::range_text() const {
-  const bool lo = std::isfinite(min), hi = std::isfinite(max);
+  const Bounds b = bounds_of(*this);
+  const bool lo = std::isfinite(b.lo), hi = std::isfinite(b.hi);
   if (!lo && !hi) return "any value";
-  if (lo && !hi) return std::string(min_exclusive ? "> " : ">= ") + num(min);
-  if (!lo && hi) return std::string(max_exclusive ? "< " : "<= ") + num(max);
-  return std::string(min_exclusive ? "(" : "[") + num(min) + ", " + num(max) +
-         (max_exclusive ? ")" : "]");
+  if (lo && !hi) return std::string(b.lo_open ? "> " : ">= ") + num(b.lo);
+  if (!lo && hi) return std::string(b.hi_open ? "< " : "<= ") + num(b.hi);
+  return std::string(b.lo_open ? "(" : "[") + num(b.lo) + ", " + num(b.hi) + (b.hi_open ? ")" : "]");
 }
 
 bool ParameterSpec::in_range(double v) const {
   if (!std::isfinite(v)) return false;
-  if (min_exclusive ? !(v > min) : !(v >= min)) return false;
-  if (max_exclusive ? !(v < max) : !(v <= max)) return false;
+  const Bounds b = bounds_of(*this);
+  if (b.lo_open ? !(v > b.lo) : !(v >= b.lo)) return false;
+  if (b.hi_open ? !(v < b.hi) : !(v <= b.hi)) return false;
   return true;
 }
 

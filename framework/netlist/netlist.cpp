@@ -591,7 +591,13 @@ Circuit elaborate(const Netlist& nl, const Registry& registry) {
             std::size_t col = 0;
             for (const auto& cell : row) {
               ParameterSpec cs = ParameterSpec::scalar(pname, spec->columns[col++], "");
-              vals.push_back(parameter_value(nl, c, cs, cell));
+              const double v = parameter_value(nl, c, cs, cell);
+              if (!cs.in_range(v))
+                r.fail(cell, c.name, pname,
+                       "row " + std::to_string(t.size() + 1) + ", column " + std::to_string(col) + ": value " +
+                           units::format_si(v, spec_dimension(cs)) + " is out of range; valid: " + cs.range_text() +
+                           " (" + cs.unit + ")");
+              vals.push_back(v);
             }
             t.push_back(std::move(vals));
           }

@@ -59,6 +59,7 @@ LoadedPlugin load_plugin(const std::string& path, const SourceLocation& where, R
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) fail("no such file");
   if (std::filesystem::is_directory(path, ec)) fail("this is a directory, not a shared library");
+  if (!std::filesystem::is_regular_file(path, ec)) fail("not a regular file (a FIFO or device?), not a shared library");
   // dlopen searches the library path for names without a slash; a plugin is
   // always the file named.
   std::string open_path = path;
