@@ -67,6 +67,8 @@ const std::vector<BadCase>& bad_cases() {
       {"duplicate_key.yaml", {}, 9, "tank", "V", {"duplicate key 'V'", "duplicate_key.yaml:7:"}},
       {"duplicate_section.yaml", {}, 11, "", "", {"duplicate key 'outputs'"}},
       {"zero_volume.yaml", {}, 7, "tank", "V", {"out of range", "[1e-12, 100]"}},
+      {"merge_key.yaml", {}, 6, "tank", "", {"merge keys (<<) are not supported"}},
+      {"parameter_reference.yaml", {}, 5, "", "p_supply", {"cannot refer to another parameter"}},
       {"implausible_pressure.yaml", {}, 7, "source", "p", {"out of range", "'p_supply'", "[1, 1e+08]"}},
       {"implausible_pressure.yaml", {"p_supply=1e-320"}, 7, "source", "p", {"out of range", "1e-320 Pa"}},
       {"table_negative_conductance.yaml", {}, 38, "cylinder", "cushion_C_of_z", {"row 3, column 2", "[0, 0.001]"}},

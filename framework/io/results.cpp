@@ -48,6 +48,13 @@ void write_table(std::ostream& out, const ResultsTable& table) {
 
 }  // namespace
 
+void check_output_file(const std::string& path, const std::string& option) {
+  if (path.empty()) throw std::invalid_argument(option + " \"\": give a file name");
+  std::error_code ec;
+  if (fs::is_directory(path, ec))
+    throw std::invalid_argument(option + " " + path + ": this is a directory; give a file name in it");
+}
+
 void write_csv_atomic(const std::string& path, const ResultsTable& table) {
   const fs::path target(path);
   const fs::path tmp = target.string() + ".writing";
@@ -65,8 +72,9 @@ void write_csv_atomic(const std::string& path, const ResultsTable& table) {
   std::error_code ec;
   fs::rename(tmp, target, ec);
   if (ec) {
+    const std::string why = ec.message();
     fs::remove(tmp, ec);
-    throw std::runtime_error("cannot move results into '" + path + "': " + ec.message());
+    throw std::runtime_error("cannot move results into '" + path + "': " + why);
   }
   fs::remove(partial_csv_path(path), ec);
 }

@@ -20,6 +20,10 @@ struct ResultsTable {
   void drop_columns(const std::string& prefix);
 };
 
+// Before any work: throws std::invalid_argument if `path` cannot name an
+// output file (empty, or a directory); `option` names the argument ("-o").
+void check_output_file(const std::string& path, const std::string& option);
+
 // Header "t [s],p [Pa],...". Throws std::runtime_error naming the path.
 // On success also removes a stale PATH.partial.csv left by an earlier failed
 // run, so that the directory never holds results from two different runs.

@@ -334,6 +334,10 @@ Netlist parse_netlist(const std::string& text, const std::string& file_name) {
         p.dim = q.dim;
         p.had_unit = q.had_unit;
       } catch (const units::ParseError& err) {
+        if (is_identifier(text))
+          r.fail(e.value, "", e.key,
+                 "'" + text + "': a top-level parameter is a value with its unit (5 bar); it cannot refer to another "
+                 "parameter (components can refer to top-level parameters by name)");
         r.fail(e.value, "", e.key, std::string("cannot read '") + text + "': " + err.what());
       }
       nl.parameters.push_back(p);
@@ -354,6 +358,9 @@ Netlist parse_netlist(const std::string& text, const std::string& file_name) {
                "a component is a mapping with a 'type' and its parameters, e.g. " + e.key +
                    ": {type: volume, V: 1 L}");
       for (const auto& pe : r.mapping(e.value, "component '" + e.key + "'", e.key, Reader::Keys::parameters)) {
+        if (pe.key == "<<")
+          r.fail(pe.key_node, e.key, "",
+                 "YAML merge keys (<<) are not supported in a component; write its type and parameters out");
         if (pe.key == "type") {
           c.type = r.scalar_text(pe.value, e.key, "type", "the type");
           c.type_where = r.at(pe.value);

@@ -306,6 +306,11 @@ SweepSummary run_sweep(const std::string& netlist_path, const Design& design, co
     text.assign((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   }
   const Netlist base = parse_netlist(text, netlist_path);
+  try {
+    check_output_file(output, "-o");
+  } catch (const std::invalid_argument& e) {
+    throw InputError(SourceLocation{"-o", 0, 0}, "", "", e.what());
+  }
   const auto metrics = select_metrics(base, builtin_registry(), opt.metrics);
   const long n = static_cast<long>(design.samples.size());
   const std::string identity = sweep_identity(text, design, metrics, opt.assembly.eliminate_aliases);
