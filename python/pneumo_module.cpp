@@ -108,20 +108,15 @@ py::array_t<double> columns_array(const ResultsTable& table) {
 }
 
 py::dict stats_dict(const SolverStats& s) {
+  const std::pair<const char*, long> counts[] = {
+      {"steps", s.steps}, {"residual_evals", s.residual_evals}, {"jacobian_evals", s.jacobian_evals},
+      {"jacobian_recombinations", s.jacobian_recombinations}, {"nonlinear_iterations", s.nonlinear_iterations},
+      {"nonlinear_failures", s.nonlinear_failures}, {"error_test_failures", s.error_test_failures},
+      {"root_evals", s.root_evals}, {"reinitialisations", s.reinitialisations}, {"variables", s.variables},
+      {"netlist_variables", s.netlist_variables}, {"explicit_variables", s.explicit_variables},
+      {"nonzeros", s.nonzeros}};
   py::dict d;
-  d["steps"] = s.steps;
-  d["residual_evals"] = s.residual_evals;
-  d["jacobian_evals"] = s.jacobian_evals;
-  d["jacobian_recombinations"] = s.jacobian_recombinations;
-  d["nonlinear_iterations"] = s.nonlinear_iterations;
-  d["nonlinear_failures"] = s.nonlinear_failures;
-  d["error_test_failures"] = s.error_test_failures;
-  d["root_evals"] = s.root_evals;
-  d["reinitialisations"] = s.reinitialisations;
-  d["variables"] = s.variables;
-  d["netlist_variables"] = s.netlist_variables;
-  d["explicit_variables"] = s.explicit_variables;
-  d["nonzeros"] = s.nonzeros;
+  for (const auto& [name, value] : counts) d[name] = value;
   return d;
 }
 
