@@ -35,8 +35,9 @@ namespace {
 
 // A loaded netlist: its text (each sweep thread parses its own copy, since
 // YAML nodes are not safe to share across threads), the parsed netlist with
-// the registry its `plugins:` make, and a lock for elaboration, the one
-// step of a run that reads the shared YAML nodes.
+// the registry its `plugins:` make, and a lock held while anything reads
+// the shared YAML nodes (elaboration, a sweep's design and metrics), so that
+// Python threads may run one netlist at once.
 class LoadedNetlist {
  public:
   explicit LoadedNetlist(const std::string& path) : path_(path) {
@@ -51,13 +52,13 @@ class LoadedNetlist {
   const std::string& text() const { return text_; }
   const Netlist& netlist() const { return netlist_; }
   const Registry& registry() const { return registry_; }
-  std::mutex& elaboration() const { return elaboration_; }
+  std::mutex& yaml_lock() const { return yaml_lock_; }
 
  private:
   std::string path_, text_;
   Netlist netlist_;
   Registry registry_;
-  mutable std::mutex elaboration_;
+  mutable std::mutex yaml_lock_;
 };
 
 // What `pneumo simulate` computes: the run, and every metric the netlist
@@ -74,7 +75,7 @@ Simulation simulate(const LoadedNetlist& loaded, const std::vector<std::string>&
   std::unique_ptr<System> system;
   Netlist nl;
   {
-    std::lock_guard<std::mutex> lock(loaded.elaboration());
+    std::lock_guard<std::mutex> lock(loaded.yaml_lock());
     nl = loaded.netlist();
     for (const auto& a : sets) apply_override(nl, a);
     const std::vector<bool> all(nl.metrics.size(), true);
@@ -148,6 +149,7 @@ py::list parameters_list(const Netlist& nl) {
 // The values of one --grid axis NAME=FROM:TO:COUNT (SI), as `pneumo sweep`
 // spaces them; pneumo.sweep makes the full factorial of the axes.
 std::vector<double> grid_axis(const LoadedNetlist& loaded, const std::string& name, const std::string& spec) {
+  std::lock_guard<std::mutex> lock(loaded.yaml_lock());
   const study::Design one = study::grid_design(loaded.netlist(), loaded.registry(), {name + "=" + spec});
   std::vector<double> axis;
   for (const auto& s : one.samples) axis.push_back(s.front());
@@ -331,8 +333,11 @@ PYBIND11_MODULE(_core, m) {
         std::vector<study::RunRecord> records;
         {
           py::gil_scoped_release release;
-          d = samples_from(l, names, samples);
-          metrics = study::select_metrics(l.netlist(), l.registry(), metric_names);
+          {
+            std::lock_guard<std::mutex> lock(l.yaml_lock());  // both read the netlist's YAML nodes
+            d = samples_from(l, names, samples);
+            metrics = study::select_metrics(l.netlist(), l.registry(), metric_names);
+          }
           records = run_design(l, d, metrics, sets, threads);
         }
         return sweep_dict(d, metrics, records);

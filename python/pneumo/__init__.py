@@ -132,7 +132,7 @@ class Netlist:
         raw = self._core.simulate(_assignments(set))
         result = Result(raw)
         if not raw["ok"]:
-            raise SimulationError(f"{self.file}: simulation failed: {raw['message']}", result, raw["t_reached"])
+            raise SimulationError(f"simulation of {self.file} failed: {raw['message']}", result, raw["t_reached"])
         return result
 
     def __repr__(self):

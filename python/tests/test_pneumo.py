@@ -144,6 +144,18 @@ def test_a_malformed_netlist_raises_netlist_error_naming_file_and_line(tmp_path)
     assert run.stderr.strip() == str(e)
 
 
+def test_a_run_the_solver_cannot_finish_raises_simulation_error_with_the_rows_so_far(tmp_path):
+    path = SOURCE / "tests" / "data" / "bad_netlists" / "solver_failure.yaml"  # max_step 1 ns
+    with pytest.raises(pneumo.SimulationError) as info:
+        pneumo.load(path).simulate()
+    e = info.value
+    assert e.t < 1.0 and len(e.result) >= 1 and e.result.t[0] == 0.0
+    # The command line's message, which exits with status 1.
+    run = cli("simulate", path, "-q", "-o", tmp_path / "out.csv")
+    assert run.returncode == 1
+    assert f"pneumo: {e}" in run.stderr
+
+
 def test_an_unknown_override_is_a_netlist_error():
     with pytest.raises(pneumo.NetlistError, match="--set no_such"):
         pneumo.load(TANK_FILLING).simulate(set={"no_such": 1.0})
@@ -174,6 +186,24 @@ def test_the_gil_is_released_while_a_sweep_runs():
     assert t1 - t0 > 4 * margin
     inside = sum(t0 + margin < t < t1 - margin for t in ticks)
     assert inside > 1000
+
+
+def test_python_threads_may_simulate_one_netlist_at_once():
+    net = pneumo.load(CUSHION_RIG)
+    settings = [0.5, 1.0, 2.0, 3.0]
+    alone = [net.simulate(set={"z_EC": z})["x"] for z in settings]
+    together = [None] * len(settings)
+
+    def run(k):
+        together[k] = net.simulate(set={"z_EC": settings[k]})["x"]
+
+    threads = [threading.Thread(target=run, args=(k,)) for k in range(len(settings))]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    for a, b in zip(alone, together):
+        np.testing.assert_array_equal(a, b)
 
 
 def test_component_library():
