@@ -17,6 +17,8 @@ PACKAGES=(
   gnuplot-nox            # pneumo plot
   libopenmpi-dev openmpi-bin   # pneumo sweep under mpirun (optional at build time)
   chromium               # headless check of the pneumo diagnose HTML report (tests)
+  pybind11-dev python3-dev python3-numpy   # the Python module (python/)
+  python3-pytest         # its tests
 )
 missing=()
 for p in "${PACKAGES[@]}"; do
