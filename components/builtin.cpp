@@ -28,6 +28,14 @@ void register_builtin_components(Registry& r) {
   register_pressure_sensor(r);
   register_temperature_sensor(r);
   register_position_sensor(r);
+  register_limit_switch(r);
+  register_pressure_switch(r);
+  register_and_gate(r);
+  register_or_gate(r);
+  register_not_gate(r);
+  register_timer(r);
+  register_flip_flop(r);
+  register_sequencer(r);
 }
 
 const Registry& builtin_registry() {
