@@ -26,7 +26,7 @@ class LimitSwitch final : public ComponentT<LimitSwitch> {
             .non_negative(),
     };
     i.ports = {{"flange", Domain::translational, Causality::acausal, "sensed flange (no force)"},
-               {"y", Domain::signal, Causality::output, "switch state 0/1"}};
+               {"y", Domain::signal, Causality::output, "switch state 0/1", true}};
     i.observables = {{"state", "1", "switch state 0/1"}};
     i.equations = {"no force", "switch output"};
     i.modes = 1;

@@ -16,7 +16,7 @@ inline std::vector<PortSpec> gate_ports(double neutral) {
   for (int k = 1; k <= 4; ++k)
     ports.push_back({"in" + std::to_string(k), Domain::signal, Causality::input,
                      "input 0/1" + std::string(k > 2 ? " (optional)" : ""), k > 2, neutral});
-  ports.push_back({"y", Domain::signal, Causality::output, "output 0/1"});
+  ports.push_back({"y", Domain::signal, Causality::output, "output 0/1", true});
   return ports;
 }
 

@@ -10,7 +10,7 @@ class NotGate final : public ComponentT<NotGate> {
     i.type = "not";
     i.description = "Logic NOT of a 0/1 signal: y = 1 - in.";
     i.ports = {{"in", Domain::signal, Causality::input, "input 0/1"},
-               {"y", Domain::signal, Causality::output, "output 0/1"}};
+               {"y", Domain::signal, Causality::output, "output 0/1", true}};
     i.equations = {"y = 1 - in"};
     return i;
   }

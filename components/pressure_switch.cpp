@@ -24,7 +24,7 @@ class PressureSwitch final : public ComponentT<PressureSwitch> {
         ParameterSpec::scalar("hysteresis", "Pa", "fall below p_on before it releases", 0.2e5).non_negative(),
     };
     i.ports = {{"port", Domain::pneumatic, Causality::acausal, "gas port (tapped, no flow)"},
-               {"y", Domain::signal, Causality::output, "switch state 0/1"}};
+               {"y", Domain::signal, Causality::output, "switch state 0/1", true}};
     i.observables = {{"state", "1", "switch state 0/1"}};
     i.equations = {"no flow", "stream temperature", "switch output"};
     i.modes = 1;

@@ -152,7 +152,7 @@ class Sequencer final : public ComponentT<Sequencer> {
     for (const auto& n : c.inputs)
       i.ports.push_back({n, Domain::signal, Causality::input, "transition input 0/1"});
     for (const auto& n : c.outputs) {
-      i.ports.push_back({n, Domain::signal, Causality::output, "command of " + n + ": 1 from " + n + "+ to " + n + "-"});
+      i.ports.push_back({n, Domain::signal, Causality::output, "command of " + n + ": 1 from " + n + "+ to " + n + "-", true});
       i.equations.push_back("output " + n);
     }
     i.modes = kOutputs + static_cast<int>(c.outputs.size());

@@ -27,7 +27,7 @@ class Timer final : public ComponentT<Timer> {
         ParameterSpec::scalar("delay", "s", "delay").positive(),
     };
     i.ports = {{"in", Domain::signal, Causality::input, "input 0/1"},
-               {"y", Domain::signal, Causality::output, "delayed output 0/1"}};
+               {"y", Domain::signal, Causality::output, "delayed output 0/1", true}};
     i.observables = {{"state", "1", "output 0/1"}};
     i.equations = {"timer output"};
     i.modes = 3;  // output, running, due time

@@ -301,6 +301,40 @@ connections:
 )",
        0.02,
        {"hose", "temperature_sensor", "pressure_sensor"}},
+      {"switching",
+       // Switches on a moving flange and a filling tank, gates, a timer, a
+       // flip-flop and a step chain, checked with the chain mid-cycle (the
+       // gates' inputs are variables, so their products have slopes).
+       R"yaml(
+components:
+  supply: {type: pressure_source, p: 4 bar}
+  fill:   {type: iso6358_throttle, C: 0.5 dm3/(s*bar)}
+  tank:   {type: volume, V: 0.2 L, p0: 1 bar}
+  ps:     {type: pressure_switch, p_on: 2 bar}
+  body:   {type: translational_mass, m: 1 kg, s0: 0 m, v0: 0.5 m/s}
+  home:   {type: limit_switch, position: 0, window: 10 mm}
+  far:    {type: limit_switch, position: 20 mm, window: 10 mm}
+  go:     {type: signal_source, kind: step, value: 0, height: 1, t_start: 1 ms}
+  seq:    {type: sequencer, steps: "A+ (A- B+)", transitions: "X1 P1"}
+  both:   {type: and}
+  either: {type: or}
+  inv:    {type: not}
+  delay:  {type: timer, delay: 2 ms}
+  mem:    {type: flip_flop}
+connections:
+  - [supply.port, fill.a]
+  - [fill.b, tank.port, ps.port]
+  - [body.flange, home.flange, far.flange]
+  - [go.y, seq.start, both.in1]
+  - [far.y, seq.X1, inv.in]
+  - [ps.y, either.in1, delay.in]
+  - [seq.A, both.in2]
+  - [seq.B, either.in2]
+  - [delay.y, seq.P1, mem.S]
+  - [inv.y, mem.R, both.in3]
+)yaml",
+       0.02,
+       {"pressure_switch", "limit_switch", "sequencer", "and", "or", "not", "timer", "flip_flop"}},
   };
   return list;
 }
