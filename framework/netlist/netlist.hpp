@@ -10,7 +10,7 @@
 //     tank: {type: volume, V: V, p0: 1 bar, T0: 293.15 K}
 //   connections:
 //     - [source.port, valve.a]
-//   outputs:    {p: tank.p, T: tank.T}
+//   outputs:    {p: tank.p, T: {var: tank.T, unit: degC}}
 //   simulation: {t_end: 2 s, rtol: 1e-6, atol: 1e-6, output_interval: 1 ms}
 //   plugins:    [build/my_components.so]  # relative to the netlist's directory
 #pragma once
@@ -65,6 +65,8 @@ struct OutputDecl {
   std::string quantity;   // variable, observable or port variable ("port.p")
   SourceLocation where;
   bool integral = false;  // {integral: comp.var}: its time integral from t_start
+  std::string unit;       // display unit in result files ("" = SI), e.g. barg, mm
+  SourceLocation unit_where;
 };
 
 // A component plugin the netlist loads (framework/plugin/plugin.hpp).
