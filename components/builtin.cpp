@@ -28,6 +28,7 @@ void register_builtin_components(Registry& r) {
   register_pressure_sensor(r);
   register_temperature_sensor(r);
   register_position_sensor(r);
+  register_cylinder(r);
 }
 
 const Registry& builtin_registry() {

@@ -30,6 +30,7 @@ void register_directional_valve_52(Registry& r);
 void register_pressure_sensor(Registry& r);
 void register_temperature_sensor(Registry& r);
 void register_position_sensor(Registry& r);
+void register_cylinder(Registry& r);
 
 }  // namespace pneumo::components
 

@@ -301,6 +301,35 @@ connections:
 )",
        0.02,
        {"hose", "temperature_sensor", "pressure_sensor"}},
+      {"cylinders",
+       // A cylinder cushioned at both ends with LuGre friction and wall heat,
+       // extending into its rod-end cushion (second point inside it); a
+       // rodless one with closed ports (a gas spring) and eq. 8 friction.
+       R"(
+components:
+  supply: {type: pressure_source, p: 6 bar}
+  valve:  {type: iso6358_throttle, C: 1 dm3/(s*bar), b: 0.3}
+  out:    {type: iso6358_throttle, C: 0.3 dm3/(s*bar), b: 0.4}
+  air:    {type: atmosphere}
+  load:   {type: translational_mass, m: 1 kg}
+  wall:   {type: thermal_mass, C: 20 J/K, T0: 300 K}
+  cyl:    {type: cylinder, bore: 25 mm, rod: 10 mm, stroke: 50 mm, cap_cushion_length: 10 mm, cap_plug_diameter: 12 mm,
+           cap_cushion_C: 0.05 dm3/(s*bar), rod_cushion_length: 10 mm, rod_plug_diameter: 14 mm,
+           rod_cushion_C: 0.05 dm3/(s*bar), wall_alpha: 100 W/(m2*K), friction_model: lugre, friction_FC: 10 N,
+           friction_FS: 15 N, friction_sigma0: 1e5 N/m, x0: 30 mm, p0_cap: 3 bar, p0_rod: 3 bar}
+  gasspr: {type: cylinder, bore: 20 mm, rod: 0, stroke: 40 mm, friction: annexC_pAB+, x0: 20 mm, p0_cap: 3 bar}
+  mass2:  {type: translational_mass, m: 0.5 kg}
+connections:
+  - [supply.port, valve.a]
+  - [valve.b, cyl.cap]
+  - [cyl.rod, out.a]
+  - [out.b, air.port]
+  - [cyl.flange, load.flange]
+  - [cyl.heat_rod, wall.port]
+  - [gasspr.flange, mass2.flange]
+)",
+       0.03,
+       {"cylinder"}},
   };
   return list;
 }
