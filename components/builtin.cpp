@@ -29,6 +29,7 @@ void register_builtin_components(Registry& r) {
   register_temperature_sensor(r);
   register_position_sensor(r);
   register_cylinder(r);
+  register_single_acting_cylinder(r);
 }
 
 const Registry& builtin_registry() {

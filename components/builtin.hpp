@@ -31,6 +31,7 @@ void register_pressure_sensor(Registry& r);
 void register_temperature_sensor(Registry& r);
 void register_position_sensor(Registry& r);
 void register_cylinder(Registry& r);
+void register_single_acting_cylinder(Registry& r);
 
 }  // namespace pneumo::components
 

@@ -8,8 +8,10 @@
 //     "extended" at the stroke's end; the flange position equals x;
 //   * end cushioning: with the needle closed further the piston arrives at
 //     the end slower;
-//   * single-acting: the spring alone returns the piston; at rest the
-//     spring and pressure forces balance.
+//   * single-acting: the spring alone returns the piston (without it, the
+//     piston stays); at rest the spring and pressure forces balance (closed
+//     form for a vented spring chamber, the observed pressures for a closed
+//     one).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -127,6 +129,68 @@ TEST(PlainCylinder, CushioningBrakesTheEndOfTheStroke) {
   const double dt_open = impact(open) - entry(open), dt_shut = impact(shut) - entry(shut);
   std::printf("cushion zone crossed in %.4f s (needle open) and %.4f s (nearly shut)\n", dt_open, dt_shut);
   EXPECT_GT(dt_shut, 1.5 * dt_open);
+}
+
+// A single-acting cylinder, bore 20 mm, rod 8 mm, stroke 50 mm; `cap` is
+// the component on its cap port through a throttle.
+std::string single_acting(const std::string& cylinder_extra, const std::string& cap_source, double t_end) {
+  return R"(
+ambient: {p: 101325 Pa, T: 293.15 K}
+components:
+  source:   )" + cap_source + R"(
+  throttle: {type: iso6358_throttle, C: 0.5 dm3/(s*bar), b: 0.3}
+  load:     {type: translational_mass, m: 0.3 kg}
+  cyl:      {type: single_acting_cylinder, bore: 20 mm, rod: 8 mm, stroke: 50 mm, friction_model: coulomb_viscous,
+             friction_viscous: 20 N*s/m)" + cylinder_extra + R"(}
+connections:
+  - [source.port, throttle.a]
+  - [throttle.b, cyl.cap]
+  - [cyl.flange, load.flange]
+outputs:
+  x: cyl.x
+  p_cap: cyl.p_cap
+  p_rod: cyl.p_rod
+  F_spring: cyl.F_spring
+simulation: {t_end: )" + num(t_end) + R"( s}
+)";
+}
+
+TEST(SingleActingCylinder, ReturnsUnderItsSpringAlone) {
+  // Extended at the start, cap side vented: the spring brings it home; the
+  // same cylinder without a spring stays where it is.
+  const std::string vent = "{type: atmosphere}";
+  const RunResult sprung = run_text(
+      single_acting(", spring_preload: 10 N, spring_rate: 200 N/m, x0: 45 mm", vent, 1.0), "sprung.yaml");
+  const RunResult loose =
+      run_text(single_acting(", spring_preload: 0 N, spring_rate: 0 N/m, x0: 45 mm", vent, 1.0), "loose.yaml");
+  bool retracted = false;
+  for (const auto& ev : sprung.solver.events) retracted = retracted || ev.tag == "retracted";
+  EXPECT_TRUE(retracted);
+  EXPECT_NEAR(column(sprung.table, "x").back(), 0.0, 1e-5);
+  EXPECT_NEAR(column(loose.table, "x").back(), 0.045, 1e-9);
+}
+
+TEST(SingleActingCylinder, AtRestSpringAndPressureForcesBalance) {
+  const double A = kPi * 0.02 * 0.02 / 4, A_rod = kPi * 0.008 * 0.008 / 4, p_amb = 101325, p_s = 3e5;
+  const double F0 = 20, k = 2000;
+  const std::string supply = "{type: pressure_source, p: 3 bar, T: 293.15 K}";
+  // Vented: the closed form x = ((p_s - p_amb) A - F0) / k.
+  const RunResult vented = run_text(single_acting(", spring_preload: 20 N, spring_rate: 2000 N/m", supply, 3.0),
+                                    "vented.yaml");
+  const double x_eq = ((p_s - p_amb) * A - F0) / k;
+  std::printf("single-acting at rest: x %.9f m, closed form %.9f m\n", column(vented.table, "x").back(), x_eq);
+  EXPECT_NEAR(column(vented.table, "x").back(), x_eq, 1e-6 * x_eq);
+  // Closed spring chamber: its gas spring joins the balance.
+  const RunResult closed = run_text(
+      single_acting(", spring_preload: 20 N, spring_rate: 2000 N/m, spring_chamber: closed", supply, 3.0),
+      "closed.yaml");
+  const double x = column(closed.table, "x").back(), p_cap = column(closed.table, "p_cap").back();
+  const double p_rod = column(closed.table, "p_rod").back();
+  const double imbalance = p_cap * A - p_rod * (A - A_rod) - p_amb * A_rod - (F0 + k * x);
+  std::printf("closed spring chamber at rest: x %.6f m, p_rod %.6g Pa, force imbalance %.3g N\n", x, p_rod, imbalance);
+  EXPECT_LT(x, x_eq - 1e-3);    // the trapped air pushes back
+  EXPECT_GT(p_rod, 1.05 * p_amb);
+  EXPECT_NEAR(imbalance, 0.0, 1e-6 * p_cap * A);
 }
 
 }  // namespace
