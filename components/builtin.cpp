@@ -36,6 +36,8 @@ void register_builtin_components(Registry& r) {
   register_timer(r);
   register_flip_flop(r);
   register_sequencer(r);
+  register_cylinder(r);
+  register_single_acting_cylinder(r);
 }
 
 const Registry& builtin_registry() {

@@ -38,6 +38,8 @@ void register_not_gate(Registry& r);
 void register_timer(Registry& r);
 void register_flip_flop(Registry& r);
 void register_sequencer(Registry& r);
+void register_cylinder(Registry& r);
+void register_single_acting_cylinder(Registry& r);
 
 }  // namespace pneumo::components
 
