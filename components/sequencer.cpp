@@ -121,7 +121,7 @@ struct Chain {
 
 class Sequencer final : public ComponentT<Sequencer> {
  public:
-  enum Mode { kStep, kCycles, kOutputs };
+  enum Mode { kStep, kCycles, kCycleStart, kOutputs };
 
   static ComponentInfo describe() {
     ComponentInfo i;
@@ -193,6 +193,7 @@ class Sequencer final : public ComponentT<Sequencer> {
     if (step == 0) {
       if (!level(0) || (cycles_ > 0 && modes[kCycles] >= cycles_)) return {};
       enter(1, modes);
+      modes[kCycleStart] = e.t();
       return {true, "start: step 1 " + chain_.step_text[0], "cycle_start"};
     }
     for (int input : chain_.transitions[step - 1])
@@ -205,7 +206,10 @@ class Sequencer final : public ComponentT<Sequencer> {
     }
     modes[kStep] = 0.0;
     modes[kCycles] += 1.0;
-    return {true, after + ": cycle " + format_number(modes[kCycles]) + " done", "cycle_end"};
+    return {true,
+            after + ": cycle " + format_number(modes[kCycles]) + " done, cycle time " +
+                format_number(e.t() - modes[kCycleStart]) + " s",
+            "cycle_end"};
   }
   void enter(int step, double* modes) const {
     modes[kStep] = step;

@@ -169,12 +169,12 @@ void plot_step_diagram(const std::string& csv_path, const std::string& prefix, c
     times << (k ? ", " : "") << quoted(label.str()) << " " << k + 1;
   }
   run_gnuplot(prefix, 150 * n + 120, title, [&](std::ostream& gp, const std::string& t) {
-    gp << "set multiplot layout " << n << ",1 title " << quoted(t + " - displacement-step diagram") << "\n"
+    gp << "set multiplot layout " << n << ",1 title "
+       << quoted(t + ": displacement-step diagram (top axis: transition times in s)") << "\n"
        << "set key off\nset xrange [1:" << last << "]\nset yrange [-0.15:1.15]\nset ytics ('0' 0, '1' 1)\n"
-       << "set xtics 1\nset grid xtics ytics\nset lmargin 12\n";
+       << "set xtics 1\nset grid xtics ytics\nset lmargin 12\nset rmargin 6\n";
     for (int k = 0; k < n; ++k) {
-      gp << (k == 0 ? "set x2tics (" + times.str() + ") rotate by 30 left\nset x2label 't [s] at the transitions'\n"
-                    : "unset x2tics\nunset x2label\n")
+      gp << (k == 0 ? "set x2tics (" + times.str() + ")\nset tmargin 3\n" : "unset x2tics\nset tmargin 1\n")
          << (k + 1 == n ? "set xlabel 'step'\n" : "unset xlabel\n") << "set ylabel " << quoted(table.names[cols[k]])
          << "\nplot " << quoted(data_path) << " using 1:" << k + 2 << " with lines lw 3\n";
     }

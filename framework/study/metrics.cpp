@@ -77,6 +77,18 @@ std::vector<Metric> builtin_metrics() {
        [](const RunResult& r) {
          return r.solver.events.empty() ? kNaN : event_time(r, kImpactEvent) - r.solver.events.front().t;
        }},
+      {"cycle_time", "s",
+       "first cycle of a step chain: from its event tagged cycle_start to the next tagged cycle_end (needs the "
+       "sequencer's step as output 'step')",
+       {"step"},
+       [](const RunResult& r) {
+         double start = kNaN;
+         for (const auto& e : r.solver.events) {
+           if (std::isnan(start) && e.tag == "cycle_start") start = e.t;
+           else if (!std::isnan(start) && e.tag == "cycle_end") return e.t - start;
+         }
+         return kNaN;
+       }},
       audit_metric("E_kin_entry", "J", "kinetic energy at cushion entry", true, "kinetic_energy_at_entry"),
       audit_metric("E_drive_cushion", "J", "driving work during cushioning", true, "driving_work"),
       audit_metric("E_compression", "J", "compression of the cushion gas", false, "cushion_gas_compression"),

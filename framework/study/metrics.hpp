@@ -13,6 +13,9 @@
 //   T_EC_max   [K]    highest cushion-volume temperature over the run
 //   t_move     [s]    total movement time: from the first logged event (the
 //                     valve command step) to the first cap-end impact
+// Sequence metric (a netlist with a sequencer and its step as output 'step'):
+//   cycle_time [s]    first cycle: from the event tagged cycle_start (the
+//                     start signal) to the next tagged cycle_end
 // A metric whose event never happens (e.g. the piston never reaches the cap
 // by t_end) is NaN ("nan" in the results), not an error.
 //
