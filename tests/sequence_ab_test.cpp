@@ -1,0 +1,110 @@
+// netlists/sequence_ab.yaml: two cylinders switched by their limit switches
+// through the sequencer A+ B+ B- A-.
+//  * Order: the chain's steps follow each other in the notation's order, each
+//    entered at the instant (and just after, in the log) the limit switch of
+//    the previous movement closes - not at a time read off an earlier run.
+//  * Motion: when B+ starts, A is extended and B still retracted; when A-
+//    starts, B is back.
+//  * cycle_time (start signal to A0) falls as the supply pressure rises.
+//  * Display units: the barg columns are the SI pressures less the ambient.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "components/builtin.hpp"
+#include "framework/netlist/netlist.hpp"
+#include "framework/run/run.hpp"
+#include "framework/study/metrics.hpp"
+
+namespace pneumo {
+namespace {
+
+const std::string kNetlist = std::string(PNEUMO_SOURCE_DIR) + "/netlists/sequence_ab.yaml";
+
+RunResult run_ab(const std::vector<std::string>& sets = {}) {
+  Netlist nl = load_netlist(kNetlist);
+  for (const auto& s : sets) apply_override(nl, s);
+  return run_simulation(nl, builtin_registry());
+}
+
+int index_of(const RunResult& r, const std::string& component, const std::string& tag, double after = -1.0) {
+  for (std::size_t i = 0; i < r.solver.events.size(); ++i) {
+    const auto& e = r.solver.events[i];
+    if (e.component == component && e.tag == tag && e.t > after) return static_cast<int>(i);
+  }
+  return -1;
+}
+
+double at(const RunResult& r, const std::string& column, double t) {
+  const int c = r.table.column(column);
+  for (const auto& row : r.table.rows)
+    if (row[0] >= t) return row[c];
+  return std::nan("");
+}
+
+TEST(SequenceAB, StepsFollowTheNotationEachTriggeredByItsLimitSwitch) {
+  const RunResult r = run_ab();
+  ASSERT_TRUE(r.solver.ok) << r.solver.message;
+  const auto& ev = r.solver.events;
+  // Sequencer step k and the limit switch whose closing must trigger it.
+  const std::vector<std::pair<std::string, std::string>> chain = {
+      {"cycle_start", "start"}, {"step_2", "a1"}, {"step_3", "b1"}, {"step_4", "b0"}, {"cycle_end", "a0"}};
+  int previous = -1;
+  for (const auto& [tag, trigger] : chain) {
+    const int i = index_of(r, "seq", tag);
+    ASSERT_GE(i, 0) << "no sequencer event " << tag;
+    EXPECT_GT(i, previous) << tag << " out of order";
+    previous = i;
+    // The trigger's event is at the same instant, logged before the step.
+    const int j = index_of(r, trigger, trigger == "start" ? "step" : "on", ev[i].t - 1e-9);
+    ASSERT_GE(j, 0) << "no event of " << trigger << " at t = " << ev[i].t;
+    EXPECT_LT(j, i) << tag;
+    EXPECT_EQ(ev[j].t, ev[i].t) << tag << " not at the instant " << trigger << " switched";
+  }
+  const double t_B_plus = ev[index_of(r, "seq", "step_2")].t;
+  const double t_A_minus = ev[index_of(r, "seq", "step_4")].t;
+  EXPECT_GT(at(r, "x_A", t_B_plus), 0.099);   // A extended (switch closes 1 mm before the stop)
+  EXPECT_LT(at(r, "x_B", t_B_plus), 1e-4);    // B not yet moved
+  EXPECT_LT(at(r, "x_B", t_A_minus), 0.0011); // B back within its switch window
+  EXPECT_GT(at(r, "x_A", t_A_minus), 0.099);  // A still out
+  // Each cylinder travels its full stroke once.
+  EXPECT_EQ(index_of(r, "a1", "on", ev[index_of(r, "seq", "cycle_end")].t), -1);
+}
+
+TEST(SequenceAB, CycleTimeFallsAsSupplyPressureRises) {
+  const study::Metric* cycle = nullptr;
+  for (const auto& m : study::metric_catalogue())
+    if (m.name == "cycle_time") cycle = &m;
+  ASSERT_NE(cycle, nullptr);
+  double previous = INFINITY;
+  for (const char* p : {"4 bar", "5 bar", "6 bar", "7 bar"}) {
+    const RunResult r = run_ab({std::string("p_supply=") + p});
+    ASSERT_TRUE(r.solver.ok) << r.solver.message;
+    const double t_cycle = cycle->compute(r);
+    std::printf("p_supply %s (absolute): cycle_time %.4f s\n", p, t_cycle);
+    ASSERT_FALSE(std::isnan(t_cycle)) << p;
+    EXPECT_LT(t_cycle, previous) << p;
+    previous = t_cycle;
+  }
+}
+
+TEST(SequenceAB, BargColumnsAreSIPressureLessAmbient) {
+  const RunResult r = run_ab({"t_start=0.05 s"});
+  ASSERT_TRUE(r.solver.ok) << r.solver.message;
+  const std::string path = testing::TempDir() + "sequence_ab_units.csv";
+  write_csv_atomic(path, r.table);
+  const ResultsTable shown = read_csv(path);
+  const int c = shown.column("p_cap_A");
+  ASSERT_GE(c, 0);
+  EXPECT_EQ(shown.units[c], "barg");
+  EXPECT_EQ(shown.units[shown.column("x_A")], "m");
+  for (std::size_t k = 0; k < r.table.rows.size(); k += 97)
+    EXPECT_NEAR(shown.rows[k][c], (r.table.rows[k][c] - 101325.0) / 1e5, 1e-8);
+  std::remove(path.c_str());
+}
+
+}  // namespace
+}  // namespace pneumo
