@@ -1,4 +1,4 @@
-// netlists/sequence_ab.yaml: two cylinders switched by their limit switches
+// netlists/sequence_ab.yaml (and assembly_line.yaml): cylinders switched by their limit switches
 // through the sequencer A+ B+ B- A-.
 //  * Order: the chain's steps follow each other in the notation's order, each
 //    entered at the instant (and just after, in the log) the limit switch of
@@ -104,6 +104,35 @@ TEST(SequenceAB, BargColumnsAreSIPressureLessAmbient) {
   for (std::size_t k = 0; k < r.table.rows.size(); k += 97)
     EXPECT_NEAR(shown.rows[k][c], (r.table.rows[k][c] - 101325.0) / 1e5, 1e-8);
   std::remove(path.c_str());
+}
+
+// netlists/assembly_line.yaml: six cylinders, two of them (D, E) moving in
+// one step. The chain completes and prints its takt; in the parallel step
+// both leave their retracted switches before the step ends, and the step
+// ends only when the slower of the two has arrived (D1 after E1).
+TEST(AssemblyLine, RunsItsChainWithAParallelStepAndPrintsTheTakt) {
+  const RunResult r = run_simulation(load_netlist(std::string(PNEUMO_SOURCE_DIR) + "/netlists/assembly_line.yaml"),
+                                     builtin_registry());
+  ASSERT_TRUE(r.solver.ok) << r.solver.message;
+  const auto& ev = r.solver.events;
+  const int step4 = index_of(r, "seq", "step_4"), step5 = index_of(r, "seq", "step_5");
+  const int end = index_of(r, "seq", "cycle_end");
+  ASSERT_GE(step4, 0);
+  ASSERT_GE(step5, 0);
+  ASSERT_GE(end, 0);
+  for (const char* sw : {"d0", "e0"}) {
+    const int off = index_of(r, sw, "off", ev[step4].t - 1e-9);
+    ASSERT_GE(off, 0) << sw;
+    EXPECT_LT(ev[off].t, ev[step5].t) << sw << " still retracted when step 5 began";
+  }
+  const int d1 = index_of(r, "d1", "on", ev[step4].t), e1 = index_of(r, "e1", "on", ev[step4].t);
+  ASSERT_GE(d1, 0);
+  ASSERT_GE(e1, 0);
+  EXPECT_LT(ev[e1].t, ev[d1].t);        // the small stamp arrives first ...
+  EXPECT_EQ(ev[d1].t, ev[step5].t);     // ... the press's arrival ends the step
+  EXPECT_NE(ev[end].message.find("cycle time"), std::string::npos) << ev[end].message;
+  std::printf("assembly line takt: %.4f s (%s)\n", ev[end].t - ev[index_of(r, "seq", "cycle_start")].t,
+              ev[end].message.c_str());
 }
 
 }  // namespace
