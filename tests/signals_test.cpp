@@ -248,6 +248,47 @@ simulation: {t_end: 1 s}
   EXPECT_NE(r.solver.message.find("ff"), std::string::npos) << r.solver.message;
 }
 
+// A valve commanded by a sequencer output (a signal that jumps at an event)
+// keeps its switching time: the spool ramps at 1/t_switch_time from the
+// command's instant, half open after half of it and 99 % open after 99 % of
+// it (the drive's smooth end costs ~0.1 % of t_switch_time there).
+TEST(Sequencer, CommandedValveKeepsItsSwitchingTime) {
+  const RunResult r = run_text(R"yaml(
+components:
+  go:     {type: signal_source, kind: step, value: 0, height: 1, t_start: 0.05 s}
+  seq:    {type: sequencer, steps: "A+ A-", transitions: "T T"}
+  hold:   {type: timer, delay: 0.1 s}
+  supply: {type: pressure_source, p: 6 bar}
+  valve:  {type: directional_valve_52, C: 0.5 dm3/(s*bar), t_switch_time: 20 ms}
+  ca:     {type: volume, V: 0.1 L}
+  cb:     {type: volume, V: 0.1 L}
+  air:    {type: atmosphere}
+connections:
+  - [go.y, seq.start]
+  - [seq.A, valve.command, hold.in]
+  - [hold.y, seq.T]
+  - [supply.port, valve.P]
+  - [valve.A, ca.port]
+  - [valve.B, cb.port]
+  - [valve.R, air.port]
+outputs: {x: valve.x}
+simulation: {t_end: 0.2 s, output_interval: 0.1 ms}
+)yaml");
+  ASSERT_TRUE(r.solver.ok) << r.solver.message;
+  const int cx = r.table.column("x");
+  auto crossing = [&](double level) {
+    const auto& rows = r.table.rows;
+    for (std::size_t i = 1; i < rows.size(); ++i)
+      if (rows[i - 1][cx] < level && rows[i][cx] >= level)
+        return rows[i - 1][0] + (level - rows[i - 1][cx]) * (rows[i][0] - rows[i - 1][0]) / (rows[i][cx] - rows[i - 1][cx]);
+    return std::nan("");
+  };
+  const double t_cmd = event_time(r, "seq", "cycle_start"), T = 0.02;
+  EXPECT_NEAR(t_cmd, 0.05, 1e-9);
+  EXPECT_NEAR(crossing(0.5) - t_cmd, 0.5 * T, 0.005 * T);
+  EXPECT_NEAR(crossing(0.99) - t_cmd, 0.99 * T, 0.005 * T);
+}
+
 TEST(Sequencer, BadChainsAreInputErrorsAtTheirParameter) {
   auto error_of = [](const std::string& seq) -> InputError {
     try {
