@@ -8,7 +8,7 @@
 
 namespace pneumo::components {
 
-class LimitSwitch final : public ComponentT<LimitSwitch> {
+class LimitSwitch final : public WindowSwitchComponent<LimitSwitch> {
  public:
   enum Port { kFlange, kOut };
 
@@ -36,27 +36,17 @@ class LimitSwitch final : public ComponentT<LimitSwitch> {
   }
 
   explicit LimitSwitch(const Construction& c)
-      : ComponentT(c),
-        window_{c.params["position"] - 0.5 * c.params["window"], c.params["position"] + 0.5 * c.params["window"],
-                c.params["hysteresis"]} {}
+      : WindowSwitchComponent(c,
+                              {c.params["position"] - 0.5 * c.params["window"],
+                               c.params["position"] + 0.5 * c.params["window"], c.params["hysteresis"]},
+                              "s", "m") {}
 
   template <class T>
   void equations(const Eval<T>& e, T* r) const {
     r[0] = e.flange(kFlange).f;
     r[1] = e.signal(kOut) - e.mode(0);
   }
-  double observe(int, const Eval<double>& e) const override { return e.mode(0); }
-
-  void roots(const Eval<double>& e, double* g) const override { window_.roots(e.flange(kFlange).s, e.mode(0), g); }
-  EventResult on_event(const Eval<double>& e, double* modes, EventKind, int, int) const override {
-    return on_inputs_changed(e, modes);
-  }
-  EventResult on_inputs_changed(const Eval<double>& e, double* modes) const override {
-    return window_.update(e.flange(kFlange).s, modes, "s", "m");
-  }
-
- private:
-  WindowSwitch window_;
+  double measured(const Eval<double>& e) const { return e.flange(kFlange).s; }
 };
 
 void register_limit_switch(Registry& r) { r.add<LimitSwitch>(); }

@@ -9,7 +9,7 @@
 
 namespace pneumo::components {
 
-class PressureSwitch final : public ComponentT<PressureSwitch> {
+class PressureSwitch final : public WindowSwitchComponent<PressureSwitch> {
  public:
   enum Port { kPort, kOut };
 
@@ -34,7 +34,8 @@ class PressureSwitch final : public ComponentT<PressureSwitch> {
   }
 
   explicit PressureSwitch(const Construction& c)
-      : ComponentT(c), window_{c.params["p_on"], std::numeric_limits<double>::infinity(), c.params["hysteresis"]} {}
+      : WindowSwitchComponent(c, {c.params["p_on"], std::numeric_limits<double>::infinity(), c.params["hysteresis"]},
+                              "p", "Pa") {}
 
   template <class T>
   void equations(const Eval<T>& e, T* r) const {
@@ -43,18 +44,7 @@ class PressureSwitch final : public ComponentT<PressureSwitch> {
     r[1] = port.T_out - port.T_in;
     r[2] = e.signal(kOut) - e.mode(0);
   }
-  double observe(int, const Eval<double>& e) const override { return e.mode(0); }
-
-  void roots(const Eval<double>& e, double* g) const override { window_.roots(e.gas_port(kPort).p, e.mode(0), g); }
-  EventResult on_event(const Eval<double>& e, double* modes, EventKind, int, int) const override {
-    return on_inputs_changed(e, modes);
-  }
-  EventResult on_inputs_changed(const Eval<double>& e, double* modes) const override {
-    return window_.update(e.gas_port(kPort).p, modes, "p", "Pa");
-  }
-
- private:
-  WindowSwitch window_;
+  double measured(const Eval<double>& e) const { return e.gas_port(kPort).p; }
 };
 
 void register_pressure_switch(Registry& r) { r.add<PressureSwitch>(); }

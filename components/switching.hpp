@@ -8,6 +8,7 @@
 #include <cmath>
 #include <sstream>
 #include <string>
+#include <utility>
 
 #include "framework/model/component.hpp"
 
@@ -46,6 +47,32 @@ struct WindowSwitch {
     return {true, std::string(next ? "on" : "off") + " at " + what + " = " + format_number(q) + " " + unit,
             next ? "on" : "off"};
   }
+};
+
+// Base of the switches on a measured quantity (limit_switch,
+// pressure_switch): state in mode 0, observable 0 the state, switched at the
+// roots of its window and, at the start, by the event iteration. The derived
+// class defines  double measured(const Eval<double>&) const.
+template <class Derived>
+class WindowSwitchComponent : public ComponentT<Derived> {
+ public:
+  WindowSwitchComponent(const Construction& c, WindowSwitch window, std::string what, std::string unit)
+      : ComponentT<Derived>(c), window_(window), what_(std::move(what)), unit_(std::move(unit)) {}
+
+  double observe(int, const Eval<double>& e) const override { return e.mode(0); }
+  void roots(const Eval<double>& e, double* g) const override { window_.roots(measured(e), e.mode(0), g); }
+  EventResult on_event(const Eval<double>& e, double* modes, EventKind, int, int) const override {
+    return on_inputs_changed(e, modes);
+  }
+  EventResult on_inputs_changed(const Eval<double>& e, double* modes) const override {
+    return window_.update(measured(e), modes, what_, unit_);
+  }
+
+ private:
+  double measured(const Eval<double>& e) const { return static_cast<const Derived&>(*this).measured(e); }
+
+  WindowSwitch window_;
+  std::string what_, unit_;
 };
 
 }  // namespace pneumo::components

@@ -360,6 +360,8 @@ SolverResult simulate(System& system, const SolverOptions& opt, const OutputFn& 
              " still change (a loop of signals that switch each other at one instant)");
         return false;
       }
+      ++result.stats.reinitialisations;
+      accumulate_stats();
       check(IDAReInit(ida, t, y.get(), yp.get()), "IDAReInit");
       if (n_quad > 0) check(IDAQuadReInit(ida, q.get()), "IDAQuadReInit");
       if (!consistent_ic()) return false;
