@@ -74,6 +74,7 @@ struct Chain {
       if (w.size() < 2 || (w.back() != '+' && w.back() != '-') || !is_name(name))
         throw ParameterError("steps", "'" + w + "' is not an action; write the actuator's name and + (extend) or - "
                                       "(retract), e.g. \"A+ B+ B- A-\", with ( ) around actions of one step");
+      if (name == "start") throw ParameterError("steps", "'start' names the start input, not an actuator");
       if (!open) c.steps.emplace_back(), c.step_text.emplace_back();
       c.steps.back().push_back({index_of(c.outputs, name), w.back() == '+' ? 1.0 : 0.0});
       c.step_text.back() += (c.step_text.back().empty() ? "" : " ") + w;

@@ -11,12 +11,14 @@
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <string>
 #include <vector>
 
 #include "components/builtin.hpp"
 #include "framework/netlist/netlist.hpp"
 #include "framework/run/run.hpp"
+#include "framework/io/plot.hpp"
 #include "framework/study/metrics.hpp"
 
 namespace pneumo {
@@ -104,6 +106,26 @@ TEST(SequenceAB, BargColumnsAreSIPressureLessAmbient) {
   for (std::size_t k = 0; k < r.table.rows.size(); k += 97)
     EXPECT_NEAR(shown.rows[k][c], (r.table.rows[k][c] - 101325.0) / 1e5, 1e-8);
   std::remove(path.c_str());
+}
+
+// The displacement-step diagram is drawn from the results file (gnuplot);
+// without the sequencer's step column it says what to add.
+TEST(SequenceAB, StepDiagramIsDrawnAndNeedsTheStepColumn) {
+  const RunResult r = run_ab();
+  ASSERT_TRUE(r.solver.ok) << r.solver.message;
+  const std::string dir = testing::TempDir() + "sequence_ab_plot/";
+  std::filesystem::create_directories(dir);
+  write_csv_atomic(dir + "ab.csv", r.table);
+  plot_step_diagram(dir + "ab.csv", dir + "steps", {"x_A", "x_B"}, "step");
+  EXPECT_GT(std::filesystem::file_size(dir + "steps.png"), 1000u);
+  EXPECT_FALSE(std::filesystem::exists(dir + "steps.steps.csv"));  // its data file is cleaned up
+  try {
+    plot_step_diagram(dir + "ab.csv", dir + "bad", {"x_A"}, "v_A");
+    ADD_FAILURE() << "a column that is not the step was accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("SEQ.step"), std::string::npos) << e.what();
+  }
+  std::filesystem::remove_all(dir);
 }
 
 // netlists/assembly_line.yaml: six cylinders, two of them (D, E) moving in

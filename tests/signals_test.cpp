@@ -308,6 +308,31 @@ TEST(Sequencer, BadChainsAreInputErrorsAtTheirParameter) {
   EXPECT_EQ(t.parameter(), "transitions");
   EXPECT_NE(t.message().find("2 steps, 1 transitions"), std::string::npos) << t.message();
   EXPECT_EQ(error_of("steps: \"A+ A-\", transitions: \"A A0\"").parameter(), "transitions");
+  EXPECT_EQ(error_of("steps: \"start+ A+\"").parameter(), "steps");
+}
+
+// A display unit must exist and fit the output's dimension; the error
+// points at the unit's line.
+TEST(OutputUnits, UnknownOrMismatchedUnitIsAnErrorAtItsLine) {
+  auto error_of = [](const std::string& output) -> InputError {
+    try {
+      elaborate(parse_netlist("components:\n  tank: {type: volume, V: 1 L}\noutputs:\n  p: " + output + "\n",
+                              "units.yaml"),
+                builtin_registry());
+    } catch (const InputError& e) {
+      return e;
+    }
+    ADD_FAILURE() << "no error for " << output;
+    return InputError({}, "", "", "");
+  };
+  const InputError wrong = error_of("{var: tank.p, unit: mm}");
+  EXPECT_EQ(wrong.where().line, 4);
+  EXPECT_NE(wrong.message().find("does not fit"), std::string::npos) << wrong.message();
+  const InputError unknown = error_of("{var: tank.p, unit: furlong}");
+  EXPECT_EQ(unknown.where().line, 4);
+  EXPECT_NE(unknown.message().find("furlong"), std::string::npos) << unknown.message();
+  EXPECT_NE(error_of("{var: tank.p, units: bar}").message().find("unknown key"), std::string::npos);
+  EXPECT_NE(error_of("{unit: bar}").message().find("{var: component.variable}"), std::string::npos);
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 #include "framework/io/plot.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -130,11 +131,15 @@ void plot_step_diagram(const std::string& csv_path, const std::string& prefix, c
   // Transitions: the rows where the active step changes (the solver writes
   // a row at every event, so these are the event times).
   std::vector<std::size_t> change;
-  for (std::size_t i = 1; i < table.rows.size(); ++i)
-    if (table.rows[i][sc] != table.rows[i - 1][sc]) change.push_back(i);
-  if (change.size() < 2)
+  bool whole = true;
+  for (std::size_t i = 0; i < table.rows.size(); ++i) {
+    whole &= table.rows[i][sc] == std::floor(table.rows[i][sc]);
+    if (i > 0 && table.rows[i][sc] != table.rows[i - 1][sc]) change.push_back(i);
+  }
+  if (!whole || change.size() < 2)
     throw std::runtime_error("plot --steps: column '" + step_column + "' of " + csv_path +
-                             " changes fewer than twice; output the sequencer's step (outputs: {step: SEQ.step})");
+                             " is not a step index that changes at least twice (whole numbers); output the sequencer's "
+                             "step (outputs: {step: SEQ.step})");
   // Each step's time span maps onto one unit of the step axis (VDI 3260):
   // transition k at abscissa k + 1, linear in time in between.
   std::vector<double> lo, hi;  // each column normalised: 0 at its least, 1 at its greatest value
