@@ -1,5 +1,5 @@
 // Cost of the sequence netlists: netlists/sequence_ab.yaml (2 cylinders,
-// 3 s) and netlists/assembly_line.yaml (6 cylinders, 3 s), each run
+// 1.5 s) and netlists/assembly_line.yaml (6 cylinders, 2.5 s), each run
 // elaborated and solved on one thread. Prints the median and least CPU and
 // wall time over the runs, the cycle (takt) time the sequencer reports, and
 // the solver's counts - the figures the README quotes for the takt.

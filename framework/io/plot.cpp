@@ -103,7 +103,8 @@ void plot_results(const std::string& csv_path, const std::string& prefix, const 
   const auto panels = panels_of(table, columns, csv_path);
   const int n = static_cast<int>(panels.size());
   run_gnuplot(prefix, 220 * n + 60, title, [&](std::ostream& gp, const std::string& t) {
-    gp << "set multiplot layout " << n << ",1 title " << quoted(t) << "\n";
+    gp << "set multiplot layout " << n << ",1 title " << quoted(t) << "\n"
+       << "set lmargin 12\n";  // the panels' time axes aligned whatever their labels
     for (int k = 0; k < n; ++k) {
       const auto& panel = panels[k];
       const std::string label = panel_label(table, panel);
