@@ -14,7 +14,8 @@ class FlipFlop final : public ComponentT<FlipFlop> {
   static ComponentInfo describe() {
     ComponentInfo i;
     i.type = "flip_flop";
-    i.description = "SR flip-flop: S = 1 sets Q = 1, R = 1 resets Q = 0, both high: the dominant input wins; Qn = 1 - Q. "
+    i.description =
+        "SR flip-flop: S = 1 sets Q = 1, R = 1 resets Q = 0, both high: the dominant input wins; Qn = 1 - Q. "
                     "Events: set, reset.";
     i.parameters = {
         ParameterSpec::text("dominant", {"reset", "set"}, "which input wins when both are high", "reset"),

@@ -41,7 +41,8 @@ struct Chain {
 
   static bool is_name(const std::string& s) {
     return !s.empty() && (std::isalpha(static_cast<unsigned char>(s[0])) || s[0] == '_') &&
-           std::all_of(s.begin(), s.end(), [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; });
+           std::all_of(s.begin(), s.end(),
+                       [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; });
   }
   static int index_of(std::vector<std::string>& names, const std::string& n) {
     const auto it = std::find(names.begin(), names.end(), n);
@@ -153,7 +154,8 @@ class Sequencer final : public ComponentT<Sequencer> {
     for (const auto& n : c.inputs)
       i.ports.push_back({n, Domain::signal, Causality::input, "transition input 0/1"});
     for (const auto& n : c.outputs) {
-      i.ports.push_back({n, Domain::signal, Causality::output, "command of " + n + ": 1 from " + n + "+ to " + n + "-", true});
+      i.ports.push_back(
+          {n, Domain::signal, Causality::output, "command of " + n + ": 1 from " + n + "+ to " + n + "-", true});
       i.equations.push_back("output " + n);
     }
     i.modes = kOutputs + static_cast<int>(c.outputs.size());
@@ -161,7 +163,8 @@ class Sequencer final : public ComponentT<Sequencer> {
     return i;
   }
 
-  explicit Sequencer(const Construction& c) : ComponentT(c), chain_(Chain::parse(c.params)), cycles_(c.params["cycles"]) {
+  explicit Sequencer(const Construction& c)
+      : ComponentT(c), chain_(Chain::parse(c.params)), cycles_(c.params["cycles"]) {
     if (cycles_ != std::floor(cycles_)) throw ParameterError("cycles", "cycles must be a whole number");
   }
 

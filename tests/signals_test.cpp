@@ -280,7 +280,8 @@ simulation: {t_end: 0.2 s, output_interval: 0.1 ms}
     const auto& rows = r.table.rows;
     for (std::size_t i = 1; i < rows.size(); ++i)
       if (rows[i - 1][cx] < level && rows[i][cx] >= level)
-        return rows[i - 1][0] + (level - rows[i - 1][cx]) * (rows[i][0] - rows[i - 1][0]) / (rows[i][cx] - rows[i - 1][cx]);
+        return rows[i - 1][0] +
+               (level - rows[i - 1][cx]) * (rows[i][0] - rows[i - 1][0]) / (rows[i][cx] - rows[i - 1][cx]);
     return std::nan("");
   };
   const double t_cmd = event_time(r, "seq", "cycle_start"), T = 0.02;

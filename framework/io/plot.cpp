@@ -58,7 +58,8 @@ std::string with_unit(const ResultsTable& table, int c) {
 // The y label of a panel: "p_cap, p_rod [barg]" when the columns share a
 // unit; each curve's legend then names the column alone.
 std::string panel_label(const ResultsTable& table, const std::vector<int>& panel) {
-  const bool same = std::all_of(panel.begin(), panel.end(), [&](int c) { return table.units[c] == table.units[panel[0]]; });
+  const bool same =
+      std::all_of(panel.begin(), panel.end(), [&](int c) { return table.units[c] == table.units[panel[0]]; });
   if (!same) return "";
   std::string names;
   for (int c : panel) names += (names.empty() ? "" : ", ") + table.names[c];
