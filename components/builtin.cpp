@@ -28,6 +28,16 @@ void register_builtin_components(Registry& r) {
   register_pressure_sensor(r);
   register_temperature_sensor(r);
   register_position_sensor(r);
+  register_limit_switch(r);
+  register_pressure_switch(r);
+  register_and_gate(r);
+  register_or_gate(r);
+  register_not_gate(r);
+  register_timer(r);
+  register_flip_flop(r);
+  register_sequencer(r);
+  register_cylinder(r);
+  register_single_acting_cylinder(r);
 }
 
 const Registry& builtin_registry() {

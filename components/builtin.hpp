@@ -30,6 +30,16 @@ void register_directional_valve_52(Registry& r);
 void register_pressure_sensor(Registry& r);
 void register_temperature_sensor(Registry& r);
 void register_position_sensor(Registry& r);
+void register_limit_switch(Registry& r);
+void register_pressure_switch(Registry& r);
+void register_and_gate(Registry& r);
+void register_or_gate(Registry& r);
+void register_not_gate(Registry& r);
+void register_timer(Registry& r);
+void register_flip_flop(Registry& r);
+void register_sequencer(Registry& r);
+void register_cylinder(Registry& r);
+void register_single_acting_cylinder(Registry& r);
 
 }  // namespace pneumo::components
 

@@ -58,14 +58,12 @@
 #include <type_traits>
 
 #include "components/builtin.hpp"
-#include "components/enthalpy_flow.hpp"
-#include "components/friction.hpp"
-#include "components/iso6358_flow.hpp"
+#include "components/cylinder_parts.hpp"
 
 namespace pneumo::components {
 
 namespace {
-constexpr double kPi = 3.14159265358979323846;
+constexpr double kPi = kCylinderPi;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 }  // namespace
 
@@ -268,10 +266,6 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
     return i;
   }
 
-  struct Cushion {
-    double C_bore, b_bore, ramp, C_cushion, b_cushion, C_check, b_check, crack, check_ramp;
-  };
-
   explicit CushionedCylinder(const Construction& c) : ComponentT(c), friction_(FrictionLaw::from(c.params)) {
     const auto& p = c.params;
     A_B_ = kPi * p["bore"] * p["bore"] / 4;
@@ -290,8 +284,7 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
     V0_EC_ = p["dead_volume_cushion"];
     V0_ch_ = p["dead_volume_channel"];
     cap_ = read_cushion(p, "");
-    k_stop_ = p["stop_stiffness"];
-    d_stop_ = p["stop_damping"];
+    stops_ = EndStops{p["stop_stiffness"], p["stop_damping"]};
     wall_alpha_ = p["wall_alpha"];
     friction_main_ = friction_.main;
     friction_cushion_ = friction_.cushion;
@@ -335,32 +328,6 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
     T F_pressure;
   };
 
-  template <class T>
-  T cushion_flow(const Cushion& c, const T& gap, const T& p_EC, const T& p_ch, const T& T_EC, const T& T_ch,
-                 const T& x, const GasModel& gas, T& open) const {
-    // Bore opening fraction: 1 in the main stroke, 0 once the plug engages.
-    const T z = gap / c.ramp;
-    open = min(max(z, T(0.0)), T(1.0));
-    // Bore opening and cushion throttle in parallel, the check valve
-    // (channel -> cushion volume) opening linearly above its cracking pressure.
-    // A path whose conductance is exactly 0 (the bore closed by the plug,
-    // the check valve shut: clamped, so with zero derivative too) carries
-    // no flow and is not evaluated, except for the structural pattern.
-    constexpr bool structural = std::is_same_v<T, Pattern>;
-    const T zero = 0.0 * x;
-    const T m_bore = structural || value(open) > 0.0
-                         ? iso6358_mass_flow(p_EC, p_ch, T_EC, T_ch, T(c.C_bore * open), c.b_bore, 0.999, gas)
-                         : zero;
-    const T m_throttle =
-        iso6358_mass_flow(p_EC, p_ch, T_EC, T_ch, T(c.C_cushion + 0.0 * x), c.b_cushion, 0.999, gas);
-    const T check_open = min(max(T((p_ch - p_EC - c.crack) / c.check_ramp), T(0.0)), T(1.0));
-    const T m_check =
-        structural || value(check_open) > 0.0
-            ? iso6358_mass_flow(p_EC, p_ch, T_EC, T_ch, T(c.C_check * check_open), c.b_check, 0.999, gas)
-            : zero;
-    return m_bore + m_throttle + m_check;
-  }
-
   // Everything derived from the local variables. It reads only the
   // position, the velocity and the chambers' masses and energies (not the
   // port pressures: p_A too comes from U_A / V_A, which the gas-law row
@@ -396,18 +363,18 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
     s.x = fl.s;
     s.v = fl.v;
     s.V_A = V0_A_ + A_colr_ * s.x;
-    s.p_A = (gas.kappa - 1.0) * e.var(kUA) / s.V_A;
+    s.p_A = chamber_pressure(e.var(kUA), s.V_A, gas);
     s.V_EC = V0_EC_ + (A_B_ - A_CP_) * (stroke_ - s.x);
     s.V_ch = V0_ch_ + A_CP_ * (stroke_ - s.x);
-    s.T_A = e.var(kUA) / (e.var(kMA) * gas.cv());
-    s.T_EC = e.var(kUEC) / (e.var(kMEC) * gas.cv());
-    s.T_ch = e.var(kUch) / (e.var(kMch) * gas.cv());
-    s.p_EC = (gas.kappa - 1.0) * e.var(kUEC) / s.V_EC;
-    s.p_ch = (gas.kappa - 1.0) * e.var(kUch) / s.V_ch;
+    s.T_A = chamber_temperature(e.var(kMA), e.var(kUA), gas);
+    s.T_EC = chamber_temperature(e.var(kMEC), e.var(kUEC), gas);
+    s.T_ch = chamber_temperature(e.var(kMch), e.var(kUch), gas);
+    s.p_EC = chamber_pressure(e.var(kUEC), s.V_EC, gas);
+    s.p_ch = chamber_pressure(e.var(kUch), s.V_ch, gas);
     if (rod_) {
-      s.T_ECr = e.var(kUECr) / (e.var(kMECr) * gas.cv());
+      s.T_ECr = chamber_temperature(e.var(kMECr), e.var(kUECr), gas);
       s.V_ECr = V0_ECr_ + (A_B_ - A_CPr_) * s.x;
-      s.p_ECr = (gas.kappa - 1.0) * e.var(kUECr) / s.V_ECr;
+      s.p_ECr = chamber_pressure(e.var(kUECr), s.V_ECr, gas);
     } else {
       s.p_ECr = s.V_ECr = s.T_ECr = 0.0 * s.x;
     }
@@ -464,13 +431,7 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
     } else {
       s.F_fric = friction_.force(friction_main_, s.v, s.z, zero);
     }
-    // Elastic end stops (never pulling).
-    const T pen_rod = -s.x, pen_cap = s.x - stroke_;
-    const T F_rod = select_lazy<T>(
-        value(pen_rod) > 0, [&] { return max(T(k_stop_ * pen_rod - d_stop_ * s.v), T(0.0)); }, [&] { return zero; });
-    const T F_cap = select_lazy<T>(
-        value(pen_cap) > 0, [&] { return max(T(k_stop_ * pen_cap + d_stop_ * s.v), T(0.0)); }, [&] { return zero; });
-    s.F_stop = F_rod - F_cap;
+    s.F_stop = stops_.force(s.x, s.v, stroke_);
     if (!rod_)
       s.F_pressure = s.p_A * A_A_ + gas.p_ambient * A_R_ - s.p_EC * (A_B_ - A_CP_) - s.p_ch * A_CP_;
     else
@@ -483,11 +444,11 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
   template <class T>
   T wall_area_rod(const T& x) const {
     const double V0 = V0_A_ + (rod_ ? V0_ECr_ : 0.0);
-    return 2.0 * A_A_ + kPi * (bore_ + rod_d_) * (x + V0 / A_A_);
+    return chamber_wall_area(A_A_, kPi * (bore_ + rod_d_), x, V0);
   }
   template <class T>
   T wall_area_cap(const T& x) const {
-    return 2.0 * A_B_ + kPi * bore_ * ((stroke_ - x) + (V0_EC_ + V0_ch_) / A_B_);
+    return chamber_wall_area(A_B_, kPi * bore_, T(stroke_ - x), V0_EC_ + V0_ch_);
   }
 
   template <class T>
@@ -629,10 +590,7 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
       case kHcushion: return s.H_x;
       case kPfric: return s.F_fric * s.v;
       case kPstop: return s.F_stop * s.v;
-      case kEstop: {
-        const double pen = s.x < 0 ? -s.x : s.x > stroke_ ? s.x - stroke_ : 0.0;
-        return 0.5 * k_stop_ * pen * pen;
-      }
+      case kEstop: return stops_.energy(s.x, stroke_);
       case kUgas: return e.var(kUA) + e.var(kUEC) + e.var(kUch) + (rod_ ? e.var(kUECr) : 0.0);
       case kPECr: return s.p_ECr;
       case kTECro: return s.T_ECr;
@@ -740,7 +698,7 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
       // At rest against the rod-end stop: the stop carries the net pressure
       // force (friction is zero at v = 0).
       const double F = p0_A_ * A_A_ + gas.p_ambient * A_R_ - p0_cap_ * A_B_;
-      x = F < 0 ? F / k_stop_ : 0.0;
+      x = F < 0 ? F / stops_.k : 0.0;
     }
     sv.fix_position(kFlange, x);
     const double V_A = V0_A_ + A_colr_ * x;
@@ -800,7 +758,8 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
 
   double A_B_, A_R_, A_A_, A_CP_, bore_, rod_d_, stroke_, L_, V0_A_, V0_EC_, V0_ch_;
   Cushion cap_{}, rodc_{};
-  double k_stop_, d_stop_, wall_alpha_;
+  EndStops stops_{};
+  double wall_alpha_;
   FrictionLaw friction_;
   FrictionCoefficients friction_main_, friction_cushion_;
   double friction_scale_, v_reg_, v_eps_;

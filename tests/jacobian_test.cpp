@@ -301,6 +301,88 @@ connections:
 )",
        0.02,
        {"hose", "temperature_sensor", "pressure_sensor"}},
+      {"switching",
+       // Switches on a moving flange and a filling tank, gates, a timer, a
+       // flip-flop and a step chain, checked with the chain mid-cycle (the
+       // gates' inputs are variables, so their products have slopes).
+       R"yaml(
+components:
+  supply: {type: pressure_source, p: 4 bar}
+  fill:   {type: iso6358_throttle, C: 0.5 dm3/(s*bar)}
+  tank:   {type: volume, V: 0.2 L, p0: 1 bar}
+  ps:     {type: pressure_switch, p_on: 2 bar}
+  body:   {type: translational_mass, m: 1 kg, s0: 0 m, v0: 0.5 m/s}
+  home:   {type: limit_switch, position: 0, window: 10 mm}
+  far:    {type: limit_switch, position: 20 mm, window: 10 mm}
+  go:     {type: signal_source, kind: step, value: 0, height: 1, t_start: 1 ms}
+  seq:    {type: sequencer, steps: "A+ (A- B+)", transitions: "X1 P1"}
+  both:   {type: and}
+  either: {type: or}
+  inv:    {type: not}
+  delay:  {type: timer, delay: 2 ms}
+  mem:    {type: flip_flop}
+connections:
+  - [supply.port, fill.a]
+  - [fill.b, tank.port, ps.port]
+  - [body.flange, home.flange, far.flange]
+  - [go.y, seq.start, both.in1]
+  - [far.y, seq.X1, inv.in]
+  - [ps.y, either.in1, delay.in]
+  - [seq.A, both.in2]
+  - [seq.B, either.in2]
+  - [delay.y, seq.P1, mem.S]
+  - [inv.y, mem.R, both.in3]
+)yaml",
+       0.02,
+       {"pressure_switch", "limit_switch", "sequencer", "and", "or", "not", "timer", "flip_flop"}},
+      {"cylinders",
+       // A cylinder cushioned at both ends with LuGre friction and wall heat,
+       // extending into its rod-end cushion (second point inside it); a
+       // rodless one with closed ports (a gas spring) and eq. 8 friction;
+       // single-acting cylinders with a closed (vented through a throttle)
+       // and a vented spring chamber.
+       R"(
+components:
+  supply: {type: pressure_source, p: 6 bar}
+  valve:  {type: iso6358_throttle, C: 1 dm3/(s*bar), b: 0.3}
+  out:    {type: iso6358_throttle, C: 0.3 dm3/(s*bar), b: 0.4}
+  air:    {type: atmosphere}
+  load:   {type: translational_mass, m: 1 kg}
+  wall:   {type: thermal_mass, C: 20 J/K, T0: 300 K}
+  cyl:    {type: cylinder, bore: 25 mm, rod: 10 mm, stroke: 50 mm, cap_cushion_length: 10 mm, cap_plug_diameter: 12 mm,
+           cap_cushion_C: 0.05 dm3/(s*bar), rod_cushion_length: 10 mm, rod_plug_diameter: 14 mm,
+           rod_cushion_C: 0.05 dm3/(s*bar), wall_alpha: 100 W/(m2*K), friction_model: lugre, friction_FC: 10 N,
+           friction_FS: 15 N, friction_sigma0: 1e5 N/m, x0: 30 mm, p0_cap: 3 bar, p0_rod: 3 bar}
+  gasspr: {type: cylinder, bore: 20 mm, rod: 0, stroke: 40 mm, friction: annexC_pAB+, x0: 20 mm, p0_cap: 3 bar}
+  mass2:  {type: translational_mass, m: 0.5 kg}
+  sac_in: {type: iso6358_throttle, C: 0.2 dm3/(s*bar), b: 0.3}
+  sac:    {type: single_acting_cylinder, bore: 16 mm, rod: 6 mm, stroke: 30 mm, spring_preload: 5 N,
+           spring_rate: 300 N/m, spring_chamber: closed, x0: 10 mm, p0_cap: 2 bar, friction_model: coulomb_viscous,
+           friction_FC: 3 N, friction_viscous: 10 N*s/m}
+  sac_out: {type: iso6358_throttle, C: 0.05 dm3/(s*bar), b: 0.3}
+  air2:   {type: atmosphere}
+  mass3:  {type: translational_mass, m: 0.2 kg}
+  sac2_in: {type: iso6358_throttle, C: 0.2 dm3/(s*bar), b: 0.3}
+  sac2:   {type: single_acting_cylinder, bore: 16 mm, rod: 6 mm, stroke: 30 mm, spring_rate: 300 N/m, x0: 5 mm}
+  mass4:  {type: translational_mass, m: 0.2 kg}
+connections:
+  - [supply.port, valve.a]
+  - [valve.b, cyl.cap]
+  - [cyl.rod, out.a]
+  - [out.b, air.port]
+  - [cyl.flange, load.flange]
+  - [cyl.heat_rod, wall.port]
+  - [gasspr.flange, mass2.flange]
+  - [supply.port, sac_in.a, sac2_in.a]
+  - [sac_in.b, sac.cap]
+  - [sac.rod, sac_out.a]
+  - [sac_out.b, air2.port]
+  - [sac.flange, mass3.flange]
+  - [sac2_in.b, sac2.cap]
+  - [sac2.flange, mass4.flange]
+)",
+       0.03,
+       {"cylinder", "single_acting_cylinder"}},
   };
   return list;
 }

@@ -1564,6 +1564,26 @@ bool System::handle_roots(double t, const double* y, const double* yp, const int
   return changed;
 }
 
+bool System::handle_input_changes(double t, const double* y, const double* yp, std::vector<EventLogEntry>& log,
+                                  std::vector<std::string>* changed) {
+  block_inputs(t, y, yp);
+  bool any = false;
+  bool invalid = false;
+  double ly[kMaxLocal], lyp[kMaxLocal];
+  for (const auto& b : blocks_) {
+    if (!b->component || !b->component->info().follows_inputs) continue;
+    gather(*b, y, yp, ly, lyp);
+    Eval<double> e(*b->component, t, ly, lyp, modes_.data() + b->mode0, b->connected.get(), circuit_.gas, &invalid);
+    const std::vector<double> before(modes_.begin() + b->mode0, modes_.begin() + b->mode0 + b->component->info().modes);
+    const EventResult res = b->component->on_inputs_changed(e, modes_.data() + b->mode0);
+    after_event(*b, before, t);
+    if (res.changed && changed) changed->push_back(b->component->name());
+    any |= res.changed;
+    if (!res.message.empty() || !res.tag.empty()) log.push_back({t, b->component->name(), res.message, res.tag});
+  }
+  return any;
+}
+
 double System::probe(const Probe& p, double t, const double* y, const double* yp) const {
   block_inputs(t, y, yp);
   const Block& b = *blocks_[p.component];  // component blocks come first, in order

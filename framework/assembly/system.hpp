@@ -182,6 +182,12 @@ class System {
   bool handle_time_event(double t, const double* y, const double* yp, std::vector<EventLogEntry>& log);
   bool handle_roots(double t, const double* y, const double* yp, const int* root_info,
                     std::vector<EventLogEntry>& log);
+  // One pass of event iteration at consistent (y, y') after a
+  // re-initialisation: every component re-reads its inputs
+  // (Component::on_inputs_changed). Returns true if any mode changed; the
+  // names of the components that changed go to `changed` if given.
+  bool handle_input_changes(double t, const double* y, const double* yp, std::vector<EventLogEntry>& log,
+                            std::vector<std::string>* changed = nullptr);
 
   double probe(const Probe& p, double t, const double* y, const double* yp) const;
 

@@ -230,7 +230,12 @@ int main(int argc, char** argv) {
   std::string plot_csv, plot_out;
   plot->add_option("results", plot_csv, "results CSV")->required();
   plot->add_option("-o,--output", plot_out, "output prefix (default: the CSV path without .csv)");
-  plot->add_option("--columns", plot_columns, "columns to plot, comma separated (default: all)");
+  plot->add_option("--columns", plot_columns,
+                   "panels to plot, comma separated; names joined by + share a panel, e.g. p_cap+p_rod,x (default: all)");
+  std::string plot_steps, plot_step_column = "step";
+  plot->add_option("--steps", plot_steps,
+                   "instead: the displacement-step diagram of these travel columns, e.g. x_A,x_B");
+  plot->add_option("--step-column", plot_step_column, "with --steps: the column of the sequencer's step (default: step)");
 
   int study_status = -1;  // set by `sweep` / `sensitivity` (framework/cli/study_commands.cpp)
   pneumo::cli::add_study_commands(app, study_status);
@@ -260,7 +265,10 @@ int main(int argc, char** argv) {
     if (*plot) {
       if (plot_out.empty()) plot_out = (std::filesystem::path(plot_csv).parent_path() /
                                         std::filesystem::path(plot_csv).stem()).string();
-      plot_results(plot_csv, plot_out, split_list(plot_columns), plot_csv);
+      if (!plot_steps.empty())
+        plot_step_diagram(plot_csv, plot_out, split_list(plot_steps), plot_step_column, plot_csv);
+      else
+        plot_results(plot_csv, plot_out, split_list(plot_columns), plot_csv);
       std::cout << "plotted " << plot_out << ".png and " << plot_out << ".svg\n";
       return 0;
     }

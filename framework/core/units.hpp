@@ -86,6 +86,14 @@ struct Unit {
   bool gauge = false;
 };
 
+// How result files show a value in a unit other than SI:
+// shown = (si - offset) / scale, headed by `unit` (bar, barg, mm, degC; for
+// a gauge unit the offset holds the ambient pressure). Empty unit: SI as is.
+struct DisplayUnit {
+  std::string unit;
+  double scale = 1.0, offset = 0.0;
+};
+
 // Thrown for every malformed unit or quantity. what() is a human readable
 // message naming the offending token (e.g. "unknown unit 'furlong'; ..."); it
 // does not repeat the whole text or the column, which callers add themselves.

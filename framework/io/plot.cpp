@@ -1,8 +1,12 @@
 #include "framework/io/plot.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
+#include <sstream>
 #include <stdexcept>
 
 #include "framework/io/results.hpp"
@@ -22,51 +26,64 @@ std::string quoted(const std::string& s) {
   return out + "\"";
 }
 
-}  // namespace
+int column_of(const ResultsTable& table, const std::string& name, const std::string& csv_path) {
+  const int i = table.column(name);
+  if (i >= 0) return i;
+  std::string valid;
+  for (std::size_t k = 1; k < table.names.size(); ++k) valid += (k > 1 ? ", " : "") + table.names[k];
+  throw std::runtime_error("plot: no column '" + name + "' in " + csv_path + "; columns: " + valid);
+}
 
-void plot_results(const std::string& csv_path, const std::string& prefix, const std::vector<std::string>& columns,
-                  const std::string& title) {
-  const ResultsTable table = read_csv(csv_path);
-  std::vector<int> cols;
-  if (columns.empty()) {
-    for (std::size_t i = 1; i < table.names.size(); ++i) cols.push_back(static_cast<int>(i));
-  } else {
-    for (const auto& c : columns) {
-      const int i = table.column(c);
-      if (i < 0) {
-        std::string valid;
-        for (std::size_t k = 1; k < table.names.size(); ++k) valid += (k > 1 ? ", " : "") + table.names[k];
-        throw std::runtime_error("plot: no column '" + c + "' in " + csv_path + "; columns: " + valid);
-      }
-      cols.push_back(i);
-    }
+// The panels: each a list of columns ("p_cap+p_rod" is one panel of two).
+std::vector<std::vector<int>> panels_of(const ResultsTable& table, const std::vector<std::string>& specs,
+                                        const std::string& csv_path) {
+  std::vector<std::vector<int>> panels;
+  if (specs.empty())
+    for (std::size_t i = 1; i < table.names.size(); ++i) panels.push_back({static_cast<int>(i)});
+  for (const auto& spec : specs) {
+    std::vector<int> panel;
+    std::stringstream ss(spec);
+    for (std::string name; std::getline(ss, name, '+');)
+      if (!name.empty()) panel.push_back(column_of(table, name, csv_path));
+    if (!panel.empty()) panels.push_back(std::move(panel));
   }
-  if (cols.empty()) throw std::runtime_error("plot: nothing to plot in " + csv_path);
-  if (const auto parent = fs::path(prefix).parent_path(); !parent.empty()) fs::create_directories(parent);
+  if (panels.empty()) throw std::runtime_error("plot: nothing to plot in " + csv_path);
+  return panels;
+}
 
+std::string with_unit(const ResultsTable& table, int c) {
+  return table.names[c] + (table.units[c].empty() ? "" : " [" + table.units[c] + "]");
+}
+
+// The y label of a panel: "p_cap, p_rod [barg]" when the columns share a
+// unit; each curve's legend then names the column alone.
+std::string panel_label(const ResultsTable& table, const std::vector<int>& panel) {
+  const bool same =
+      std::all_of(panel.begin(), panel.end(), [&](int c) { return table.units[c] == table.units[panel[0]]; });
+  if (!same) return "";
+  std::string names;
+  for (int c : panel) names += (names.empty() ? "" : ", ") + table.names[c];
+  return names + (table.units[panel[0]].empty() ? "" : " [" + table.units[panel[0]] + "]");
+}
+
+// Writes PREFIX.png and PREFIX.svg from a script whose body draws the plot
+// (`body(term)` gets "png" or "svg" to size fonts), then cleans up.
+template <class Body>
+void run_gnuplot(const std::string& prefix, int height, const std::string& title, const Body& body) {
+  if (const auto parent = fs::path(prefix).parent_path(); !parent.empty()) fs::create_directories(parent);
   const std::string script_path = prefix + ".gnuplot";
   {
     std::ofstream gp(script_path);
     if (!gp) throw std::runtime_error("plot: cannot write " + script_path);
-    const int panels = static_cast<int>(cols.size());
-    const int height = 220 * panels + 60;
-    gp << "set datafile separator ','\n"
-       << "set key off\nset grid\n";
+    gp << "set datafile separator ','\nset grid\n";
     for (const std::string term : {"pngcairo", "svg"}) {
       const std::string ext = term == "pngcairo" ? ".png" : ".svg";
       gp << "set terminal " << term << " size 900," << height << (term == "pngcairo" ? " font 'sans,10'" : "")
          << "\n"
          << "set termoption noenhanced\n"
-         << "set output " << quoted(prefix + ext) << "\n"
-         << "set multiplot layout " << panels << ",1 title " << quoted(title) << "\n";
-      for (int k = 0; k < panels; ++k) {
-        const int c = cols[k];
-        const std::string unit = table.units[c].empty() ? "" : " [" + table.units[c] + "]";
-        gp << "set ylabel " << quoted(table.names[c] + unit) << "\n"
-           << (k + 1 == panels ? "set xlabel 't [s]'\n" : "unset xlabel\n")
-           << "plot " << quoted(csv_path) << " every ::1 using 1:" << (c + 1) << " with lines lw 2\n";
-      }
-      gp << "unset multiplot\nset output\n";
+         << "set output " << quoted(prefix + ext) << "\n";
+      body(gp, title);
+      gp << "set output\n";
     }
   }
   const std::string cmd = "gnuplot " + quoted(script_path) + " 2>" + quoted(prefix + ".gnuplot.log");
@@ -77,6 +94,101 @@ void plot_results(const std::string& csv_path, const std::string& prefix, const 
   std::error_code ec;
   fs::remove(prefix + ".gnuplot.log", ec);
   fs::remove(script_path, ec);
+}
+
+}  // namespace
+
+void plot_results(const std::string& csv_path, const std::string& prefix, const std::vector<std::string>& columns,
+                  const std::string& title) {
+  const ResultsTable table = read_csv(csv_path);
+  const auto panels = panels_of(table, columns, csv_path);
+  const int n = static_cast<int>(panels.size());
+  run_gnuplot(prefix, 220 * n + 60, title, [&](std::ostream& gp, const std::string& t) {
+    gp << "set multiplot layout " << n << ",1 title " << quoted(t) << "\n"
+       << "set lmargin 12\n";  // the panels' time axes aligned whatever their labels
+    for (int k = 0; k < n; ++k) {
+      const auto& panel = panels[k];
+      const std::string label = panel_label(table, panel);
+      gp << (panel.size() > 1 ? "set key top right\n" : "set key off\n")
+         << "set ylabel " << quoted(label.empty() ? "" : label) << "\n"
+         << (k + 1 == n ? "set xlabel 't [s]'\n" : "unset xlabel\n") << "plot ";
+      for (std::size_t j = 0; j < panel.size(); ++j) {
+        const int c = panel[j];
+        gp << (j ? ", " : "") << quoted(csv_path) << " every ::1 using 1:" << (c + 1) << " with lines lw 2 title "
+           << quoted(label.empty() ? with_unit(table, c) : table.names[c]);
+      }
+      gp << "\n";
+    }
+    gp << "unset multiplot\n";
+  });
+}
+
+void plot_step_diagram(const std::string& csv_path, const std::string& prefix, const std::vector<std::string>& columns,
+                       const std::string& step_column, const std::string& title) {
+  const ResultsTable table = read_csv(csv_path);
+  const int sc = column_of(table, step_column, csv_path);
+  std::vector<int> cols;
+  for (const auto& c : columns) cols.push_back(column_of(table, c, csv_path));
+  if (cols.empty()) throw std::runtime_error("plot --steps: name the displacement columns, e.g. --steps x_A,x_B");
+  // Transitions: the rows where the active step changes (the solver writes
+  // a row at every event, so these are the event times).
+  std::vector<std::size_t> change;
+  bool whole = true;
+  for (std::size_t i = 0; i < table.rows.size(); ++i) {
+    whole &= table.rows[i][sc] == std::floor(table.rows[i][sc]);
+    if (i > 0 && table.rows[i][sc] != table.rows[i - 1][sc]) change.push_back(i);
+  }
+  if (!whole || change.size() < 2)
+    throw std::runtime_error("plot --steps: column '" + step_column + "' of " + csv_path +
+                             " is not a step index that changes at least twice (whole numbers); output the sequencer's "
+                             "step (outputs: {step: SEQ.step})");
+  // Each step's time span maps onto one unit of the step axis (VDI 3260):
+  // transition k at abscissa k + 1, linear in time in between.
+  std::vector<double> lo, hi;  // each column normalised: 0 at its least, 1 at its greatest value
+  for (int c : cols) {
+    lo.push_back(table.rows[0][c]), hi.push_back(table.rows[0][c]);
+    for (const auto& r : table.rows) lo.back() = std::min(lo.back(), r[c]), hi.back() = std::max(hi.back(), r[c]);
+  }
+  const std::string data_path = prefix + ".steps.csv";
+  if (const auto parent = fs::path(prefix).parent_path(); !parent.empty()) fs::create_directories(parent);
+  {
+    std::ofstream out(data_path);
+    if (!out) throw std::runtime_error("plot: cannot write " + data_path);
+    out << std::setprecision(10);
+    for (std::size_t k = 0; k + 1 < change.size(); ++k) {
+      const double t0 = table.rows[change[k]][0], t1 = table.rows[change[k + 1]][0];
+      for (std::size_t i = change[k]; i <= change[k + 1]; ++i) {
+        const auto& row = table.rows[i];
+        out << (k + 1) + (t1 > t0 ? (row[0] - t0) / (t1 - t0) : 0.0);
+        for (std::size_t j = 0; j < cols.size(); ++j)
+          out << "," << (hi[j] > lo[j] ? (row[cols[j]] - lo[j]) / (hi[j] - lo[j]) : 0.0);
+        out << "\n";
+      }
+    }
+  }
+  const int n = static_cast<int>(cols.size());
+  const int last = static_cast<int>(change.size());
+  std::ostringstream times;
+  times << std::setprecision(3);
+  for (int k = 0; k < last; ++k) {
+    std::ostringstream label;
+    label << std::fixed << std::setprecision(3) << table.rows[change[k]][0];
+    times << (k ? ", " : "") << quoted(label.str()) << " " << k + 1;
+  }
+  run_gnuplot(prefix, 150 * n + 120, title, [&](std::ostream& gp, const std::string& t) {
+    gp << "set multiplot layout " << n << ",1 title "
+       << quoted(t + ": displacement-step diagram (top axis: transition times in s)") << "\n"
+       << "set key off\nset xrange [1:" << last << "]\nset yrange [-0.15:1.15]\nset ytics ('0' 0, '1' 1)\n"
+       << "set xtics 1\nset grid xtics ytics\nset lmargin 12\nset rmargin 6\n";
+    for (int k = 0; k < n; ++k) {
+      gp << (k == 0 ? "set x2tics (" + times.str() + ")\nset tmargin 3\n" : "unset x2tics\nset tmargin 1\n")
+         << (k + 1 == n ? "set xlabel 'step'\n" : "unset xlabel\n") << "set ylabel " << quoted(table.names[cols[k]])
+         << "\nplot " << quoted(data_path) << " using 1:" << k + 2 << " with lines lw 3\n";
+    }
+    gp << "unset multiplot\n";
+  });
+  std::error_code ec;
+  fs::remove(data_path, ec);
 }
 
 }  // namespace pneumo

@@ -1,5 +1,6 @@
 // Plots of results files through gnuplot (Debian package gnuplot-nox): one
-// panel per chosen column over time, written as PNG and SVG.
+// panel per chosen column (or group of columns) over time, or a
+// displacement-step diagram, written as PNG and SVG.
 #pragma once
 
 #include <string>
@@ -7,9 +8,19 @@
 
 namespace pneumo {
 
-// Writes PREFIX.png and PREFIX.svg. Empty `columns` = every column but t.
-// Throws std::runtime_error (unknown column, gnuplot missing or failing).
+// Writes PREFIX.png and PREFIX.svg. Each entry of `columns` is a panel;
+// names joined by '+' share it ("p_cap+p_rod") with a legend. Empty
+// `columns` = every column but t, one panel each. Throws std::runtime_error
+// (unknown column, gnuplot missing or failing).
 void plot_results(const std::string& csv_path, const std::string& prefix, const std::vector<std::string>& columns,
                   const std::string& title = "");
+
+// The displacement-step diagram of a sequence (VDI 3260): one lane per
+// column of `columns` (an actuator's travel, normalised to 0 .. 1 over the
+// run), over a step axis on which each step - the time between two changes
+// of the column `step_column` (the sequencer's active step) - takes one
+// unit; the transitions' times are marked on the top axis.
+void plot_step_diagram(const std::string& csv_path, const std::string& prefix, const std::vector<std::string>& columns,
+                       const std::string& step_column, const std::string& title = "");
 
 }  // namespace pneumo

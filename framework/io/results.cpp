@@ -21,8 +21,10 @@ void ResultsTable::drop_columns(const std::string& prefix) {
     for (std::size_t i : keep) out.push_back(v[i]);
     v = std::move(out);
   };
+  const bool with_display = display.size() == names.size();
   filter(names);
   filter(units);
+  if (with_display) filter(display);
   for (auto& row : rows) filter(row);
 }
 
@@ -35,13 +37,20 @@ int ResultsTable::column(const std::string& name) const {
 namespace {
 
 void write_table(std::ostream& out, const ResultsTable& table) {
+  auto shown = [&](std::size_t i) -> const units::DisplayUnit* {
+    return i < table.display.size() && !table.display[i].unit.empty() ? &table.display[i] : nullptr;
+  };
   for (std::size_t i = 0; i < table.names.size(); ++i) {
     out << (i ? "," : "") << table.names[i];
-    if (i < table.units.size() && !table.units[i].empty()) out << " [" << table.units[i] << "]";
+    const std::string unit = shown(i) ? shown(i)->unit : i < table.units.size() ? table.units[i] : "";
+    if (!unit.empty()) out << " [" << unit << "]";
   }
   out << "\n" << std::setprecision(10);
   for (const auto& row : table.rows) {
-    for (std::size_t i = 0; i < row.size(); ++i) out << (i ? "," : "") << row[i];
+    for (std::size_t i = 0; i < row.size(); ++i) {
+      const units::DisplayUnit* d = shown(i);
+      out << (i ? "," : "") << (d ? (row[i] - d->offset) / d->scale : row[i]);
+    }
     out << "\n";
   }
 }

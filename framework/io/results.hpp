@@ -7,11 +7,16 @@
 #include <string>
 #include <vector>
 
+#include "framework/core/units.hpp"
+
 namespace pneumo {
 
 struct ResultsTable {
   std::vector<std::string> names;  // first column is always "t"
   std::vector<std::string> units;
+  // Per column (or empty): the unit files show instead of units[i]; the
+  // rows stay SI.
+  std::vector<units::DisplayUnit> display;
   std::vector<std::vector<double>> rows;
 
   void add_row(std::vector<double> row) { rows.push_back(std::move(row)); }

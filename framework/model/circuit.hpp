@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "framework/core/error.hpp"
+#include "framework/core/units.hpp"
 #include "framework/model/component.hpp"
 #include "framework/model/gas.hpp"
 
@@ -35,6 +36,7 @@ struct Probe {
   int index = -1;
   std::string unit;
   bool integral = false;  // the output is the time integral of this quantity
+  units::DisplayUnit display;    // how result files show it (SI inside)
 };
 
 // The local variable names of a component, in layout order ("port.p",

@@ -149,6 +149,9 @@ struct ComponentInfo {
   std::vector<std::string> equations;       // optional names, for diagnostics
   int modes = 0;                            // discrete state values
   int roots = 0;                            // state event functions
+  // The modes follow the inputs: on_inputs_changed is called after every
+  // re-initialisation (event iteration).
+  bool follows_inputs = false;
 
   int port_index(const std::string& name) const;
   const ParameterSpec* parameter(const std::string& name) const;
@@ -371,6 +374,18 @@ class Component {
   virtual EventResult on_event(const Eval<double>& e, double* modes, EventKind kind, int root,
                                int direction) const {
     (void)e; (void)modes; (void)kind; (void)root; (void)direction;
+    return {};
+  }
+
+  // Event iteration (for types whose info says follows_inputs). After an
+  // event changed some modes, the signals they drive jump at the
+  // re-initialisation, where no root function can see the jump; the
+  // framework then calls this at the new consistent values, again and again
+  // (a bounded number of passes) until no component changes its modes. A
+  // component switched by such signals re-reads its inputs here and updates
+  // its modes as at an event (one discrete step per call).
+  virtual EventResult on_inputs_changed(const Eval<double>& e, double* modes) const {
+    (void)e; (void)modes;
     return {};
   }
 

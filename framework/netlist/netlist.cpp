@@ -398,13 +398,32 @@ Netlist parse_netlist(const std::string& text, const std::string& file_name) {
     auto add = [&](const std::string& name, const YAML::Node& where, const YAML::Node& ref_node) {
       // name: comp.var, or name: {integral: comp.var} for its time integral
       // (energy from a power, mass from a mass flow), integrated by the solver.
+      // Either form may name a display unit: {var: comp.var, unit: barg}.
       YAML::Node ref = ref_node;
       bool integral = false;
+      std::string unit;
+      SourceLocation unit_where;
       if (ref_node.IsMap()) {
-        if (ref_node.size() != 1 || !ref_node["integral"])
-          r.fail(ref_node, "", "", "output '" + name + "': a mapping output must be {integral: component.variable}");
-        ref = ref_node["integral"];
-        integral = true;
+        for (const auto& e : r.mapping(ref_node, "output '" + name + "'")) {
+          if (e.key == "unit") {
+            unit = r.scalar_text(e.value, "", "", "a display unit");
+            unit_where = r.at(e.value);
+            try {
+              units::parse_unit(unit);
+            } catch (const units::ParseError& err) {
+              r.fail(e.value, "", "", "output '" + name + "': unit '" + unit + "': " + err.what());
+            }
+          } else if (e.key != "var" && e.key != "integral") {
+            r.fail(e.key_node, "", "", "output '" + name + "': unknown key '" + e.key + "'; " +
+                                           choices_hint(e.key, {"var", "integral", "unit"}));
+          }
+        }
+        if (!ref_node["var"] == !ref_node["integral"])
+          r.fail(ref_node, "", "",
+                 "output '" + name + "': write {var: component.variable} or {integral: component.variable}, "
+                 "optionally with unit: (e.g. {var: cyl.p_cap, unit: barg})");
+        integral = static_cast<bool>(ref_node["integral"]);
+        ref = integral ? ref_node["integral"] : ref_node["var"];
       }
       const std::string s = r.scalar_text(ref, "", "", "an output reference");
       const auto dot = s.find('.');
@@ -412,7 +431,7 @@ Netlist parse_netlist(const std::string& text, const std::string& file_name) {
         r.fail(ref, "", "", "output '" + s + "' must be component.variable");
       for (const auto& o : nl.outputs)
         if (o.name == name) r.fail(where, "", "", "duplicate output name '" + name + "'");
-      nl.outputs.push_back({name, s.substr(0, dot), s.substr(dot + 1), r.at(ref), integral});
+      nl.outputs.push_back({name, s.substr(0, dot), s.substr(dot + 1), r.at(ref), integral, unit, unit_where});
     };
     if (os.IsMap()) {
       for (const auto& e : r.mapping(os, "outputs")) add(e.key, e.key_node, e.value);
@@ -728,6 +747,15 @@ Circuit elaborate(const Netlist& nl, const Registry& registry) {
     if (o.integral) {
       probe.integral = true;
       probe.unit = probe.unit == "W" ? "J" : probe.unit == "kg/s" ? "kg" : probe.unit + "*s";
+    }
+    if (!o.unit.empty()) {
+      const units::Unit u = units::parse_unit(o.unit);
+      if (!(u.dim == units::dimension_of(probe.unit)))
+        throw InputError(o.unit_where, o.component, "",
+                         "output '" + o.name + "': unit '" + o.unit + "' (" + u.dim.to_string() + ") does not fit '" +
+                             o.quantity + "' in " + probe.unit + " (" + units::dimension_of(probe.unit).to_string() +
+                             ")");
+      probe.display = {o.unit, u.scale, u.offset + (u.gauge ? nl.gas.p_ambient : 0.0)};
     }
     circuit.probes.push_back(probe);
   }

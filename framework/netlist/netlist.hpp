@@ -10,7 +10,7 @@
 //     tank: {type: volume, V: V, p0: 1 bar, T0: 293.15 K}
 //   connections:
 //     - [source.port, valve.a]
-//   outputs:    {p: tank.p, T: tank.T}
+//   outputs:    {p: tank.p, T: {var: tank.T, unit: degC}}
 //   metrics:    {p_max: {max: p}, t_full: {of: p, crosses: 4 bar, direction: rising}}
 //   simulation: {t_end: 2 s, rtol: 1e-6, atol: 1e-6, output_interval: 1 ms}
 //   plugins:    [build/my_components.so]  # relative to the netlist's directory
@@ -67,6 +67,8 @@ struct OutputDecl {
   std::string quantity;   // variable, observable or port variable ("port.p")
   SourceLocation where;
   bool integral = false;  // {integral: comp.var}: its time integral from t_start
+  std::string unit;       // display unit in result files ("" = SI), e.g. barg, mm
+  SourceLocation unit_where;
 };
 
 // A moment a metric refers to: a fixed time, or the n-th event COMPONENT.TAG

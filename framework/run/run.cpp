@@ -19,6 +19,7 @@ RunResult run_system(System& system, const SolverOptions& options) {
   const auto& probes = system.circuit().probes;
   out.table.names.push_back("t");
   out.table.units.push_back("s");
+  out.table.display.emplace_back();
   // Integral outputs are IDAS quadratures; the others are sampled.
   Quadratures quad;
   std::vector<double> integrals;
@@ -28,6 +29,7 @@ RunResult run_system(System& system, const SolverOptions& options) {
     const auto& p = probes[i];
     out.table.names.push_back(p.name);
     out.table.units.push_back(p.unit);
+    out.table.display.push_back(p.display);
     if (p.integral) {
       slot[i] = static_cast<int>(quad.integrands.size());
       quad.integrands.push_back(p);

@@ -341,7 +341,33 @@ SolverResult simulate(System& system, const SolverOptions& opt, const OutputFn& 
                              result.events);
     ++next_event;
   }
-  if (!consistent_ic()) return result;
+  // Event iteration: a mode change makes signals jump at the re-initialisation,
+  // where IDA cannot see a root; components that follow their inputs
+  // (logic with memory, step chains, timers) re-read them until none changes.
+  auto settle = [&]() -> bool {
+    constexpr int kMaxPasses = 100;
+    for (int pass = 0;; ++pass) {
+      user.parts.valid = false;
+      std::vector<std::string> changed;
+      if (!system.handle_input_changes(t, user.physical_y(y.get()), user.physical_yp(yp.get()), result.events,
+                                       &changed))
+        return true;
+      if (pass == kMaxPasses) {
+        std::string names;
+        for (const auto& n : changed) names += (names.empty() ? "" : ", ") + n;
+        fail("event iteration at t = " + std::to_string(t) + " s does not settle: after " +
+             std::to_string(kMaxPasses) + " passes the modes of " + names +
+             " still change (a loop of signals that switch each other at one instant)");
+        return false;
+      }
+      ++result.stats.reinitialisations;
+      accumulate_stats();
+      check(IDAReInit(ida, t, y.get(), yp.get()), "IDAReInit");
+      if (n_quad > 0) check(IDAQuadReInit(ida, q.get()), "IDAQuadReInit");
+      if (!consistent_ic()) return false;
+    }
+  };
+  if (!consistent_ic() || !settle()) return result;
   emit();
 
   // Output times: the grid t_start + k * output_interval, then t_end.
@@ -406,7 +432,7 @@ SolverResult simulate(System& system, const SolverOptions& opt, const OutputFn& 
     accumulate_stats();
     check(IDAReInit(ida, t, y.get(), yp.get()), "IDAReInit");
     if (n_quad > 0) check(IDAQuadReInit(ida, q.get()), "IDAQuadReInit");
-    if (!consistent_ic()) return false;
+    if (!consistent_ic() || !settle()) return false;
     restart_roots(fired);
     return true;
   };

@@ -1,0 +1,300 @@
+// Double-acting cylinder as FluidSIM and Automation Studio draw it: x = 0
+// fully retracted, x = stroke fully extended; port `cap` feeds the cap-side
+// chamber (pressure there extends), port `rod` the rod-side chamber (pressure
+// there retracts). Both ports are closed when unconnected.
+//
+//   V_cap = dead_volume_cap + A x,   V_rod = dead_volume_rod + (A - A_rod)(stroke - x)
+//   F = p_cap A - p_rod (A - A_rod) - p_amb A_rod + F_friction + F_stops   (+x)
+//
+// Each chamber has its own mass and energy balance (state m, U); rod: 0
+// makes it rodless (both faces full bore). Friction: the friction_model of
+// components/friction.hpp (seed 000 presets with the chamber pressures,
+// Coulomb + viscous, LuGre); elastic end stops at x = 0 and x = stroke.
+// Heat: with wall_alpha = 0 the heat ports are at the gas temperature
+// (insulated if unconnected); with wall_alpha > 0 they are the walls and the
+// gas exchanges Q = wall_alpha A_wall(x) (T_wall - T_gas) with them.
+//
+// End-position cushioning at either end is optional: giving
+// cap_cushion_length (or rod_cushion_length) splits that chamber into the
+// cushion annulus at the piston and the channel behind the port, joined by
+// the bore opening, the needle throttle <end>_cushion_C and a check valve
+// (components/cylinder_parts.hpp; the geometry of cushioned_cylinder).
+//
+// Events, tagged for metrics and audits: "retracted" / "extended" at the
+// stop contacts (the stop force jumps: the solver re-initialises),
+// "left_retracted" / "left_extended" leaving them, "cap_cushion_entry" /
+// "rod_cushion_entry" and their "_exit" where the plug engages.
+#include <cmath>
+#include <limits>
+
+#include "components/builtin.hpp"
+#include "components/cylinder_parts.hpp"
+
+namespace pneumo::components {
+
+class Cylinder final : public ComponentT<Cylinder> {
+ public:
+  enum Port { kCap, kRod, kFlange, kHeatCap, kHeatRod };
+  enum Obs {
+    kX, kV, kPcap, kProd, kTcap, kTrod, kFpressure, kFfric, kFstop, kZ, kHcap, kHrod, kPdV, kQcap, kQrod, kPfric,
+    kPstop, kEstop, kUgas, kPcapC, kTcapC, kProdC, kTrodC, kMcapC, kMrodC
+  };
+  enum Root { kRetracted, kExtended };
+
+  static ComponentInfo describe() {
+    ComponentInfo i;
+    i.type = "cylinder";
+    i.description =
+        "Double-acting cylinder: x = 0 retracted, x = stroke extended; ports cap (extends) and rod (retracts), closed "
+        "if unconnected; mass and energy balance per chamber, friction (presets, Coulomb + viscous, LuGre), elastic "
+        "end stops, optional wall heat and optional end-position cushioning at either end.";
+    using P = ParameterSpec;
+    i.parameters = {
+        P::scalar("bore", "m", "piston diameter").positive(),
+        P::scalar("rod", "m", "rod diameter; 0: rodless (both faces full bore area)").non_negative(),
+        P::scalar("stroke", "m", "stroke").positive(),
+        P::scalar("dead_volume_cap", "m3", "cap-side volume at x = 0 (with cap cushioning: the channel's)", 1e-6)
+            .positive(),
+        P::scalar("dead_volume_rod", "m3", "rod-side volume at x = stroke (with rod cushioning: the channel's)",
+                  1e-6)
+            .positive(),
+        P::scalar("stop_stiffness", "N/m", "end stop stiffness", 1e7).positive(),
+        P::scalar("stop_damping", "N*s/m", "end stop damping", 3000.0).non_negative(),
+        P::scalar("wall_alpha", "W/(m2*K)",
+                  "gas-to-wall heat transfer coefficient; 0: heat ports at gas temperature (external convection)", 0.0)
+            .non_negative(),
+    };
+    for (const char* end : {"cap", "rod"})
+      for (auto& s : CylinderSide::cushion_parameters(end)) i.parameters.push_back(std::move(s));
+    for (auto& f : FrictionLaw::parameters(false)) i.parameters.push_back(std::move(f));
+    const std::vector<ParameterSpec> initial = {
+        P::scalar("x0", "m", "initial position; default: at rest against the stop at x = 0 at force equilibrium",
+                  std::numeric_limits<double>::quiet_NaN()),
+        P::scalar("p0_cap", "Pa", "initial cap-side pressure, absolute", 101325.0).positive(),
+        P::scalar("p0_rod", "Pa", "initial rod-side pressure, absolute", 101325.0).positive(),
+        P::scalar("T0", "K", "initial gas temperature", 293.15).positive(),
+    };
+    i.parameters.insert(i.parameters.end(), initial.begin(), initial.end());
+    i.ports = {{"cap", Domain::pneumatic, Causality::acausal, "cap-side port: pressure extends (closed if unconnected)",
+                true},
+               {"rod", Domain::pneumatic, Causality::acausal, "rod-side port: pressure retracts (closed if unconnected)",
+                true},
+               {"flange", Domain::translational, Causality::acausal, "rod end; position = x (0 retracted)"},
+               {"heat_cap", Domain::thermal, Causality::acausal, "wall of the cap-side chamber", true},
+               {"heat_rod", Domain::thermal, Causality::acausal, "wall of the rod-side chamber", true}};
+    i.variables = {{"m_cap", "kg", "gas mass, cap side (channel with cap cushioning)"},
+                   {"U_cap", "J", "internal energy, cap side"},
+                   {"m_cap_cushion", "kg", "gas mass, cap cushion annulus"},
+                   {"U_cap_cushion", "J", "internal energy, cap cushion annulus"},
+                   {"m_rod", "kg", "gas mass, rod side (channel with rod cushioning)"},
+                   {"U_rod", "J", "internal energy, rod side"},
+                   {"m_rod_cushion", "kg", "gas mass, rod cushion annulus"},
+                   {"U_rod_cushion", "J", "internal energy, rod cushion annulus"},
+                   {"z", "m", "LuGre bristle deflection", 1e-5}};
+    i.observables = {{"x", "m", "piston position (0 retracted, stroke extended)"},
+                     {"v", "m/s", "piston velocity (> 0 extending)"},
+                     {"p_cap", "Pa", "cap-side pressure at the port, absolute"},
+                     {"p_rod", "Pa", "rod-side pressure at the port, absolute"},
+                     {"T_cap", "K", "cap-side gas temperature at the port"},
+                     {"T_rod", "K", "rod-side gas temperature at the port"},
+                     {"F_pressure", "N", "pressure force on the piston (+x), ambient on the rod included"},
+                     {"F_friction", "N", "friction force on the piston (+x)"},
+                     {"F_stop", "N", "end stop force on the piston (+x)"},
+                     {"z", "m", "LuGre bristle deflection (0 for other friction models)"},
+                     {"H_cap", "W", "enthalpy flow into the gas at port cap"},
+                     {"H_rod", "W", "enthalpy flow into the gas at port rod"},
+                     {"P_pdV", "W", "p dV/dt summed over the chambers: power from the gas to the piston"},
+                     {"Q_cap", "W", "heat flow into the gas through heat_cap"},
+                     {"Q_rod", "W", "heat flow into the gas through heat_rod"},
+                     {"P_friction", "W", "friction power F_friction v (<= 0)"},
+                     {"P_stop", "W", "end stop power F_stop v"},
+                     {"E_stop", "J", "elastic energy stored in the end stops"},
+                     {"U_gas", "J", "internal energy of the gas in all chambers"},
+                     {"p_cap_cushion", "Pa", "cap cushion annulus pressure (p_cap without cap cushioning)"},
+                     {"T_cap_cushion", "K", "cap cushion annulus temperature (T_cap without cap cushioning)"},
+                     {"p_rod_cushion", "Pa", "rod cushion annulus pressure (p_rod without rod cushioning)"},
+                     {"T_rod_cushion", "K", "rod cushion annulus temperature (T_rod without rod cushioning)"},
+                     {"m_flow_cap_cushion", "kg/s", "flow cap cushion annulus -> channel (0 without)"},
+                     {"m_flow_rod_cushion", "kg/s", "flow rod cushion annulus -> channel (0 without)"}};
+    i.equations = {"mass balance cap",     "energy balance cap",     "gas law cap",
+                   "outflow temperature cap", "wall heat cap",       "mass balance cap cushion",
+                   "energy balance cap cushion", "mass balance rod", "energy balance rod",
+                   "gas law rod",          "outflow temperature rod", "wall heat rod",
+                   "mass balance rod cushion", "energy balance rod cushion", "force balance",
+                   "bristle dynamics"};
+    i.roots = 4;
+    return i;
+  }
+
+  // Drops what this instance lacks: an end's cushion chamber and root, the
+  // LuGre state.
+  static ComponentInfo instance_info(ComponentInfo i, const ParameterValues& p) {
+    auto erase = [](auto& list, const std::vector<std::string>& names) {
+      std::erase_if(list, [&](const auto& item) {
+        if constexpr (std::is_same_v<std::decay_t<decltype(item)>, std::string>)
+          return std::find(names.begin(), names.end(), item) != names.end();
+        else
+          return std::find(names.begin(), names.end(), item.name) != names.end();
+      });
+    };
+    i.roots = 2;
+    for (const std::string end : {"cap", "rod"}) {
+      if (CylinderSide::has_cushion(p, end)) {
+        ++i.roots;
+        continue;
+      }
+      erase(i.variables, {"m_" + end + "_cushion", "U_" + end + "_cushion"});
+      erase(i.equations, {"mass balance " + end + " cushion", "energy balance " + end + " cushion"});
+    }
+    if (p.text("friction_model") != "lugre") {
+      erase(i.variables, {"z"});
+      erase(i.equations, {"bristle dynamics"});
+    }
+    return i;
+  }
+
+  explicit Cylinder(const Construction& c)
+      : ComponentT(c),
+        A_(circle_area(c.params["bore"])),
+        A_rod_(circle_area(c.params["rod"])),
+        stroke_(c.params["stroke"]),
+        cap_(c.params, "cap", A_, c.params["dead_volume_cap"], kCylinderPi * c.params["bore"], 0.0, stroke_),
+        rod_(c.params, "rod", A_ - A_rod_, c.params["dead_volume_rod"],
+             kCylinderPi * (c.params["bore"] + c.params["rod"]), A_rod_, stroke_),
+        stops_{c.params["stop_stiffness"], c.params["stop_damping"]},
+        wall_alpha_(c.params["wall_alpha"]),
+        friction_(FrictionLaw::from(c.params)),
+        x0_(c.params["x0"]),
+        p0_cap_(c.params["p0_cap"]),
+        p0_rod_(c.params["p0_rod"]),
+        T0_(c.params["T0"]) {
+    if (c.params["rod"] >= c.params["bore"]) throw ParameterError("rod", "rod diameter must be smaller than the bore");
+    if (cap_.cushioned() && rod_.cushioned() &&
+        cap_.cushion_length() + rod_.cushion_length() >= stroke_)
+      throw ParameterError("rod_cushion_length", "the cushioning zones at both ends overlap");
+    cap_.set_first_variable(0);
+    rod_.set_first_variable(cap_.variables());
+    z_var_ = cap_.variables() + rod_.variables();
+  }
+
+  template <class T>
+  struct State {
+    T x, v, z;
+    CylinderSide::Gas<T> cap, rod;
+    T F_pressure, F_fric, F_stop;
+  };
+
+  template <class T>
+  State<T> state(const Eval<T>& e) const {
+    const auto fl = e.flange(kFlange);
+    const double p_amb = e.gas().p_ambient;
+    State<T> s{fl.s, fl.v, friction_.has_state() ? e.var(z_var_) : T(0.0 * fl.v), cap_.gas(e, fl.s),
+               rod_.gas(e, T(stroke_ - fl.s)), T(0.0), T(0.0), T(0.0)};
+    s.F_pressure = cap_.force(s.cap) - rod_.force(s.rod) - p_amb * A_rod_;
+    s.F_fric = piston_friction(friction_, s.v, s.z, s.rod.p_piston, s.cap.p_piston, s.cap.p_piston, p_amb);
+    s.F_stop = stops_.force(s.x, s.v, stroke_);
+    return s;
+  }
+
+  template <class T>
+  void equations(const Eval<T>& e, T* r) const {
+    const State<T> s = state(e);
+    cap_.equations(e, e.gas_port(kCap), e.heat_port(kHeatCap), s.cap, s.x, s.v, wall_alpha_, r);
+    r += cap_.rows();
+    rod_.equations(e, e.gas_port(kRod), e.heat_port(kHeatRod), s.rod, T(stroke_ - s.x), T(-s.v), wall_alpha_, r);
+    r += rod_.rows();
+    // The flange pulls on the cylinder with f = -F.
+    r[0] = e.flange(kFlange).f + s.F_pressure + s.F_fric + s.F_stop;
+    if (friction_.has_state()) r[1] = e.der(z_var_) - friction_.lugre_zdot(s.v, e.var(z_var_));
+  }
+
+  double observe(int k, const Eval<double>& e) const override {
+    const State<double> s = state(e);
+    auto inflow = [&](int port) {
+      const auto g = e.gas_port(port);
+      return enthalpy_inflow(g.m_flow, g.T_in, g.T_out, e.gas());
+    };
+    switch (k) {
+      case kX: return s.x;
+      case kV: return s.v;
+      case kPcap: return s.cap.p;
+      case kProd: return s.rod.p;
+      case kTcap: return s.cap.T_gas;
+      case kTrod: return s.rod.T_gas;
+      case kFpressure: return s.F_pressure;
+      case kFfric: return s.F_fric;
+      case kFstop: return s.F_stop;
+      case kZ: return s.z;
+      case kHcap: return inflow(kCap);
+      case kHrod: return inflow(kRod);
+      case kPdV: return cap_.p_dV(s.cap, s.v) + rod_.p_dV(s.rod, -s.v);
+      case kQcap: return e.heat_port(kHeatCap).Q;
+      case kQrod: return e.heat_port(kHeatRod).Q;
+      case kPfric: return s.F_fric * s.v;
+      case kPstop: return s.F_stop * s.v;
+      case kEstop: return stops_.energy(s.x, stroke_);
+      case kUgas: return cap_.internal_energy(e) + rod_.internal_energy(e);
+      case kPcapC: return s.cap.p_piston;
+      case kTcapC: return s.cap.T_piston;
+      case kProdC: return s.rod.p_piston;
+      case kTrodC: return s.rod.T_piston;
+      case kMcapC: return s.cap.m_x;
+      case kMrodC: return s.rod.m_x;
+    }
+    return 0.0;
+  }
+
+  void roots(const Eval<double>& e, double* g) const override {
+    const double x = e.flange(kFlange).s;
+    g[kRetracted] = x;
+    g[kExtended] = x - stroke_;
+    int k = 2;
+    if (cap_.cushioned()) g[k++] = x - cap_.cushion_length();
+    if (rod_.cushioned()) g[k++] = (stroke_ - x) - rod_.cushion_length();
+  }
+
+  // A stop contact makes the force jump (the damping term acts from the
+  // first contact on): the solver re-initialises there. Leaving a stop is
+  // continuous (k pen - d v falls to 0 before pen does).
+  EventResult on_event(const Eval<double>& e, double*, EventKind, int root, int dir) const override {
+    const std::string at = " at v = " + std::to_string(e.flange(kFlange).v) + " m/s";
+    const bool up = dir > 0;  // g growing: x extending (stops), leaving a cushion zone
+    if (root == kRetracted)
+      return up ? EventResult{false, "leaves the retracted end" + at, "left_retracted"}
+                : EventResult{true, "retracted: contact with the cap-end stop" + at, "retracted"};
+    if (root == kExtended)
+      return up ? EventResult{true, "extended: contact with the rod-end stop" + at, "extended"}
+                : EventResult{false, "leaves the extended end" + at, "left_extended"};
+    // Cushion roots: the cap end's first (g falls on entry for both ends).
+    const std::string end = root == 2 && cap_.cushioned() ? "cap" : "rod";
+    return up ? EventResult{false, "leaves the " + end + "-end cushioning zone" + at, end + "_cushion_exit"}
+              : EventResult{false, "enters the " + end + "-end cushioning zone" + at, end + "_cushion_entry"};
+  }
+
+  void start(StartValues& sv, const GasModel& gas) const override {
+    double x = x0_;
+    if (std::isnan(x)) {
+      // At rest against the stop at x = 0: the stop carries the net pressure
+      // force (friction is zero at rest).
+      const double F = p0_cap_ * A_ - p0_rod_ * (A_ - A_rod_) - gas.p_ambient * A_rod_;
+      x = F < 0 ? F / stops_.k : 0.0;
+    }
+    sv.fix_position(kFlange, x);
+    cap_.start(sv, gas, kCap, kHeatCap, p0_cap_, T0_, x);
+    rod_.start(sv, gas, kRod, kHeatRod, p0_rod_, T0_, stroke_ - x);
+    if (friction_.has_state()) sv.fix_var(z_var_, 0.0);
+  }
+
+ private:
+  double A_, A_rod_, stroke_;
+  CylinderSide cap_, rod_;
+  EndStops stops_;
+  double wall_alpha_;
+  FrictionLaw friction_;
+  double x0_, p0_cap_, p0_rod_, T0_;
+  int z_var_ = 4;
+};
+
+void register_cylinder(Registry& r) { r.add<Cylinder>(); }
+
+}  // namespace pneumo::components
