@@ -30,6 +30,8 @@ void register_builtin_components(Registry& r) {
   register_position_sensor(r);
   register_cylinder(r);
   register_single_acting_cylinder(r);
+  register_pressure_regulator(r);
+  register_relief_valve(r);
 }
 
 const Registry& builtin_registry() {

@@ -349,6 +349,47 @@ connections:
 )",
        0.03,
        {"cylinder", "single_acting_cylinder"}},
+      {"pressure_valves",
+       // A relief valve opening on a tank being filled (partly open at the
+       // second point), a regulator feeding a load, and a regulator whose
+       // outlet is back-driven into its relief (every node of two ports:
+       // see the hoses snippet on nodes with nearly zero flow).
+       R"(
+components:
+  source: {type: pressure_source, p: 8 bar, T: 300 K}
+  feed:   {type: iso6358_throttle, C: 0.2 dm3/(s*bar), b: 0.3}
+  tank:   {type: volume, V: 0.1 L, p0: 5.9 bar}
+  relief: {type: relief_valve, p_set: 5 barg, band: 0.5 bar, C: 1 dm3/(s*bar)}
+  air:    {type: atmosphere}
+  reg:    {type: pressure_regulator, p_set: 4 barg, C: 1 dm3/(s*bar)}
+  line:   {type: volume, V: 0.05 L, p0: 4.5 bar}
+  load:   {type: iso6358_throttle, C: 0.3 dm3/(s*bar), b: 0.3}
+  air2:   {type: atmosphere}
+  reg2:   {type: pressure_regulator, p_set: 3 barg, C: 0.5 dm3/(s*bar), relief_C: 0.3 dm3/(s*bar)}
+  line2:  {type: volume, V: 0.05 L, p0: 4.2 bar, T0: 310 K}
+  push:   {type: iso6358_throttle, C: 0.1 dm3/(s*bar), b: 0.3}
+  high:   {type: pressure_source, p: 7 bar, T: 320 K}
+  air3:   {type: atmosphere}
+  air4:   {type: atmosphere}
+  src2:   {type: pressure_source, p: 7.5 bar, T: 290 K}
+  src3:   {type: pressure_source, p: 6 bar, T: 300 K}
+connections:
+  - [source.port, feed.a]
+  - [src2.port, reg.in]
+  - [src3.port, reg2.in]
+  - [feed.b, tank.port, relief.in]
+  - [relief.out, air.port]
+  - [reg.out, line.port]
+  - [line.port_b, load.a]
+  - [load.b, air2.port]
+  - [reg.exhaust, air3.port]
+  - [reg2.out, line2.port]
+  - [line2.port_b, push.a]
+  - [push.b, high.port]
+  - [reg2.exhaust, air4.port]
+)",
+       0.02,
+       {"relief_valve", "pressure_regulator"}},
   };
   return list;
 }
