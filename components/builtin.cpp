@@ -30,6 +30,7 @@ void register_builtin_components(Registry& r) {
   register_position_sensor(r);
   register_cylinder(r);
   register_single_acting_cylinder(r);
+  register_directional_valve_53(r);
   register_pressure_regulator(r);
   register_relief_valve(r);
 }

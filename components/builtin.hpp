@@ -32,6 +32,7 @@ void register_temperature_sensor(Registry& r);
 void register_position_sensor(Registry& r);
 void register_cylinder(Registry& r);
 void register_single_acting_cylinder(Registry& r);
+void register_directional_valve_53(Registry& r);
 void register_pressure_regulator(Registry& r);
 void register_relief_valve(Registry& r);
 

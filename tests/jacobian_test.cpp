@@ -390,6 +390,49 @@ connections:
 )",
        0.02,
        {"relief_valve", "pressure_regulator"}},
+      {"directional_valve_53",
+       // 5/3 valves: one on a schedule from solenoid 14 towards 12 (second
+       // point mid-ramp just past the centre's overlap: the 12 paths
+       // opening), one with an exhausted centre driven by its solenoid
+       // signals, one with a pressurised centre at rest.
+       R"(
+components:
+  supply: {type: pressure_source, p: 6 bar}
+  v1:     {type: directional_valve_53, C: 0.3 dm3/(s*bar), t_switch_time: 20 ms, initial: 1, centre: exhausted,
+           schedule: [[0.005, -1]]}
+  a1:     {type: volume, V: 0.1 L, p0: 1.5 bar}
+  b1:     {type: volume, V: 0.1 L, p0: 3 bar}
+  air1:   {type: atmosphere}
+  s2:     {type: pressure_source, p: 5 bar}
+  sol14:  {type: signal_source, kind: step, value: 0, height: 1, t_start: 0.004}
+  sol12:  {type: signal_source, kind: constant, value: 0}
+  v2:     {type: directional_valve_53, C: 0.2 dm3/(s*bar), t_switch_time: 10 ms, centre: exhausted}
+  a2:     {type: volume, V: 0.1 L, p0: 2 bar}
+  b2:     {type: volume, V: 0.1 L, p0: 4 bar}
+  air2:   {type: atmosphere}
+  s3:     {type: pressure_source, p: 4 bar}
+  v3:     {type: directional_valve_53, C: 0.2 dm3/(s*bar), centre: pressurised}
+  a3:     {type: volume, V: 0.1 L, p0: 2 bar}
+  b3:     {type: volume, V: 0.1 L, p0: 3 bar}
+  air3:   {type: atmosphere}
+connections:
+  - [supply.port, v1.P]
+  - [v1.A, a1.port]
+  - [v1.B, b1.port]
+  - [v1.R, air1.port]
+  - [s2.port, v2.P]
+  - [v2.A, a2.port]
+  - [v2.B, b2.port]
+  - [v2.R, air2.port]
+  - [sol14.y, v2.command_14]
+  - [sol12.y, v2.command_12]
+  - [s3.port, v3.P]
+  - [v3.A, a3.port]
+  - [v3.B, b3.port]
+  - [v3.R, air3.port]
+)",
+       0.03,
+       {"directional_valve_53"}},
   };
   return list;
 }
