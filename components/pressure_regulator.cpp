@@ -85,12 +85,7 @@ class PressureRegulator final : public ComponentT<PressureRegulator> {
   void equations(const Eval<T>& e, T* r) const {
     const auto in = e.gas_port(kIn), out = e.gas_port(kOut), ex = e.gas_port(kExhaust);
     const Flows<T> f = flows(e);
-    r[0] = in.m_flow - f.m;
-    r[1] = out.m_flow - (f.m_r - f.m);
-    r[2] = ex.m_flow + f.m_r;
-    r[3] = in.T_out - out.T_in;
-    r[4] = out.T_out - mix_temperature(f.m, in.T_in, T(-f.m_r), ex.T_in, e.gas());
-    r[5] = ex.T_out - out.T_in;
+    series_port_rows(in, out, ex, f.m, f.m_r, e.gas(), r);
   }
 
   double observe(int k, const Eval<double>& e) const override {

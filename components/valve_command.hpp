@@ -254,4 +254,17 @@ void five_port_rows(const GasPortView<T>& P, const GasPortView<T>& A, const GasP
   r[7] = R.T_out - mix_temperature(m_AR, A.T_in, m_BR, B.T_in, gas);
 }
 
+// The six port rows of a valve with a path in -> mid and a path mid -> ex
+// (pressure regulator P -> A -> exhaust, quick exhaust valve P -> A -> R).
+template <class T>
+void series_port_rows(const GasPortView<T>& in, const GasPortView<T>& mid, const GasPortView<T>& ex, const T& m_in,
+                      const T& m_ex, const GasModel& gas, T* r) {
+  r[0] = in.m_flow - m_in;
+  r[1] = mid.m_flow - (m_ex - m_in);
+  r[2] = ex.m_flow + m_ex;
+  r[3] = in.T_out - mid.T_in;
+  r[4] = mid.T_out - mix_temperature(m_in, in.T_in, T(-m_ex), ex.T_in, gas);
+  r[5] = ex.T_out - mid.T_in;
+}
+
 }  // namespace pneumo::components

@@ -433,6 +433,43 @@ connections:
 )",
        0.03,
        {"directional_valve_53"}},
+      {"logic_valves",
+       // A shuttle and a two-pressure valve, each with inlets crossing over
+       // (a ramped inlet pressure passes the other's inside the run), and a
+       // quick exhaust valve venting a tank through R while its line fills.
+       R"(
+components:
+  ramp:   {type: signal_source, kind: ramp, value: 2e5, height: 4e5, t_start: 0, duration: 0.04}
+  s1:     {type: pressure_source, p: 2 bar}
+  s2:     {type: pressure_source, p: 3 bar, T: 310 K}
+  or:     {type: shuttle_valve, C: 0.2 dm3/(s*bar)}
+  t1:     {type: volume, V: 0.1 L, p0: 2.5 bar}
+  s3:     {type: pressure_source, p: 2 bar}
+  s4:     {type: pressure_source, p: 3 bar, T: 310 K}
+  and:    {type: two_pressure_valve, C: 0.2 dm3/(s*bar), ramp: 0.5 bar}
+  t2:     {type: volume, V: 0.1 L, p0: 2.5 bar}
+  line:   {type: volume, V: 0.02 L, p0: 1.5 bar}
+  feed:   {type: iso6358_throttle, C: 0.05 dm3/(s*bar), b: 0.3}
+  s5:     {type: pressure_source, p: 6 bar}
+  qev:    {type: quick_exhaust_valve, C_PA: 0.5 dm3/(s*bar), C_AR: 1 dm3/(s*bar)}
+  t3:     {type: volume, V: 0.1 L, p0: 5 bar}
+  air:    {type: atmosphere}
+connections:
+  - [ramp.y, s1.p_in, s3.p_in]
+  - [s1.port, or.in_1]
+  - [s2.port, or.in_2]
+  - [or.out, t1.port]
+  - [s3.port, and.in_1]
+  - [s4.port, and.in_2]
+  - [and.out, t2.port]
+  - [s5.port, feed.a]
+  - [feed.b, line.port]
+  - [line.port_b, qev.P]
+  - [qev.A, t3.port]
+  - [qev.R, air.port]
+)",
+       0.02,
+       {"shuttle_valve", "two_pressure_valve", "quick_exhaust_valve"}},
   };
   return list;
 }
