@@ -27,7 +27,7 @@ components:
   source: {type: pressure_source, p: 8 bar, T: 293.15 K}
   feed:   {type: iso6358_throttle, C: 0.2 dm3/(s*bar), b: 0.3}
   tank:   {type: volume, V: 0.5 L, p0: 1 bar}
-  relief: {type: relief_valve, p_set: 5 barg, band: 0.5 bar, C: 1 dm3/(s*bar)}
+  relief: {type: relief_valve, p_set: 5 bar g, band: 0.5 bar, C: 1 dm3/(s*bar)}
   air:    {type: atmosphere}
 connections:
   - [source.port, feed.a]
