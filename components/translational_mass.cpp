@@ -20,7 +20,9 @@ class TranslationalMass final : public ComponentT<TranslationalMass> {
         ParameterSpec::scalar("v0", "m/s", "initial velocity", 0.0),
     };
     i.ports = {{"flange", Domain::translational, Causality::acausal, "flange"}};
-    i.observables = {{"s", "m", "position"}, {"v", "m/s", "velocity"}};
+    i.observables = {{"s", "m", "position"},
+                     {"v", "m/s", "velocity"},
+                     {"E_kin", "J", "kinetic energy 1/2 m v^2", "kinetic_energy"}};
     i.equations = {"Newton's law"};
     return i;
   }
@@ -37,7 +39,14 @@ class TranslationalMass final : public ComponentT<TranslationalMass> {
     else s.fix_position(0, s0_);
     s.fix_velocity(0, v0_);
   }
-  double observe(int k, const Eval<double>& e) const override { return k == 0 ? e.flange(0).s : e.flange(0).v; }
+  double observe(int k, const Eval<double>& e) const override {
+    const auto fl = e.flange(0);
+    switch (k) {
+      case 0: return fl.s;
+      case 1: return fl.v;
+      default: return 0.5 * m_ * fl.v * fl.v;
+    }
+  }
 
  private:
   double m_, s0_, v0_;

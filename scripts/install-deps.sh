@@ -12,6 +12,7 @@ PACKAGES=(
   libyaml-cpp-dev
   libcli11-dev
   libceres-dev           # pneumo fit: nonlinear least squares (2.1)
+  libnlopt-cxx-dev       # pneumo optimize: DIRECT-L, COBYLA, BOBYQA
   libgtest-dev googletest
   gnuplot-nox            # pneumo plot
   libopenmpi-dev openmpi-bin   # pneumo sweep under mpirun (optional at build time)

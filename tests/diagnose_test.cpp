@@ -46,6 +46,7 @@ std::string slurp(const fs::path& p) {
 std::string small_catalogue(const fs::path& dir, const std::vector<std::string>& keep) {
   YAML::Node full = YAML::LoadFile(kSource + "/catalogues/cushion_rig.yaml");
   YAML::Node out;
+  out["phases"] = full["phases"];
   for (const auto& k : keep) out["effects"][k] = full["effects"][k];
   const auto path = (dir / "catalogue.yaml").string();
   std::ofstream(path) << YAML::Dump(out);
@@ -186,7 +187,7 @@ TEST(Diagnose, ReportJsonHasVerdictEffectsAndWhere) {
   const std::string j = slurp(leak_case().dir / "report.json");
   EXPECT_NE(j.find("\"verdict\": [\"leakage_piston_seal\""), std::string::npos);
   for (const char* key : {"\"effects\"", "\"where\"", "\"validation_gap_before\"", "\"validation_gap_after\"",
-                          "\"significance\"", "\"cushioning\"", "\"main_stroke\"", "\"significant_windows\""})
+                          "\"significance\"", "\"cushioning\"", "\"stroke\"", "\"significant_windows\""})
     EXPECT_NE(j.find(key), std::string::npos) << key;
   // Phase shares of the gap add up to the whole.
   const auto& g = leak_case().report.validation_before;

@@ -98,13 +98,13 @@ TEST(SweepDesign, SamplesFileWithUnitsAndLineNumberedErrors) {
 // and 0.5 K on temperatures.
 TEST(SweepMetrics, NominalRigAgreesWithReference) {
   Netlist nl = load_netlist(kRig);
-  const auto metrics = select_metrics(nl, {});
+  const auto metrics = select_metrics(nl, builtin_registry(), {});
   ASSERT_EQ(metrics.size(), 13u);  // 6 from the outputs, 7 from the energy audit
   const RunRecord r = run_one(nl, builtin_registry(), {}, {}, metrics);
   ASSERT_TRUE(r.ok) << r.reason;
   auto metric = [&](const std::string& name) {
     for (std::size_t k = 0; k < metrics.size(); ++k)
-      if (metrics[k]->name == name) return r.metrics[k];
+      if (metrics[k].name == name) return r.metrics[k];
     return std::numeric_limits<double>::quiet_NaN();
   };
 

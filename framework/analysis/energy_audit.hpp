@@ -1,39 +1,24 @@
-// Cushioning energy audit: the kinetic energy a cylinder brings into its
-// cap-end cushioning zone, and where it - together with the driving work
-// done while cushioning - went.
+// Energy audits of the components that declare one (Component::energy_audit,
+// e.g. a cylinder's cushioning): where the energy that entered a window of
+// the motion went.
 //
-// For every cushioned_cylinder of a netlist, prepare_energy_audit() adds
-// integral outputs of the cylinder's power observables (integrated by the
-// solver as IDAS quadratures, so the accounts are as accurate as the
-// trajectory) and the samples it needs. After the run, energy_audit() takes
-// the accounts from the cushion entry event to the piston's first standstill
-// or reversal after it (the end of the run if it never stops):
-//
-//   in:  kinetic energy at entry   1/2 M v_entry^2   (M: the translational
-//                                   masses on the cylinder's flange node)
-//        driving work              rod-side gas and ambient on the piston
-//   out: cushion gas compression   internal energy gained by the cushion gas
-//                                   (including the gas that has left it:
-//                                   dU_EC + H_out / kappa)
-//        throttle dissipation      flow work pushing that gas out through the
-//                                   needle throttle, bore opening, check valve
-//                                   and tap: H_out (kappa - 1) / kappa
-//        heat to the walls         from the cushion gas
-//        channel work              work on the plug column / channel gas,
-//                                   expelled through port B
-//        friction                  dissipated by the piston friction
-//        end stop                  absorbed by the elastic stop (damping +
-//                                   spring energy left)
-//        kinetic energy at the end
-//
-// The cushion gas's energy balance and the piston's equation of motion make
-// in - out vanish exactly; the audit's residual is the solver's error.
+// prepare_energy_audit() elaborates the netlist once to ask every component
+// for its declaration and adds the outputs the audit reads: the declared
+// observables (integrals as IDAS quadratures, so the accounts are as
+// accurate as the trajectory) and the kinetic energy of every mass on the
+// declared flange's node (observables of role "kinetic_energy"). After the
+// run, energy_audit() evaluates each term over the window - from the
+// component's opening event to the first row where its closing observable
+// is <= 0 (else the end of the run). The component's balances make
+// in - out vanish exactly; the residual is the solver's error. The audit
+// knows no component by name.
 #pragma once
 
 #include <ostream>
 #include <string>
 #include <vector>
 
+#include "framework/model/registry.hpp"
 #include "framework/netlist/netlist.hpp"
 #include "framework/run/run.hpp"
 
@@ -45,32 +30,40 @@ struct AuditTerm {
   double joules = 0.0;
 };
 
-struct CushionAudit {
-  std::string cylinder;
-  bool entered = false;      // false: the piston never reached the cushioning zone
-  double t_entry = 0.0;      // s
-  double t_end = 0.0;        // s: first standstill or reversal after entry, else end of the run
-  std::string end_reason;
-  double v_entry = 0.0;      // m/s
-  double moving_mass = 0.0;  // kg
+struct EnergyAudit {
+  std::string component;
+  std::string title;             // what is audited ("cap-end cushioning")
+  std::string open_description;  // what opens the window ("cushion entry")
+  bool opened = false;           // false: the opening event never happened
+  double t_open = 0.0;           // s
+  double t_close = 0.0;          // s
+  std::string close_reason;
+  double speed_at_open = 0.0;    // the closing observable at the opening (a velocity)
   std::vector<AuditTerm> in, out;
   double total_in = 0.0, total_out = 0.0;
   double residual() const { return total_in - total_out; }
 };
 
-// Adds the audit's outputs (named "audit.<cylinder>.<account>") to the
-// netlist; returns the names of the cylinders audited (may be empty).
-std::vector<std::string> prepare_energy_audit(Netlist& netlist);
+// One component's declaration and the output columns that carry it.
+struct AuditPlan {
+  std::string component;
+  EnergyAuditSpec spec;
+  std::vector<std::string> kinetic_columns;  // one per mass on the flange's node
+};
+
+// Adds the audits' outputs (named "audit.<component>. ...") to the netlist;
+// returns one plan per component that declares an audit (may be empty).
+std::vector<AuditPlan> prepare_energy_audit(Netlist& netlist, const Registry& registry);
 
 // The audits of a finished run of a netlist prepared as above.
-std::vector<CushionAudit> energy_audit(const Netlist& netlist, const RunResult& run);
+std::vector<EnergyAudit> energy_audit(const std::vector<AuditPlan>& plans, const RunResult& run);
 
 // Removes the audit's columns from a results table (the user's -o file
 // holds only the netlist's own outputs).
 void drop_audit_columns(ResultsTable& table);
 
-void print_audit(const CushionAudit& a, std::ostream& out);
+void print_audit(const EnergyAudit& a, std::ostream& out);
 // YAML, one document with a list of audits.
-void write_audit_yaml(const std::vector<CushionAudit>& audits, std::ostream& out);
+void write_audit_yaml(const std::vector<EnergyAudit>& audits, std::ostream& out);
 
 }  // namespace pneumo

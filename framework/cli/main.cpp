@@ -9,17 +9,20 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <iostream>
 #include <sstream>
 
 #include "components/builtin.hpp"
 #include "framework/cli/fit.hpp"
 #include "framework/analysis/energy_audit.hpp"
+#include "framework/analysis/run_metrics.hpp"
 #include "framework/cli/diagnose.hpp"
 #include "framework/core/units.hpp"
 #include "framework/core/version.hpp"
 #include "framework/io/plot.hpp"
 #include "framework/plugin/plugin.hpp"
+#include "framework/cli/optimize.hpp"
 #include "framework/cli/study_commands.hpp"
 #include "framework/cli/split_list.hpp"
 #include "framework/run/run.hpp"
@@ -89,32 +92,61 @@ void print_stats(const SolverResult& r, double seconds, std::ostream& out) {
 
 using pneumo::cli::split_list;
 
+void print_metrics(const Netlist& nl, const std::vector<double>& values, const std::vector<std::string>& units,
+                   std::ostream& out) {
+  for (std::size_t i = 0; i < nl.metrics.size(); ++i)
+    out << "metric " << nl.metrics[i].name << " = " << std::setprecision(6) << values[i] << (units[i].empty() ? "" : " ") << units[i] << "\n";
+}
+
+void write_metrics_csv(const std::string& path, const Netlist& nl, const std::vector<double>& values,
+                       const std::vector<std::string>& units) {
+  if (const auto parent = std::filesystem::path(path).parent_path(); !parent.empty())
+    std::filesystem::create_directories(parent);
+  const std::string tmp = path + ".writing";
+  {
+    std::ofstream f(tmp);
+    f << "metric,value,unit\n" << std::setprecision(17);
+    for (std::size_t i = 0; i < nl.metrics.size(); ++i) f << nl.metrics[i].name << "," << values[i] << "," << units[i] << "\n";
+    if (!f) throw std::runtime_error("cannot write the metrics to " + path);
+  }
+  std::filesystem::rename(tmp, path);
+}
+
 int simulate_command(const std::string& netlist_path, const std::vector<std::string>& sets, std::string output,
                      bool stats, bool quiet, const std::string& plot_prefix, const std::string& plot_columns,
-                     const std::string& audit_path) {
+                     const std::string& audit_path, const std::string& metrics_path) {
   Netlist nl = load_netlist(netlist_path);
   for (const auto& s : sets) apply_override(nl, s);
   const bool user_outputs = !nl.outputs.empty();
-  if (!audit_path.empty() && prepare_energy_audit(nl).empty())
-    throw InputError(SourceLocation{nl.file, 1, 1}, "", "",
-                     "--energy-audit: the netlist has no cushioned_cylinder to audit");
   if (output.empty()) output = std::filesystem::path(netlist_path).stem().string() + ".csv";
-  if (const auto parent = std::filesystem::path(output).parent_path(); !parent.empty())
-    std::filesystem::create_directories(parent);
 
   const auto t0 = std::chrono::steady_clock::now();
   const Registry registry = registry_with_plugins(builtin_registry(), nl);  // the netlist's `plugins:`
+  // Every metric of the netlist is evaluated; integrals and audits are extra outputs.
+  const std::vector<bool> all_metrics(nl.metrics.size(), true);
+  add_metric_outputs(nl, all_metrics);
+  std::vector<AuditPlan> audit_plans;
+  if (!audit_path.empty() || metrics_read_audit(nl, all_metrics)) audit_plans = prepare_energy_audit(nl, registry);
+  if (!audit_path.empty() && audit_plans.empty())
+    throw InputError(SourceLocation{nl.file, 1, 1}, "", "",
+                     "--energy-audit: no component of this netlist declares an energy audit");
   System system(elaborate(nl, registry));  // all input errors surface here
   if (!user_outputs)
     throw InputError(SourceLocation{nl.file, 1, 1}, "", "",
                      "the netlist has no 'outputs:' (name: component.variable); nothing would be written");
+  const std::vector<std::string> metric_unit = metric_units(nl, system.circuit());
+  if (const auto parent = std::filesystem::path(output).parent_path(); !parent.empty())
+    std::filesystem::create_directories(parent);
   RunResult run = run_system(system, solver_options(nl.simulation));
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  std::vector<CushionAudit> audits;
-  if (!audit_path.empty()) {
-    if (run.solver.ok) audits = energy_audit(nl, run);
-    drop_audit_columns(run.table);
+  std::vector<EnergyAudit> audits;
+  std::vector<double> metric_values;
+  if (run.solver.ok) {
+    audits = energy_audit(audit_plans, run);
+    metric_values = evaluate_metrics(nl, all_metrics, run, audits);
   }
+  drop_audit_columns(run.table);
+  drop_metric_columns(run.table);
 
   if (!quiet)
     for (const auto& ev : run.solver.events)
@@ -129,6 +161,7 @@ int simulate_command(const std::string& netlist_path, const std::vector<std::str
     return 1;
   }
   write_csv_atomic(output, run.table);
+  if (!metrics_path.empty()) write_metrics_csv(metrics_path, nl, metric_values, metric_unit);
   if (!audit_path.empty()) {
     if (const auto parent = std::filesystem::path(audit_path).parent_path(); !parent.empty())
       std::filesystem::create_directories(parent);
@@ -157,6 +190,7 @@ int simulate_command(const std::string& netlist_path, const std::vector<std::str
       std::cout << "\n";
     }
   }
+  if (!quiet) print_metrics(nl, metric_values, metric_unit, std::cout);
   if (stats) print_stats(run.solver, seconds, std::cout);
   if (!plot_prefix.empty()) {
     plot_results(output, plot_prefix, split_list(plot_columns), nl.file);
@@ -188,7 +222,9 @@ int main(int argc, char** argv) {
   sim->add_option("--columns", plot_columns, "columns to plot, comma separated (default: all)");
   std::string audit_path;
   sim->add_option("--energy-audit", audit_path,
-                  "cushioning energy audit of every cushioned_cylinder: print it and write it (YAML) to FILE");
+                  "energy audit of every component that declares one: print it and write it (YAML) to FILE");
+  std::string metrics_path;
+  sim->add_option("--metrics-out", metrics_path, "write the netlist's metrics to FILE (CSV: metric,value,unit)");
 
   auto* plot = app.add_subcommand("plot", "plot a results CSV to PNG and SVG through gnuplot");
   std::string plot_csv, plot_out;
@@ -198,6 +234,7 @@ int main(int argc, char** argv) {
 
   int study_status = -1;  // set by `sweep` / `sensitivity` (framework/cli/study_commands.cpp)
   pneumo::cli::add_study_commands(app, study_status);
+  pneumo::cli::add_optimize_command(app, study_status);
 
   auto* comps = app.add_subcommand("components", "list component types, or show one");
   std::string type;
@@ -217,7 +254,8 @@ int main(int argc, char** argv) {
 
   try {
     if (fit_cmd->selected()) return fit_cmd->run();
-    if (*sim) return simulate_command(netlist, sets, output, stats, quiet, plot_prefix, plot_columns, audit_path);
+    if (*sim) return simulate_command(netlist, sets, output, stats, quiet, plot_prefix, plot_columns, audit_path,
+                                     metrics_path);
     if (*diagnose_cmd) return run_diagnose_command();
     if (*plot) {
       if (plot_out.empty()) plot_out = (std::filesystem::path(plot_csv).parent_path() /

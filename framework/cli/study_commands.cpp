@@ -121,7 +121,7 @@ int sensitivity_command(const SensitivityArgs& a) {
     throw InputError(SourceLocation{a.netlist, 1, 1}, "", "", "pneumo sensitivity: give the ranges with --param NAME=LOW:HIGH ...");
   const auto ranges = parse_ranges(nl, builtin_registry(), a.params);
   const int k = static_cast<int>(ranges.size());
-  const auto metrics = select_metrics(nl, split_list(a.metrics));
+  const auto metrics = select_metrics(nl, builtin_registry(), split_list(a.metrics));
   if (a.method != "morris" && a.method != "sobol")
     throw InputError(SourceLocation{a.netlist, 1, 1}, "", "", "--method must be morris or sobol, not '" + a.method + "'");
 
@@ -148,7 +148,7 @@ int sensitivity_command(const SensitivityArgs& a) {
   opt.threads = a.threads;
   opt.progress = !a.quiet;
   opt.assembly.eliminate_aliases = a.eliminate;
-  for (const auto* m : metrics) opt.metrics.push_back(m->name);
+  for (const auto& m : metrics) opt.metrics.push_back(m.name);
   if (comm.rank() == 0 && !a.quiet)
     std::cout << a.method << ": " << k << " parameters, " << d.samples.size() << " runs -> " << runs_path << "\n";
   const SweepSummary s = run_sweep(a.netlist, d, runs_path, opt, comm);
@@ -169,11 +169,11 @@ int sensitivity_command(const SensitivityArgs& a) {
   for (std::size_t m = 0; m < metrics.size(); ++m) {
     std::vector<double> f;
     for (const auto& r : s.records) f.push_back(r.ok ? r.metrics[m] : NAN);
-    table << "  " << metrics[m]->name << " [" << metrics[m]->unit << "]\n";
+    table << "  " << metrics[m].name << " [" << metrics[m].unit << "]\n";
     if (a.method == "morris") {
       const MorrisIndices ix = morris_indices(morris, f);
       for (int j = 0; j < k; ++j) {
-        csv << metrics[m]->name << "," << ranges[j].parameter.name << "," << num(ix.mu_star[j]) << ","
+        csv << metrics[m].name << "," << ranges[j].parameter.name << "," << num(ix.mu_star[j]) << ","
             << num(ix.mu[j]) << "," << num(ix.sigma[j]) << "," << ix.effects[j] << "\n";
         table << "    " << ranges[j].parameter.name << ": mu* " << num(ix.mu_star[j]) << ", mu " << num(ix.mu[j])
               << ", sigma " << num(ix.sigma[j]) << " (" << ix.effects[j] << " effects)\n";
@@ -181,7 +181,7 @@ int sensitivity_command(const SensitivityArgs& a) {
     } else {
       const SobolIndices ix = sobol_indices(sobol, f);
       for (int j = 0; j < k; ++j) {
-        csv << metrics[m]->name << "," << ranges[j].parameter.name << "," << num(ix.first[j]) << ","
+        csv << metrics[m].name << "," << ranges[j].parameter.name << "," << num(ix.first[j]) << ","
             << num(ix.first_lo[j]) << "," << num(ix.first_hi[j]) << "," << num(ix.total[j]) << ","
             << num(ix.total_lo[j]) << "," << num(ix.total_hi[j]) << "," << ix.rows_used << "\n";
         table << "    " << ranges[j].parameter.name << ": S1 " << num(ix.first[j]) << " [" << num(ix.first_lo[j])

@@ -643,6 +643,13 @@ std::string si_unit_name(Dimension dim) {
   if (dim == dims::force) return "N";
   if (dim == dims::energy) return "J";
   if (dim == dims::power) return "W";
+  if (dim == dims::volume) return "m3";
+  if (dim == dims::area) return "m2";
+  if (dim == dims::velocity) return "m/s";
+  if (dim == dims::mass_flow) return "kg/s";
+  if (dim == dims::volume_flow) return "m3/s";
+  if (dim == dims::density) return "kg/m3";
+  if (dim == dims::sonic_conductance) return "m3/(s*Pa)";
   return dim.to_string();
 }
 

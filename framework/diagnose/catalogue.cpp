@@ -1,5 +1,6 @@
 #include "framework/diagnose/catalogue.hpp"
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
@@ -279,6 +280,33 @@ bool effects_conflict(const Effect& a, const Effect& b) {
   return false;
 }
 
+namespace {
+
+// phases: [{name: NAME, from: start | COMPONENT.TAG | METRIC}, ...]
+std::vector<PhaseDecl> read_phases(const std::string& path, const YAML::Node& list, const Netlist& model) {
+  if (!list.IsSequence()) fail(path, list, "", "", "'phases' must be a list of {name, from}");
+  std::vector<PhaseDecl> out;
+  for (const YAML::Node item : list) {
+    if (!item.IsMap() || !item["name"] || !item["from"])
+      fail(path, item, "", "", "a phase is {name: NAME, from: start | COMPONENT.TAG | METRIC}");
+    PhaseDecl ph{item["name"].as<std::string>(), item["from"].as<std::string>(), location_of(path, item)};
+    const auto dot = ph.from.find('.');
+    const bool is_metric = std::any_of(model.metrics.begin(), model.metrics.end(),
+                                       [&](const MetricDecl& m) { return m.name == ph.from; });
+    const bool is_event = dot != std::string::npos &&
+                          std::any_of(model.components.begin(), model.components.end(),
+                                      [&](const ComponentDecl& c) { return c.name == ph.from.substr(0, dot); });
+    if (ph.from != "start" && !is_metric && !is_event)
+      fail(path, item["from"], "", "phases." + ph.name,
+           "phase '" + ph.name + "' starts at '" + ph.from +
+               "', which is neither 'start', an event COMPONENT.TAG of the model nor one of its metrics");
+    out.push_back(std::move(ph));
+  }
+  return out;
+}
+
+}  // namespace
+
 Catalogue load_catalogue(const std::string& path, const YAML::Node& model, const std::string& model_file,
                          const Registry& registry) {
   Catalogue cat;
@@ -295,6 +323,10 @@ Catalogue load_catalogue(const std::string& path, const YAML::Node& model, const
   }
   if (!root.IsMap() || !root["effects"] || !root["effects"].IsMap())
     throw InputError(SourceLocation{path, 1, 1}, "", "", "a catalogue needs 'effects:', a map of effect name -> patch");
+  for (auto it = root.begin(); it != root.end(); ++it)
+    if (it->first.as<std::string>() != "effects" && it->first.as<std::string>() != "phases")
+      fail(path, it->first, "", "", "unknown key '" + it->first.as<std::string>() + "' (valid: effects, phases)");
+  if (root["phases"]) cat.phases = read_phases(path, root["phases"], load_netlist(model_file));
   static const std::set<std::string> kKeys = {"description",        "parameters", "requires", "add_components",
                                               "replace_components", "set",        "disconnect", "connect",
                                               "measure"};
@@ -302,7 +334,7 @@ Catalogue load_catalogue(const std::string& path, const YAML::Node& model, const
     Effect e;
     e.name = it->first.as<std::string>();
     e.where = location_of(path, it->first);
-    const YAML::Node& body = it->second;
+    const YAML::Node body = it->second;  // a copy: the iterator's pair is a temporary
     if (!body.IsMap()) fail(path, it->first, e.name, "", "an effect must be a map (parameters, set, connect, ...)");
     for (auto k = body.begin(); k != body.end(); ++k)
       if (!kKeys.count(k->first.as<std::string>()))
@@ -317,7 +349,7 @@ Catalogue load_catalogue(const std::string& path, const YAML::Node& model, const
         EffectParameter ep;
         ep.name = p->first.as<std::string>();
         ep.where = location_of(path, p->first);
-        const YAML::Node& s = p->second;
+        const YAML::Node s = p->second;
         if (!s.IsMap()) fail(path, p->first, e.name, ep.name, "needs {initial, lower, upper, null, unit}");
         // yaml-cpp parses the plain key `null` as a Null node, which s["null"]
         // does not find: the entry is taken from the iteration.

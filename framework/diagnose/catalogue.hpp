@@ -55,9 +55,19 @@ struct Effect {
   int parameter_index(const std::string& n) const;
 };
 
+// A phase of the runs in the gap report: it starts at `from` - "start", an
+// event of the unpatched model COMPONENT.TAG, or a time-valued metric of the
+// model's `metrics:` - and lasts until the next phase starts.
+struct PhaseDecl {
+  std::string name;
+  std::string from;
+  SourceLocation where;
+};
+
 struct Catalogue {
   std::string file;
   std::vector<Effect> effects;
+  std::vector<PhaseDecl> phases;  // empty: phases from the model's own events
   const Effect* find(const std::string& name) const;
 };
 

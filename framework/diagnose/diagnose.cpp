@@ -12,11 +12,11 @@
 #include <numeric>
 #include <thread>
 
+#include "framework/analysis/run_metrics.hpp"
 #include "framework/run/run.hpp"
 
 namespace pneumo::diagnose {
 
-const char* const kPhaseNames[5] = {"rest", "acceleration", "main_stroke", "cushioning", "end_position"};
 
 namespace {
 
@@ -140,8 +140,9 @@ class Engine {
   const Netlist& base() const { return base_netlist_; }
   const YAML::Node& yaml() const { return model_yaml_; }
   std::vector<MeasuredRun> runs;
-  std::vector<std::vector<int>> phases;  // per run, per sample
-  std::vector<std::array<double, 6>> phase_times;
+  std::vector<std::string> phase_names;
+  std::vector<std::vector<int>> phases;            // per run, per sample
+  std::vector<std::vector<double>> phase_times;    // per run: each phase's start, then the run's end
   std::atomic<long> simulations{0};
 
   Model model(const std::vector<EffectInstance>& effects) const {
@@ -150,18 +151,24 @@ class Engine {
     return m;
   }
 
-  // Simulated signals of run `k` at its measurement times; empty if the run failed.
-  std::vector<std::vector<double>> simulate(const Model& m, int k) {
-    ++simulations;
+  // The model at run `k`'s operating point over its measured span.
+  Netlist netlist_of(const Model& m, int k) const {
     const MeasuredRun& run = runs[k];
     Netlist nl = parse_netlist(m.text, model_file_);
     for (const auto& [name, value] : run.operating_point) apply_override(nl, name + "=" + value);
     nl.simulation.t_end = run.t.back() + 1e-9;
     const double dt = (run.t.back() - run.t.front()) / std::max<std::size_t>(1, run.t.size() - 1);
     nl.simulation.output_interval = std::min(nl.simulation.output_interval, dt);
+    return nl;
+  }
+
+  // Simulated signals of run `k` at its measurement times; empty if the run failed.
+  std::vector<std::vector<double>> simulate(const Model& m, int k) {
+    ++simulations;
+    const MeasuredRun& run = runs[k];
     RunResult res;
     try {
-      res = run_simulation(nl, registry_);
+      res = run_simulation(netlist_of(m, k), registry_);
     } catch (const std::exception&) {
       return {};
     }
@@ -240,7 +247,8 @@ class Engine {
       }
     }
     g.by_signal.assign(g.signals.size(), {});
-    g.by_phase.assign(g.signals.size(), {});
+    g.by_phase.assign(g.signals.size(), std::vector<Gap>(phase_names.size()));
+    g.phase_total.assign(phase_names.size(), {});
     for (const auto& seg : L.segments) {
       const int s = idx[runs[seg.run].signals[seg.signal]];
       for (std::size_t i = 0; i < seg.n; ++i) {
@@ -400,72 +408,69 @@ class Engine {
   }
   double screen_cutoff_ = -1;  // < 0: never stop at screening
 
-  void compute_phases() {
-    // The cylinder's stroke and cushion length, and the outputs that measure x.
-    const ComponentDecl* cyl = nullptr;
-    for (const auto& c : base_netlist_.components)
-      if (c.type == "cushioned_cylinder") cyl = &c;
-    double stroke = NAN, L = NAN;
-    std::string x_out;
-    if (cyl) {
-      const auto* info = registry_.find(cyl->type)->info.get();
-      for (const auto& [k, node] : cyl->parameters) {
-        if (k == "stroke") stroke = parameter_value(base_netlist_, *cyl, *info->parameter(k), node);
-        if (k == "cushion_length") L = parameter_value(base_netlist_, *cyl, *info->parameter(k), node);
-      }
-      for (const auto& o : base_netlist_.outputs)
-        if (o.component == cyl->name && o.quantity == "x") x_out = o.name;
-    }
+  // Phases from the unpatched model's own run at each operating point: the
+  // catalogue's list (each starting at an event, a metric or the start), or
+  // else one phase per tagged event of the model, from its first occurrence.
+  void compute_phases(const std::vector<PhaseDecl>& declared) {
     const Model base = model({});
+    std::vector<std::map<std::string, double>> starts(runs.size());  // per run: phase -> start time
+    std::map<std::string, std::vector<double>> first_seen;            // default phases: tag -> times
+    for (std::size_t k = 0; k < runs.size(); ++k) {
+      Netlist nl = netlist_of(base, static_cast<int>(k));
+      const std::vector<bool> all(nl.metrics.size(), true);
+      add_metric_outputs(nl, all);
+      RunResult res;
+      try {
+        res = run_simulation(nl, registry_);
+      } catch (const std::exception&) {
+        continue;  // input errors surfaced when the model was loaded; a failed run gets one phase
+      }
+      ++simulations;
+      for (const auto& e : res.solver.events) {
+        if (e.tag.empty()) continue;
+        const std::string ref = e.component + "." + e.tag;
+        if (!starts[k].count(ref)) {
+          starts[k][ref] = e.t;
+          first_seen[ref].push_back(e.t);
+        }
+      }
+      if (!declared.empty() && !nl.metrics.empty() && res.solver.ok) {
+        const auto values = evaluate_metrics(nl, all, res, {});
+        for (std::size_t i = 0; i < nl.metrics.size(); ++i) starts[k][nl.metrics[i].name] = values[i];
+      }
+    }
+    std::vector<std::string> from;
+    phase_names.clear();
+    if (!declared.empty()) {
+      for (const auto& p : declared) phase_names.push_back(p.name), from.push_back(p.from);
+    } else {
+      phase_names = {"start"};
+      from = {"start"};
+      std::vector<std::pair<double, std::string>> order;
+      for (auto& [ref, times] : first_seen) {
+        std::sort(times.begin(), times.end());
+        order.emplace_back(times[times.size() / 2], ref);
+      }
+      std::sort(order.begin(), order.end());
+      for (const auto& [t, ref] : order) phase_names.push_back(ref), from.push_back(ref);
+    }
     phases.assign(runs.size(), {});
     phase_times.assign(runs.size(), {});
     for (std::size_t k = 0; k < runs.size(); ++k) {
-      const auto& run = runs[k];
-      phases[k].assign(run.t.size(), 2);
+      const auto& t = runs[k].t;
+      // A phase whose start never came is empty; starts never go back in time.
       auto& pt = phase_times[k];
-      pt = {run.t.front(), run.t.front(), run.t.front(), run.t.back(), run.t.back(), run.t.back()};
-      if (x_out.empty() || std::isnan(stroke)) continue;
-      std::vector<double> x;
-      const auto it = std::find(run.signals.begin(), run.signals.end(), x_out);
-      if (it != run.signals.end()) {
-        x = run.y[it - run.signals.begin()];
-      } else {  // not measured: the unpatched model's x
-        MeasuredRun probe = run;
-        probe.signals = {x_out};
-        probe.y = {run.t};
-        probe.sigma = {1.0};
-        runs.push_back(probe);
-        const auto sim = simulate(base, static_cast<int>(runs.size()) - 1);
-        runs.pop_back();
-        if (sim.empty()) continue;
-        x = sim[0];
+      for (const auto& f : from) {
+        const auto it = starts[k].find(f);
+        double s0 = f == "start" ? t.front() : it == starts[k].end() || std::isnan(it->second) ? t.back() : it->second;
+        pt.push_back(std::clamp(std::max(s0, pt.empty() ? t.front() : pt.back()), t.front(), t.back()));
       }
-      const std::size_t n = x.size();
-      const double x0 = x[0];
-      // Velocity from a centred difference over ~5 ms (noise-robust).
-      const double dt = (run.t.back() - run.t.front()) / (n - 1);
-      const std::size_t w = std::max<std::size_t>(1, static_cast<std::size_t>(0.005 / dt));
-      std::vector<double> v(n, 0.0);
-      for (std::size_t i = 0; i < n; ++i) {
-        const std::size_t a = i >= w ? i - w : 0, b = std::min(n - 1, i + w);
-        if (b > a) v[i] = (x[b] - x[a]) / (run.t[b] - run.t[a]);
+      pt.push_back(t.back());
+      phases[k].assign(t.size(), 0);
+      for (std::size_t i = 0, p = 0; i < t.size(); ++i) {
+        while (p + 1 < from.size() && t[i] >= pt[p + 1]) ++p;
+        phases[k][i] = static_cast<int>(p);
       }
-      const double x_cush = stroke - L;
-      std::size_t i_move = n, i_acc = n, i_cush = n, i_end = n;
-      for (std::size_t i = 0; i < n; ++i)
-        if (x[i] - x0 > 3e-4) { i_move = i; break; }
-      double vmax = 0;
-      for (std::size_t i = i_move; i < n && x[i] < x_cush; ++i) vmax = std::max(vmax, v[i]);
-      for (std::size_t i = i_move; i < n; ++i)
-        if (v[i] >= 0.9 * vmax || x[i] >= x_cush) { i_acc = i; break; }
-      for (std::size_t i = i_acc; i < n; ++i)
-        if (x[i] >= x_cush) { i_cush = i; break; }
-      for (std::size_t i = i_cush; i < n; ++i)
-        if (x[i] >= stroke - 3e-4) { i_end = i; break; }
-      for (std::size_t i = 0; i < n; ++i)
-        phases[k][i] = i < i_move ? 0 : i < i_acc ? 1 : i < i_cush ? 2 : i < i_end ? 3 : 4;
-      auto tt = [&](std::size_t i) { return i < n ? run.t[i] : run.t.back(); };
-      pt = {run.t.front(), tt(i_move), tt(i_acc), tt(i_cush), tt(i_end), run.t.back()};
     }
   }
 
@@ -542,7 +547,8 @@ DiagnosisReport diagnose(const std::string& model_file, const std::string& runs_
   }
   log(fmt("diagnose: %g runs, ", eng.runs.size()) + std::to_string(cat.effects.size()) + " candidate effects, " +
       std::to_string(opt.threads) + " threads");
-  eng.compute_phases();
+  eng.compute_phases(cat.phases);
+  rep.phase_names = eng.phase_names;
   const Layout cal = eng.layout(Role::calibration), val = eng.layout(Role::validation);
 
   // Where: the unpatched model.

@@ -2,7 +2,8 @@
 //
 // Where: residuals of the unpatched model on every measured run, weighted by
 // the noise each signal shows itself (robust high-pass estimate), split by
-// signal and by phase of the stroke, plus the time windows whose residuals
+// signal and by phase (the catalogue's `phases:`, else the model's own tagged
+// events), plus the time windows whose residuals
 // are significant against that noise.
 // Which: every available candidate effect is calibrated on the calibration
 // runs (bounded Levenberg-Marquardt, finite-difference sensitivities, runs in
@@ -51,8 +52,6 @@ std::vector<MeasuredRun> load_runs(const std::string& dir, const Netlist& model)
 // third differences / sqrt(20), floored by the quantisation step / sqrt(12).
 double estimate_noise(const std::vector<double>& y);
 
-extern const char* const kPhaseNames[5];  // rest, acceleration, main_stroke, cushioning, end_position
-
 struct DiagnoseOptions {
   int threads = 2;
   int max_effects = 2;        // forward selection depth
@@ -84,8 +83,8 @@ struct GapTable {
   std::vector<std::string> signals;
   Gap total;
   std::vector<Gap> by_signal;                 // per signal
-  std::vector<std::array<Gap, 5>> by_phase;   // per signal, per phase
-  std::array<Gap, 5> phase_total{};
+  std::vector<std::vector<Gap>> by_phase;   // per signal, per phase (DiagnosisReport::phase_names)
+  std::vector<Gap> phase_total;
 };
 
 struct EffectResult {
@@ -113,11 +112,12 @@ struct WindowFinding {
 struct TracePlot {  // decimated traces of one validation run and signal
   std::string run, signal;
   std::vector<double> t, measured, before, after;
-  std::array<double, 6> phase_times{};  // phase boundaries
+  std::vector<double> phase_times;  // each phase's start, then the end
 };
 
 struct DiagnosisReport {
   std::string model_file, catalogue_file, runs_dir;
+  std::vector<std::string> phase_names;  // the catalogue's phases, or the model's tagged events
   std::vector<std::string> verdict;
   std::vector<std::vector<std::string>> verdict_groups;
   std::vector<EffectResult> effects;

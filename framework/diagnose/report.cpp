@@ -41,21 +41,27 @@ std::string html(const std::string& s) {
   return o;
 }
 
-std::string gap_json(const GapTable& g) {
+// Phase colours, repeated when there are more phases: shading (light) and bars.
+const char* const kShade[] = {"#f4f4f4", "#fff4e0", "#eef6ff", "#ffecec", "#eefbee", "#f6eeff"};
+const char* const kColour[] = {"#bbb", "#f0a030", "#4c8fd6", "#d64c4c", "#4cb04c", "#9b6bd6"};
+const char* shade(std::size_t p) { return kShade[p % 6]; }
+const char* colour(std::size_t p) { return kColour[p % 6]; }
+
+std::string gap_json(const GapTable& g, const std::vector<std::string>& phases) {
   std::ostringstream o;
   const double tot = g.total.ssr > 0 ? g.total.ssr : 1;
   o << "{\"total\": " << num(g.total.rms) << ", \"by_signal\": {";
   for (std::size_t s = 0; s < g.signals.size(); ++s) {
     o << (s ? ", " : "") << str(g.signals[s]) << ": {\"gap\": " << num(g.by_signal[s].rms)
       << ", \"share\": " << num(g.by_signal[s].ssr / tot) << ", \"by_phase\": {";
-    for (int p = 0; p < 5; ++p)
-      o << (p ? ", " : "") << str(kPhaseNames[p]) << ": {\"gap\": " << num(g.by_phase[s][p].rms)
+    for (std::size_t p = 0; p < phases.size(); ++p)
+      o << (p ? ", " : "") << str(phases[p]) << ": {\"gap\": " << num(g.by_phase[s][p].rms)
         << ", \"share\": " << num(g.by_phase[s][p].ssr / tot) << ", \"samples\": " << g.by_phase[s][p].n << "}";
     o << "}}";
   }
   o << "}, \"by_phase\": {";
-  for (int p = 0; p < 5; ++p)
-    o << (p ? ", " : "") << str(kPhaseNames[p]) << ": {\"gap\": " << num(g.phase_total[p].rms)
+  for (std::size_t p = 0; p < phases.size(); ++p)
+    o << (p ? ", " : "") << str(phases[p]) << ": {\"gap\": " << num(g.phase_total[p].rms)
       << ", \"share\": " << num(g.phase_total[p].ssr / tot) << "}";
   o << "}}";
   return o.str();
@@ -72,7 +78,7 @@ void write_atomic(const std::string& path, const std::string& text) {
   std::filesystem::rename(tmp, path);
 }
 
-std::string svg_plot(const TracePlot& p) {
+std::string svg_plot(const TracePlot& p, const std::vector<std::string>& phases) {
   const double W = 560, H = 220, l = 60, r = 10, t = 10, b = 30;
   double t0 = p.t.front(), t1 = p.t.back(), lo = INFINITY, hi = -INFINITY;
   for (const auto* v : {&p.measured, &p.before, &p.after})
@@ -87,11 +93,10 @@ std::string svg_plot(const TracePlot& p) {
   o << "<svg class=\"trace\" data-run=\"" << html(p.run) << "\" data-signal=\"" << html(p.signal)
     << "\" xmlns=\"http://www.w3.org/2000/svg\" width=\"" << W << "\" height=\"" << H << "\" viewBox=\"0 0 " << W
     << " " << H << "\">\n";
-  const char* shade[5] = {"#f4f4f4", "#fff4e0", "#eef6ff", "#ffecec", "#eefbee"};
-  for (int ph = 0; ph < 5; ++ph) {
+  for (std::size_t ph = 0; ph + 1 < p.phase_times.size() && ph < phases.size(); ++ph) {
     const double a = X(p.phase_times[ph]), c = X(p.phase_times[ph + 1]);
     if (c > a) o << "<rect x=\"" << a << "\" y=\"" << t << "\" width=\"" << c - a << "\" height=\"" << H - t - b
-                 << "\" fill=\"" << shade[ph] << "\"><title>" << kPhaseNames[ph] << "</title></rect>\n";
+                 << "\" fill=\"" << shade(ph) << "\"><title>" << html(phases[ph]) << "</title></rect>\n";
   }
   o << "<rect x=\"" << l << "\" y=\"" << t << "\" width=\"" << W - l - r << "\" height=\"" << H - t - b
     << "\" fill=\"none\" stroke=\"#888\"/>\n";
@@ -119,7 +124,6 @@ std::string svg_phase_bars(const DiagnosisReport& r) {
   const double W = 560, H = 90;
   std::ostringstream o;
   o << "<svg id=\"phase-bars\" xmlns=\"http://www.w3.org/2000/svg\" width=\"" << W << "\" height=\"" << H << "\">\n";
-  const char* color[5] = {"#bbb", "#f0a030", "#4c8fd6", "#d64c4c", "#4cb04c"};
   const double before = r.validation_before.total.ssr > 0 ? r.validation_before.total.ssr : 1;
   int row = 0;
   for (const GapTable* g : {&r.validation_before, &r.validation_after}) {
@@ -127,10 +131,10 @@ std::string svg_phase_bars(const DiagnosisReport& r) {
     const double scale = (W - 80) * (row == 0 ? 1.0 : std::min(1.0, g->total.ssr / before)) /
                          (g->total.ssr > 0 ? g->total.ssr : 1);
     o << "<text x=\"0\" y=\"" << 25 + row * 35 << "\" font-size=\"12\">" << (row ? "after" : "before") << "</text>";
-    for (int p = 0; p < 5; ++p) {
+    for (std::size_t p = 0; p < r.phase_names.size() && p < g->phase_total.size(); ++p) {
       const double w = g->phase_total[p].ssr * scale;
       o << "<rect class=\"phase-bar\" x=\"" << x << "\" y=\"" << 10 + row * 35 << "\" width=\"" << w
-        << "\" height=\"22\" fill=\"" << color[p] << "\"><title>" << kPhaseNames[p] << ": "
+        << "\" height=\"22\" fill=\"" << colour(p) << "\"><title>" << html(r.phase_names[p]) << ": "
         << num(100 * g->phase_total[p].ssr / (g->total.ssr > 0 ? g->total.ssr : 1)) << " %</title></rect>";
       x += w;
     }
@@ -166,9 +170,9 @@ void write_report_json(const DiagnosisReport& r, const std::string& path) {
   o << "],\n\"noise\": {";
   for (std::size_t i = 0; i < r.noise.size(); ++i) o << (i ? ", " : "") << str(r.noise[i].first) << ": " << num(r.noise[i].second);
   o << "},\n\"gap_unit\": \"RMS of (measured - simulated)/noise; 1 = within noise\",";
-  o << "\n\"where\": {\"validation_before\": " << gap_json(r.validation_before)
-    << ",\n  \"validation_after\": " << gap_json(r.validation_after)
-    << ",\n  \"calibration_before\": " << gap_json(r.calibration_before) << ",\n  \"significant_windows\": [";
+  o << "\n\"where\": {\"validation_before\": " << gap_json(r.validation_before, r.phase_names)
+    << ",\n  \"validation_after\": " << gap_json(r.validation_after, r.phase_names)
+    << ",\n  \"calibration_before\": " << gap_json(r.calibration_before, r.phase_names) << ",\n  \"significant_windows\": [";
   for (std::size_t i = 0; i < r.windows.size(); ++i) {
     const auto& w = r.windows[i];
     o << (i ? ",\n    " : "\n    ") << "{\"run\": " << str(w.run) << ", \"signal\": " << str(w.signal)
@@ -197,7 +201,7 @@ void write_report_json(const DiagnosisReport& r, const std::string& path) {
     for (std::size_t j = 0; j < e.group.size(); ++j) o << (j ? ", " : "") << str(e.group[j]);
     o << "]";
     if (!e.unavailable.empty() || e.screened_out) o << "}";
-    else o << ", \"where_after\": " << gap_json(e.validation_after) << "}";
+    else o << ", \"where_after\": " << gap_json(e.validation_after, r.phase_names) << "}";
   }
   o << "],\n\"seconds\": " << num(r.seconds) << ",\n\"simulations\": " << r.simulations << "\n}\n";
   write_atomic(path, o.str());
@@ -224,30 +228,29 @@ void write_report_html(const DiagnosisReport& r, const std::string& path) {
   }
   o << "</p>\n<p>Validation gap (RMS of residual / noise; 1 = within noise): before <b>"
     << num(r.validation_before.total.rms) << "</b>, after <b>" << num(r.validation_after.total.rms) << "</b>.</p>\n";
-  o << "<h2>Gap by signal and phase (validation runs)</h2>\n" << svg_phase_bars(r)
-    << "<div class=\"legend\"><span style=\"color:#888\">rest</span><span style=\"color:#f0a030\">acceleration</span>"
-       "<span style=\"color:#4c8fd6\">main stroke</span><span style=\"color:#d64c4c\">cushioning</span>"
-       "<span style=\"color:#4cb04c\">end position</span></div>\n";
-  o << "<table id=\"gap-table\"><tr><th>signal</th><th>noise</th>";
-  for (auto* p : kPhaseNames) o << "<th>" << p << " before</th><th>after</th>";
+  o << "<h2>Gap by signal and phase (validation runs)</h2>\n" << svg_phase_bars(r) << "<div class=\"legend\">";
+  for (std::size_t p = 0; p < r.phase_names.size(); ++p)
+    o << "<span style=\"color:" << colour(p) << "\">" << html(r.phase_names[p]) << "</span>";
+  o << "</div>\n<table id=\"gap-table\"><tr><th>signal</th><th>noise</th>";
+  for (const auto& p : r.phase_names) o << "<th>" << html(p) << " before</th><th>after</th>";
   o << "<th>total before</th><th>after</th></tr>\n";
   for (std::size_t s = 0; s < r.validation_before.signals.size(); ++s) {
     double sigma = NAN;
     for (const auto& [n, v] : r.noise)
       if (n == r.validation_before.signals[s]) sigma = v;
     o << "<tr><td class=\"l\">" << html(r.validation_before.signals[s]) << "</td><td>" << num(sigma) << "</td>";
-    for (int p = 0; p < 5; ++p)
+    for (std::size_t p = 0; p < r.phase_names.size(); ++p)
       o << "<td>" << num(r.validation_before.by_phase[s][p].rms) << "</td><td>"
         << (s < r.validation_after.by_phase.size() ? num(r.validation_after.by_phase[s][p].rms) : "") << "</td>";
     o << "<td>" << num(r.validation_before.by_signal[s].rms) << "</td><td>"
       << (s < r.validation_after.by_signal.size() ? num(r.validation_after.by_signal[s].rms) : "") << "</td></tr>\n";
   }
   o << "</table>\n<p id=\"phase-shares\">Share of the squared validation gap by phase, before:";
-  for (int p = 0; p < 5; ++p)
-    o << " " << kPhaseNames[p] << " "
+  for (std::size_t p = 0; p < r.phase_names.size(); ++p)
+    o << " " << html(r.phase_names[p]) << " "
       << num(100 * r.validation_before.phase_total[p].ssr /
              (r.validation_before.total.ssr > 0 ? r.validation_before.total.ssr : 1))
-      << " %" << (p < 4 ? ";" : ".");
+      << " %" << (p + 1 < r.phase_names.size() ? ";" : ".");
   o << " By signal:";
   for (std::size_t s = 0; s < r.validation_before.signals.size(); ++s)
     o << " " << html(r.validation_before.signals[s]) << " "
@@ -286,7 +289,7 @@ void write_report_html(const DiagnosisReport& r, const std::string& path) {
   o << "</table>\n<h2>Measured against simulated (validation runs)</h2>\n<p class=\"legend\">"
        "<span style=\"color:#999\">&#9644; measured</span><span style=\"color:#d62728\">&#9644; model before</span>"
        "<span style=\"color:#1f77b4\">&#9644; model with the verdict's effects</span>; shading: phases.</p>\n";
-  for (const auto& p : r.plots) o << svg_plot(p);
+  for (const auto& p : r.plots) o << svg_plot(p, r.phase_names);
   o << "</body></html>\n";
   write_atomic(path, o.str());
 }

@@ -217,7 +217,7 @@ std::string friction_preset_yaml(const FrictionCoefficients& c, const FitReport&
     << " N^2, R2 " << g(r.r2) << "\n"
     << "# general form (components/friction.hpp): |F| = b0 + b1 p + (FS0 + FS1 p - FC) exp(-|v|/vS)"
        " + (kv0 + kv1 p) |v|^a, p in bar\n"
-    << "# Paste into the cushioned_cylinder's parameters.\n";
+    << "# Paste into the cylinder's parameters (friction law).\n";
   const std::string pre = cushion_zone ? "friction_cushion" : "friction";
   o << pre << ": custom\n";
   o << pre << "_pressure: " << friction_pressure_name(c.pressure) << "\n";

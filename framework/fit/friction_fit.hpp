@@ -59,7 +59,7 @@ std::vector<FrictionPoint> friction_points(const DataTable& data, components::Fr
 components::FrictionCoefficients friction_coefficients(FrictionModel m, const FitReport& r,
                                                        components::FrictionPressure pressure);
 
-// A netlist-ready YAML snippet for the cushioned cylinder: `friction: custom`
+// A netlist-ready YAML snippet for a cylinder's friction: `friction: custom`
 // and the coefficients as friction_b0 ... friction_a with units (prefix
 // friction_cushion_ for the cushioning zone). `header` lines become comments.
 std::string friction_preset_yaml(const components::FrictionCoefficients& c, const FitReport& r,

@@ -158,7 +158,7 @@ std::string needle_throttle_yaml(const NeedleFit& f, const std::string& header) 
   std::string line;
   while (std::getline(h, line)) o << "# " << line << "\n";
   o << "# needle throttle: C and b per opening, b = b0 + slope C/C_max (R2 of the line " << g(f.b_line_r2)
-    << ")\n# Paste into the cushioned_cylinder's parameters.\ncushion_C_of_z:\n";
+    << ")\n# Paste into the cylinder's parameters (cushion needle throttle).\ncushion_C_of_z:\n";
   for (std::size_t i = 0; i < f.z.size(); ++i)
     o << "  - [" << g(f.z[i]) << ", " << g(f.per_opening[i].value("C")) << " dm3/(s*bar)]   # b = "
       << g(f.per_opening[i].value("b")) << ", R2 " << g(f.per_opening[i].r2) << "\n";

@@ -4,7 +4,7 @@
 // (components/iso6358_flow.hpp, linear continuation above p2/p1 = 0.999).
 // For a needle throttle measured at several openings z: C and b per
 // opening, then C(z) as the piecewise-linear table and b(C) = b0 + slope
-// C/C_max as a straight line, in the cushioned cylinder's parameter names.
+// C/C_max as a straight line, in the cushioning cylinder's parameter names.
 #pragma once
 
 #include <string>

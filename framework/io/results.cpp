@@ -11,6 +11,21 @@ namespace pneumo {
 
 namespace fs = std::filesystem;
 
+void ResultsTable::drop_columns(const std::string& prefix) {
+  std::vector<std::size_t> keep;
+  for (std::size_t i = 0; i < names.size(); ++i)
+    if (names[i].rfind(prefix, 0) != 0) keep.push_back(i);
+  if (keep.size() == names.size()) return;
+  auto filter = [&](auto& v) {
+    std::remove_reference_t<decltype(v)> out;
+    for (std::size_t i : keep) out.push_back(v[i]);
+    v = std::move(out);
+  };
+  filter(names);
+  filter(units);
+  for (auto& row : rows) filter(row);
+}
+
 int ResultsTable::column(const std::string& name) const {
   for (std::size_t i = 0; i < names.size(); ++i)
     if (names[i] == name) return static_cast<int>(i);

@@ -16,6 +16,8 @@ struct ResultsTable {
 
   void add_row(std::vector<double> row) { rows.push_back(std::move(row)); }
   int column(const std::string& name) const;
+  // Removes every column whose name starts with `prefix` (hidden outputs).
+  void drop_columns(const std::string& prefix);
 };
 
 // Header "t [s],p [Pa],...". Throws std::runtime_error naming the path.

@@ -1,5 +1,7 @@
 #include "framework/netlist/netlist.hpp"
 
+#include "framework/netlist/metric_reader.hpp"
+
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
@@ -276,7 +278,7 @@ Netlist parse_netlist(const std::string& text, const std::string& file_name) {
   nl.parameters_where = SourceLocation{file_name, 1, 1};
   static const std::vector<std::string> kTopKeys{"title",      "description", "gas",     "ambient",
                                                  "parameters", "components",  "connections", "outputs",
-                                                 "simulation", "plugins"};
+                                                 "simulation", "plugins",     "metrics"};
   std::map<std::string, YAML::Node> top;
   std::map<std::string, YAML::Node> top_key;
   for (const auto& e : r.mapping(root, "the netlist")) {
@@ -461,6 +463,7 @@ Netlist parse_netlist(const std::string& text, const std::string& file_name) {
     if (!(s.max_step >= 0))
       r.fail(at_key("max_step"), "", "simulation.max_step", "max_step must be > 0 (or 0 for the solver's choice)");
   }
+  if (top.count("metrics")) nl.metrics = read_metrics(top["metrics"], nl);
   return nl;
 }
 

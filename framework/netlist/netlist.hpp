@@ -11,6 +11,7 @@
 //   connections:
 //     - [source.port, valve.a]
 //   outputs:    {p: tank.p, T: tank.T}
+//   metrics:    {p_max: {max: p}, t_full: {of: p, crosses: 4 bar, direction: rising}}
 //   simulation: {t_end: 2 s, rtol: 1e-6, atol: 1e-6, output_interval: 1 ms}
 //   plugins:    [build/my_components.so]  # relative to the netlist's directory
 #pragma once
@@ -18,6 +19,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -67,6 +69,42 @@ struct OutputDecl {
   bool integral = false;  // {integral: comp.var}: its time integral from t_start
 };
 
+// A moment a metric refers to: a fixed time, or the n-th event COMPONENT.TAG
+// (EventResult::tag) of a run.
+struct TimeRef {
+  double t = 0.0;  // s, when no event is named
+  std::string component, tag;
+  int occurrence = 1;
+  bool is_event() const { return !tag.empty(); }
+};
+
+// A named scalar result of a run (`metrics:`), defined from the outputs and
+// the events (framework/analysis/run_metrics.hpp evaluates them):
+//   {max: OUT}, {min: OUT}          extreme, optionally within from / to
+//   {value: OUT, at: TIME|EVENT}    value at a time or an event
+//   {final: OUT}                    value at the end of the run
+//   {of: OUT, crosses: LEVEL, direction: rising|falling|any, n: N}
+//                                   time of the n-th crossing (within from / to)
+//   {event: COMP.TAG, n: N}         time of the n-th such event
+//   {integral: COMP.QUANTITY}       time integral (IDAS quadrature) over from / to
+//   {expr: "a - b", unit: s}        arithmetic of metrics, numbers and event times COMP.TAG
+//   {audit: COMP.TERM}              a term of COMP's energy audit (J); COMP.residual
+//                                   is the audit's relative closure (in - out) / in
+struct MetricDecl {
+  enum class Kind { max, min, value, final_value, crossing, event_time, integral, expression, audit };
+  std::string name;
+  Kind kind = Kind::max;
+  std::string output;  // column; for integral and audit: COMPONENT.QUANTITY / COMPONENT.TERM
+  std::optional<TimeRef> from, to, at;
+  units::Quantity level{};  // SI
+  int direction = 0;  // +1 rising, -1 falling, 0 either
+  int occurrence = 1;
+  TimeRef event;
+  std::string expression;
+  std::string unit;  // declared unit of an expression ("" = dimensionless)
+  SourceLocation where;
+};
+
 // A component plugin the netlist loads (framework/plugin/plugin.hpp).
 struct PluginDecl {
   std::string path;      // as written
@@ -95,6 +133,7 @@ struct Netlist {
   std::vector<ComponentDecl> components;
   std::vector<ConnectionDecl> connections;
   std::vector<OutputDecl> outputs;
+  std::vector<MetricDecl> metrics;
   SimulationSettings simulation;
   SourceLocation parameters_where;  // of the 'parameters:' key; file:1:1 if there is none
   std::vector<PluginDecl> plugins;

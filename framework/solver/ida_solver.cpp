@@ -269,7 +269,7 @@ SolverResult simulate(System& system, const SolverOptions& opt, const OutputFn& 
     VectorPtr atol_q(N_VNew_Serial(n_quad, context.ctx));
     std::copy(quad->atol.begin(), quad->atol.end(), N_VGetArrayPointer(atol_q.get()));
     check(IDAQuadSVtolerances(ida, opt.rtol, atol_q.get()), "IDAQuadSVtolerances");
-    check(IDASetQuadErrCon(ida, SUNTRUE), "IDASetQuadErrCon");
+    check(IDASetQuadErrCon(ida, SUNFALSE), "IDASetQuadErrCon");
     quad->values->assign(n_quad, 0.0);
   }
 

@@ -1,160 +1,103 @@
 #include "framework/study/metrics.hpp"
 
 #include <algorithm>
-#include <cmath>
-#include <limits>
 #include <mutex>
+
+#include "framework/analysis/run_metrics.hpp"
 
 namespace pneumo::study {
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr const char* kEntryEvent = "enters the cushioning zone";
-constexpr const char* kImpactEvent = "impact on the cap-end stop";
-
-// Time of the first logged event whose message contains `text`; NaN if none.
-double event_time(const RunResult& r, const char* text) {
-  for (const auto& e : r.solver.events)
-    if (e.message.find(text) != std::string::npos) return e.t;
-  return kNaN;
-}
-
-// Value of column `name` at time t: the first row at or after t (event rows
-// are emitted exactly at the event time), interpolated otherwise.
-double value_at(const RunResult& r, const std::string& name, double t) {
-  const int c = r.table.column(name);
-  const auto& rows = r.table.rows;
-  if (c < 0 || rows.empty() || std::isnan(t)) return kNaN;
-  for (std::size_t k = 0; k < rows.size(); ++k) {
-    if (rows[k][0] < t) continue;
-    if (rows[k][0] == t || k == 0) return rows[k][c];
-    const double w = (t - rows[k - 1][0]) / (rows[k][0] - rows[k - 1][0]);
-    return rows[k - 1][c] + w * (rows[k][c] - rows[k - 1][c]);
-  }
-  return kNaN;
-}
-
-double extreme(const RunResult& r, const std::string& name, double from, bool highest) {
-  const int c = r.table.column(name);
-  if (c < 0 || std::isnan(from)) return kNaN;
-  double best = highest ? -std::numeric_limits<double>::infinity() : std::numeric_limits<double>::infinity();
-  bool any = false;
-  for (const auto& row : r.table.rows) {
-    if (row[0] < from) continue;
-    best = highest ? std::max(best, row[c]) : std::min(best, row[c]);
-    any = true;
-  }
-  return any ? best : kNaN;
-}
-
-// A metric that is one term of the first audited cylinder's energy audit
-// (NaN if the piston never entered the cushioning zone).
-Metric audit_metric(const char* name, const char* unit, const char* description, bool in, const char* term) {
-  Metric m{name, unit, description, {}, nullptr};
-  m.from_audit = [in, term](const CushionAudit& a) {
-    if (!a.entered) return kNaN;
-    for (const auto& t : in ? a.in : a.out)
-      if (t.name == term) return t.joules;
-    return kNaN;
-  };
+std::vector<Metric>& registered() {
+  static std::vector<Metric> m;
   return m;
 }
 
-std::vector<Metric> builtin_metrics() {
-  std::vector<Metric> m = {
-      {"t_cushion", "s", "time in the cushioning zone: cushion entry event to the first cap-end impact", {"x"},
-       [](const RunResult& r) { return event_time(r, kImpactEvent) - event_time(r, kEntryEvent); }},
-      {"v_impact", "m/s", "piston velocity at the first cap-end impact", {"v"},
-       [](const RunResult& r) { return value_at(r, "v", event_time(r, kImpactEvent)); }},
-      {"p_EC_peak", "Pa", "highest cushion pressure from the cushion entry on", {"p_EC"},
-       [](const RunResult& r) { return extreme(r, "p_EC", event_time(r, kEntryEvent), true); }},
-      {"T_EC_min", "K", "lowest cushion-volume temperature over the run", {"T_EC"},
-       [](const RunResult& r) { return extreme(r, "T_EC", -std::numeric_limits<double>::infinity(), false); }},
-      {"T_EC_max", "K", "highest cushion-volume temperature over the run", {"T_EC"},
-       [](const RunResult& r) { return extreme(r, "T_EC", -std::numeric_limits<double>::infinity(), true); }},
-      {"t_move", "s", "total movement time: first logged event (valve command) to the first cap-end impact", {"x"},
-       [](const RunResult& r) {
-         return r.solver.events.empty() ? kNaN : event_time(r, kImpactEvent) - r.solver.events.front().t;
-       }},
-      audit_metric("E_kin_entry", "J", "kinetic energy at cushion entry", true, "kinetic_energy_at_entry"),
-      audit_metric("E_drive_cushion", "J", "driving work during cushioning", true, "driving_work"),
-      audit_metric("E_compression", "J", "compression of the cushion gas", false, "cushion_gas_compression"),
-      audit_metric("E_throttle", "J", "flow work through the cushion throttle / bore opening", false,
-                   "cushion_throttle_dissipation"),
-      audit_metric("E_friction_cushion", "J", "friction while cushioning", false, "friction"),
-      audit_metric("E_stop", "J", "absorbed by the end stop", false, "end_stop"),
-  };
-  Metric closure{"audit_residual", "1", "closure of the energy audit, (in - out) / in", {}, nullptr};
-  closure.from_audit = [](const CushionAudit& a) {
-    return a.entered && a.total_in != 0 ? a.residual() / a.total_in : kNaN;
-  };
-  m.push_back(std::move(closure));
-  return m;
-}
-
-std::vector<Metric>& catalogue() {
-  static std::vector<Metric> m = builtin_metrics();
-  return m;
-}
-
-std::mutex& catalogue_mutex() {
+std::mutex& registered_mutex() {
   static std::mutex m;
   return m;
 }
 
+std::string description_of(const MetricDecl& m) {
+  using K = MetricDecl::Kind;
+  switch (m.kind) {
+    case K::max: return "highest " + m.output;
+    case K::min: return "lowest " + m.output;
+    case K::value: return m.output + " at a moment";
+    case K::final_value: return m.output + " at the end";
+    case K::crossing: return "time " + m.output + " crosses its level";
+    case K::event_time: return "time of " + m.event.component + "." + m.event.tag;
+    case K::integral: return "integral of " + m.output;
+    case K::audit: return "energy audit " + m.output;
+    case K::expression: return m.expression;
+  }
+  return "";
+}
+
 }  // namespace
 
-const std::vector<Metric>& metric_catalogue() { return catalogue(); }
-
 void register_metric(Metric m) {
-  std::lock_guard<std::mutex> lock(catalogue_mutex());
-  catalogue().push_back(std::move(m));
+  std::lock_guard<std::mutex> lock(registered_mutex());
+  registered().push_back(std::move(m));
 }
 
-bool needs_audit(const std::vector<const Metric*>& metrics) {
-  return std::any_of(metrics.begin(), metrics.end(), [](const Metric* m) { return bool(m->from_audit); });
-}
-
-std::vector<double> compute_metrics(const std::vector<const Metric*>& metrics, const Netlist& nl,
-                                    const RunResult& run) {
-  std::vector<CushionAudit> audits;
-  if (needs_audit(metrics)) audits = energy_audit(nl, run);
-  std::vector<double> out;
-  for (const auto* m : metrics)
-    out.push_back(m->from_audit ? (audits.empty() ? kNaN : m->from_audit(audits.front())) : m->compute(run));
-  return out;
-}
-
-std::vector<const Metric*> available_metrics(const Netlist& nl) {
-  const bool has_cylinder = std::any_of(nl.components.begin(), nl.components.end(),
-                                        [](const ComponentDecl& c) { return c.type == "cushioned_cylinder"; });
-  std::vector<const Metric*> out;
-  for (const auto& m : metric_catalogue()) {
-    if (m.from_audit && !has_cylinder) continue;
-    bool ok = true;
-    for (const auto& need : m.needs)
-      ok &= std::any_of(nl.outputs.begin(), nl.outputs.end(), [&](const OutputDecl& o) { return o.name == need; });
-    if (ok) out.push_back(&m);
+std::vector<Metric> available_metrics(const Netlist& nl, const Registry& registry) {
+  std::vector<Metric> out;
+  if (!nl.metrics.empty()) {
+    Netlist with_outputs = nl;
+    add_metric_outputs(with_outputs, std::vector<bool>(nl.metrics.size(), true));
+    const auto units = metric_units(nl, elaborate(with_outputs, registry));
+    for (std::size_t i = 0; i < nl.metrics.size(); ++i)
+      out.push_back({nl.metrics[i].name, units[i], description_of(nl.metrics[i]), {}, nullptr, static_cast<int>(i)});
+  }
+  std::lock_guard<std::mutex> lock(registered_mutex());
+  for (const auto& m : registered()) {
+    const bool has_outputs = std::all_of(m.needs.begin(), m.needs.end(), [&](const std::string& need) {
+      return std::any_of(nl.outputs.begin(), nl.outputs.end(), [&](const OutputDecl& o) { return o.name == need; });
+    });
+    const bool shadowed = std::any_of(out.begin(), out.end(), [&](const Metric& o) { return o.name == m.name; });
+    if (has_outputs && !shadowed) out.push_back(m);
   }
   return out;
 }
 
-std::vector<const Metric*> select_metrics(const Netlist& nl, const std::vector<std::string>& names) {
-  const auto avail = available_metrics(nl);
+std::vector<Metric> select_metrics(const Netlist& nl, const Registry& registry, const std::vector<std::string>& names) {
+  auto avail = available_metrics(nl, registry);
   if (names.empty()) return avail;
-  std::vector<const Metric*> out;
+  std::vector<Metric> out;
   for (const auto& n : names) {
-    const auto it = std::find_if(avail.begin(), avail.end(), [&](const Metric* m) { return m->name == n; });
+    const auto it = std::find_if(avail.begin(), avail.end(), [&](const Metric& m) { return m.name == n; });
     if (it == avail.end()) {
       std::string list;
-      for (const auto* m : avail) list += (list.empty() ? "" : ", ") + m->name;
+      for (const auto& m : avail) list += (list.empty() ? "" : ", ") + m.name;
       throw InputError(SourceLocation{nl.file, 1, 1}, "", "",
                        "metric '" + n + "' is not available for this netlist (available: " +
-                           (list.empty() ? "none - the metrics need outputs named x, v, p_EC, T_EC" : list) + ")");
+                           (list.empty() ? "none - declare metrics in the netlist's 'metrics:' section" : list) + ")");
     }
     out.push_back(*it);
   }
+  return out;
+}
+
+MetricPlan prepare_metrics(Netlist& nl, const Registry& registry, const std::vector<Metric>& metrics) {
+  MetricPlan plan;
+  std::vector<bool> wanted(nl.metrics.size(), false);
+  for (const auto& m : metrics)
+    if (m.netlist_index >= 0) wanted[m.netlist_index] = true;
+  plan.netlist_marked = metric_closure(nl, wanted);
+  plan.audit = metrics_read_audit(nl, plan.netlist_marked);
+  add_metric_outputs(nl, plan.netlist_marked);
+  if (plan.audit) plan.audits = prepare_energy_audit(nl, registry);
+  return plan;
+}
+
+std::vector<double> compute_metrics(const std::vector<Metric>& metrics, const MetricPlan& plan, const Netlist& nl,
+                                    const RunResult& run) {
+  const std::vector<EnergyAudit> audits = plan.audit ? energy_audit(plan.audits, run) : std::vector<EnergyAudit>{};
+  const std::vector<double> values = evaluate_metrics(nl, plan.netlist_marked, run, audits);
+  std::vector<double> out;
+  for (const auto& m : metrics) out.push_back(m.netlist_index >= 0 ? values[m.netlist_index] : m.compute(run));
   return out;
 }
 

@@ -1,5 +1,6 @@
 #include "framework/study/parameters.hpp"
 
+#include <cstdlib>
 #include <fstream>
 #include <sstream>
 
@@ -22,6 +23,8 @@ const ComponentDecl* find_component(const Netlist& nl, const std::string& name) 
 
 }  // namespace
 
+void set_display_unit(StudyParameter& p, const std::string& unit_text, double ambient);
+
 StudyParameter resolve_parameter(const Netlist& nl, const Registry& registry, const std::string& name) {
   StudyParameter p;
   p.name = name;
@@ -38,6 +41,7 @@ StudyParameter resolve_parameter(const Netlist& nl, const Registry& registry, co
     }
     p.parameter = name;
     p.unit = units::si_unit_name(tp->dim);
+    set_display_unit(p, "", nl.gas.p_ambient);
     return p;
   }
   p.component = name.substr(0, dot);
@@ -51,6 +55,7 @@ StudyParameter resolve_parameter(const Netlist& nl, const Registry& registry, co
                      "component type '" + decl->type + "' has no scalar parameter '" + p.parameter +
                          "' (see 'pneumo components " + decl->type + "')");
   p.unit = spec->unit;
+  set_display_unit(p, "", nl.gas.p_ambient);
   return p;
 }
 
@@ -96,6 +101,34 @@ void assign(Netlist& nl, const StudyParameter& p, double value) {
   throw InputError(netlist_where(nl), p.component, "", "no component '" + p.component + "'");
 }
 
+// Results show `p` in `unit_text` when it names a unit of the parameter's
+// dimension (what the user wrote); otherwise in the unit engineers read.
+void set_display_unit(StudyParameter& p, const std::string& unit_text, double ambient) {
+  const units::Dimension dim = units::dimension_of(p.unit);
+  p.display_unit = units::si_unit_name(dim);
+  if (dim == units::dims::sonic_conductance) {
+    p.display_unit = "dm3/(s*bar)";
+    p.display_scale = 1e-8;
+  }
+  if (unit_text.empty()) return;
+  try {
+    const units::Unit u = units::parse_unit(unit_text);
+    if (!(u.dim == dim)) return;
+    p.display_unit = unit_text;
+    p.display_scale = u.scale;
+    p.display_offset = u.offset + (u.gauge ? ambient : 0.0);
+  } catch (const units::ParseError&) {
+  }
+}
+
+// The unit part of a quantity's text ("8bar" -> "bar"); "" for a plain number.
+std::string unit_part(const std::string& text) {
+  const std::string t = trim(text);
+  char* end = nullptr;
+  std::strtod(t.c_str(), &end);
+  return trim(std::string(end));
+}
+
 Design grid_design(const Netlist& nl, const Registry& registry, const std::vector<std::string>& specs) {
   Design d;
   std::vector<std::vector<double>> axes;
@@ -105,7 +138,8 @@ Design grid_design(const Netlist& nl, const Registry& registry, const std::vecto
     const auto parts = eq == std::string::npos ? std::vector<std::string>{} : split_trimmed(spec.substr(eq + 1), ':');
     if (eq == std::string::npos || eq == 0 || parts.size() != 3)
       throw InputError(netlist_where(nl), "", "", option + ": expected NAME=FROM:TO:COUNT, e.g. p_supply=5bar:8bar:4");
-    const StudyParameter p = resolve_parameter(nl, registry, trim(spec.substr(0, eq)));
+    StudyParameter p = resolve_parameter(nl, registry, trim(spec.substr(0, eq)));
+    set_display_unit(p, unit_part(parts[0]), nl.gas.p_ambient);
     const double a = parse_value(nl, registry, p, parts[0], option);
     const double b = parse_value(nl, registry, p, parts[1], option);
     int n = 0;
@@ -162,6 +196,7 @@ Design samples_design(const Netlist& nl, const Registry& registry, const std::st
         }
         try {
           d.parameters.push_back(resolve_parameter(nl, registry, name));
+          set_display_unit(d.parameters.back(), unit, nl.gas.p_ambient);
         } catch (const InputError& e) {
           throw InputError(where, "", name, "column '" + cell + "': " + e.message());
         }
@@ -188,10 +223,11 @@ Design samples_design(const Netlist& nl, const Registry& registry, const std::st
   return d;
 }
 
-std::vector<Range> parse_ranges(const Netlist& nl, const Registry& registry, const std::vector<std::string>& specs) {
+std::vector<Range> parse_ranges(const Netlist& nl, const Registry& registry, const std::vector<std::string>& specs,
+                                const std::string& flag) {
   std::vector<Range> out;
   for (const auto& spec : specs) {
-    const std::string option = "--param " + spec;
+    const std::string option = flag + " " + spec;
     const auto eq = spec.find('=');
     const auto parts = eq == std::string::npos ? std::vector<std::string>{} : split_trimmed(spec.substr(eq + 1), ':');
     if (eq == std::string::npos || eq == 0 || parts.size() != 2)

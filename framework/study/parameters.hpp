@@ -22,6 +22,11 @@ struct StudyParameter {
   std::string component;  // empty for a top-level parameter
   std::string parameter;  // the top-level or component parameter name
   std::string unit;       // SI unit of the value
+  // How results show it: the unit the user wrote (in --grid or a samples
+  // header), else dm3/(s*bar) for a conductance, else the SI unit.
+  std::string display_unit;
+  double display_scale = 1.0, display_offset = 0.0;  // si = scale * shown + offset
+  double shown(double si) const { return (si - display_offset) / display_scale; }
 };
 
 // Resolve NAME against the netlist (and the registry for component
@@ -60,6 +65,6 @@ struct Range {
   double lo = 0.0, hi = 0.0;
 };
 std::vector<Range> parse_ranges(const Netlist& netlist, const Registry& registry,
-                                const std::vector<std::string>& specs);
+                                const std::vector<std::string>& specs, const std::string& flag = "--param");
 
 }  // namespace pneumo::study

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -24,11 +25,21 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
+// All 17 digits: the journal must give back the exact double on resume.
 std::string number(double v) {
   if (std::isnan(v)) return "nan";
   char buf[40];
   std::snprintf(buf, sizeof buf, "%.17g", v);
   return buf;
+}
+
+// The shortest text that reads back as the same double (0.05, not
+// 0.050000000000000003): what people read in the results.
+std::string shortest(double v) {
+  if (std::isnan(v)) return "nan";
+  char buf[40];
+  const auto end = std::to_chars(buf, buf + sizeof buf, v).ptr;
+  return std::string(buf, end);
 }
 
 std::string quoted(const std::string& s) {
@@ -103,13 +114,13 @@ std::uint64_t fnv1a(std::uint64_t h, const std::string& s) {
 }
 
 std::string sweep_identity(const std::string& netlist_text, const Design& d,
-                           const std::vector<const Metric*>& metrics, bool eliminate) {
+                           const std::vector<Metric>& metrics, bool eliminate) {
   std::uint64_t h = 14695981039346656037ull;
   h = fnv1a(h, netlist_text);
   for (const auto& p : d.parameters) h = fnv1a(fnv1a(h, "|"), p.name);
   for (const auto& s : d.samples)
     for (double v : s) h = fnv1a(fnv1a(h, ","), number(v));
-  for (const auto* m : metrics) h = fnv1a(fnv1a(h, "|"), m->name);
+  for (const auto& m : metrics) h = fnv1a(fnv1a(h, "|"), m.name);
   if (eliminate) h = fnv1a(h, "|eliminate_aliases");
   char buf[64];
   std::snprintf(buf, sizeof buf, "# pneumo sweep journal %016llx runs %zu", static_cast<unsigned long long>(h),
@@ -228,7 +239,7 @@ class Progress {
   long last_done_ = -1;
 };
 
-void write_results(const std::string& output, const Design& d, const std::vector<const Metric*>& metrics,
+void write_results(const std::string& output, const Design& d, const std::vector<Metric>& metrics,
                    const std::vector<RunRecord>& records) {
   const fs::path target(output);
   const fs::path tmp = target.string() + ".writing";
@@ -236,13 +247,13 @@ void write_results(const std::string& output, const Design& d, const std::vector
     std::ofstream out(tmp);
     if (!out) throw std::runtime_error("cannot write results file '" + output + "'");
     out << "run,status";
-    for (const auto& p : d.parameters) out << "," << p.name << " [" << p.unit << "]";
-    for (const auto* m : metrics) out << "," << m->name << " [" << m->unit << "]";
+    for (const auto& p : d.parameters) out << "," << p.name << " [" << p.display_unit << "]";
+    for (const auto& m : metrics) out << "," << m.name << " [" << m.unit << "]";
     out << ",steps,reason\n";
     for (const auto& r : records) {
       out << r.index << (r.ok ? ",ok" : ",failed");
-      for (double v : d.samples[r.index]) out << "," << number(v);
-      for (std::size_t k = 0; k < metrics.size(); ++k) out << "," << (r.ok ? number(r.metrics[k]) : "");
+      for (std::size_t j = 0; j < d.parameters.size(); ++j) out << "," << shortest(d.parameters[j].shown(d.samples[r.index][j]));
+      for (std::size_t k = 0; k < metrics.size(); ++k) out << "," << (r.ok ? shortest(r.metrics[k]) : "");
       out << "," << r.steps << "," << quoted(r.reason) << "\n";
     }
     out.flush();
@@ -260,19 +271,14 @@ void write_results(const std::string& output, const Design& d, const std::vector
 }  // namespace
 
 RunRecord run_one(Netlist& nl, const Registry& registry, const std::vector<StudyParameter>& parameters,
-                  const Sample& sample, const std::vector<const Metric*>& metrics,
+                  const Sample& sample, const std::vector<Metric>& metrics,
                   const AssemblyOptions& assembly) {
   RunRecord rec;
   try {
     for (std::size_t j = 0; j < parameters.size(); ++j) assign(nl, parameters[j], sample[j]);
-    // The energy audit's accounts are extra (solver-integrated) outputs.
-    Netlist audited;
-    const bool audit = needs_audit(metrics);
-    if (audit) {
-      audited = nl;
-      prepare_energy_audit(audited);
-    }
-    const Netlist& run_nl = audit ? audited : nl;
+    // Integral metrics and energy audits read extra (solver-integrated) outputs.
+    Netlist run_nl = nl;
+    const MetricPlan plan = prepare_metrics(run_nl, registry, metrics);
     System system(elaborate(run_nl, registry), assembly);
     const RunResult run = run_system(system, solver_options(run_nl.simulation));
     rec.steps = run.solver.stats.steps;
@@ -280,7 +286,7 @@ RunRecord run_one(Netlist& nl, const Registry& registry, const std::vector<Study
       rec.reason = run.solver.message;
       return rec;
     }
-    rec.metrics = compute_metrics(metrics, run_nl, run);
+    rec.metrics = compute_metrics(metrics, plan, run_nl, run);
     rec.ok = true;
   } catch (const InputError& e) {
     rec.reason = e.what();
@@ -300,7 +306,7 @@ SweepSummary run_sweep(const std::string& netlist_path, const Design& design, co
     text.assign((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   }
   const Netlist base = parse_netlist(text, netlist_path);
-  const auto metrics = select_metrics(base, opt.metrics);
+  const auto metrics = select_metrics(base, builtin_registry(), opt.metrics);
   const long n = static_cast<long>(design.samples.size());
   const std::string identity = sweep_identity(text, design, metrics, opt.assembly.eliminate_aliases);
   if (const auto parent = fs::path(output).parent_path(); !parent.empty()) fs::create_directories(parent);

@@ -59,7 +59,7 @@ SweepSummary run_sweep(const std::string& netlist_path, const Design& design, co
 // One run with the given parameter values: never throws for a failing run
 // (bad parameter combination, solver failure): the record says why.
 RunRecord run_one(Netlist& netlist, const Registry& registry, const std::vector<StudyParameter>& parameters,
-                  const Sample& sample, const std::vector<const Metric*>& metrics,
+                  const Sample& sample, const std::vector<Metric>& metrics,
                   const AssemblyOptions& assembly = {});
 
 // The results file written by run_sweep, read back (for tests and tools).

@@ -1,0 +1,220 @@
+#include "framework/analysis/run_metrics.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+
+#include "framework/core/expression.hpp"
+
+namespace pneumo {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kInf = std::numeric_limits<double>::infinity();
+const std::string kPrefix = "metric.";
+
+using Kind = MetricDecl::Kind;
+
+int index_of(const Netlist& nl, const std::string& name) {
+  for (std::size_t i = 0; i < nl.metrics.size(); ++i)
+    if (nl.metrics[i].name == name) return static_cast<int>(i);
+  return -1;
+}
+
+// Time of the n-th event COMPONENT.TAG; NaN if it did not happen.
+double event_time(const RunResult& r, const std::string& component, const std::string& tag, int n) {
+  for (const auto& e : r.solver.events)
+    if (e.component == component && e.tag == tag && --n == 0) return e.t;
+  return kNaN;
+}
+
+double event_time(const RunResult& r, const std::string& reference) {
+  const auto dot = reference.find('.');
+  return event_time(r, reference.substr(0, dot), reference.substr(dot + 1), 1);
+}
+
+double time_of(const RunResult& r, const TimeRef& ref) {
+  return ref.is_event() ? event_time(r, ref.component, ref.tag, ref.occurrence) : ref.t;
+}
+
+// Value of a column at time t: the first row at or after t (event rows are
+// written exactly at the event), interpolated otherwise.
+double value_at(const ResultsTable& tab, int c, double t) {
+  const auto& rows = tab.rows;
+  if (c < 0 || rows.empty() || std::isnan(t)) return kNaN;
+  for (std::size_t k = 0; k < rows.size(); ++k) {
+    if (rows[k][0] < t) continue;
+    if (rows[k][0] == t || k == 0) return rows[k][c];
+    const double w = (t - rows[k - 1][0]) / (rows[k][0] - rows[k - 1][0]);
+    return rows[k - 1][c] + w * (rows[k][c] - rows[k - 1][c]);
+  }
+  return kNaN;
+}
+
+double extreme(const ResultsTable& tab, int c, double from, double to, bool highest) {
+  if (c < 0 || std::isnan(from) || std::isnan(to)) return kNaN;
+  double best = highest ? -kInf : kInf;
+  bool any = false;
+  for (const auto& row : tab.rows) {
+    if (row[0] < from || row[0] > to) continue;
+    best = highest ? std::max(best, row[c]) : std::min(best, row[c]);
+    any = true;
+  }
+  return any ? best : kNaN;
+}
+
+// Time of the n-th crossing of `level` in `direction` between rows (linear
+// in between), within [from, to].
+double crossing(const ResultsTable& tab, int c, double level, int direction, int n, double from, double to) {
+  if (c < 0 || std::isnan(from) || std::isnan(to)) return kNaN;
+  const auto& rows = tab.rows;
+  for (std::size_t k = 1; k < rows.size(); ++k) {
+    const double a = rows[k - 1][c] - level, b = rows[k][c] - level;
+    const bool rising = a < 0 && b >= 0, falling = a > 0 && b <= 0;
+    if (!((direction >= 0 && rising) || (direction <= 0 && falling))) continue;
+    const double t = rows[k - 1][0] + (rows[k][0] - rows[k - 1][0]) * a / (a - b);
+    if (t < from || t > to) continue;
+    if (--n == 0) return t;
+  }
+  return kNaN;
+}
+
+double audit_value(const std::vector<EnergyAudit>& audits, const std::string& reference) {
+  const auto dot = reference.find('.');
+  const std::string component = reference.substr(0, dot), term = reference.substr(dot + 1);
+  for (const auto& a : audits) {
+    if (a.component != component) continue;
+    if (!a.opened) return kNaN;
+    if (term == "residual") return a.total_in != 0 ? a.residual() / a.total_in : kNaN;
+    for (const auto* side : {&a.in, &a.out})
+      for (const auto& t : *side)
+        if (t.name == term) return t.joules;
+  }
+  return kNaN;
+}
+
+class Evaluator {
+ public:
+  Evaluator(const Netlist& nl, const RunResult& run, const std::vector<EnergyAudit>& audits)
+      : nl_(nl), run_(run), audits_(audits), values_(nl.metrics.size(), kNaN), done_(nl.metrics.size(), false) {}
+
+  double value(int i) {
+    if (!done_[i]) {
+      values_[i] = compute(nl_.metrics[i]);
+      done_[i] = true;
+    }
+    return values_[i];
+  }
+
+ private:
+  double compute(const MetricDecl& m) {
+    const ResultsTable& tab = run_.table;
+    const double t0 = tab.rows.empty() ? kNaN : tab.rows.front()[0];
+    const double t1 = tab.rows.empty() ? kNaN : tab.rows.back()[0];
+    const double from = m.from ? time_of(run_, *m.from) : -kInf;
+    const double to = m.to ? time_of(run_, *m.to) : kInf;
+    const int c = tab.column(m.output);
+    switch (m.kind) {
+      case Kind::max: return extreme(tab, c, from, to, true);
+      case Kind::min: return extreme(tab, c, from, to, false);
+      case Kind::value: return value_at(tab, c, time_of(run_, *m.at));
+      case Kind::final_value: return c < 0 || tab.rows.empty() ? kNaN : tab.rows.back()[c];
+      case Kind::crossing: return crossing(tab, c, m.level.si_value, m.direction, m.occurrence, from, to);
+      case Kind::event_time: return time_of(run_, m.event);
+      case Kind::integral: {
+        const int q = tab.column(kPrefix + m.name);
+        return value_at(tab, q, std::min(to, t1)) - value_at(tab, q, std::max(from, t0));
+      }
+      case Kind::audit: return audit_value(audits_, m.output);
+      case Kind::expression:
+        return Expression(m.expression).evaluate([&](const std::string& n) {
+          const int i = index_of(nl_, n);
+          return i >= 0 ? value(i) : event_time(run_, n);
+        });
+    }
+    return kNaN;
+  }
+
+  const Netlist& nl_;
+  const RunResult& run_;
+  const std::vector<EnergyAudit>& audits_;
+  std::vector<double> values_;
+  std::vector<bool> done_;
+};
+
+}  // namespace
+
+std::vector<bool> metric_closure(const Netlist& nl, std::vector<bool> wanted) {
+  wanted.resize(nl.metrics.size(), false);
+  for (bool grew = true; grew;) {
+    grew = false;
+    for (std::size_t i = 0; i < nl.metrics.size(); ++i) {
+      if (!wanted[i] || nl.metrics[i].kind != Kind::expression) continue;
+      for (const auto& n : Expression(nl.metrics[i].expression).names()) {
+        const int j = index_of(nl, n);
+        if (j >= 0 && !wanted[j]) wanted[j] = grew = true;
+      }
+    }
+  }
+  return wanted;
+}
+
+bool metrics_read_audit(const Netlist& nl, const std::vector<bool>& marked) {
+  for (std::size_t i = 0; i < nl.metrics.size() && i < marked.size(); ++i)
+    if (marked[i] && nl.metrics[i].kind == Kind::audit) return true;
+  return false;
+}
+
+void add_metric_outputs(Netlist& nl, const std::vector<bool>& marked) {
+  for (std::size_t i = 0; i < nl.metrics.size() && i < marked.size(); ++i) {
+    const MetricDecl& m = nl.metrics[i];
+    if (!marked[i] || m.kind != Kind::integral) continue;
+    const auto dot = m.output.find('.');
+    nl.outputs.push_back({kPrefix + m.name, m.output.substr(0, dot), m.output.substr(dot + 1), m.where, true});
+  }
+}
+
+void drop_metric_columns(ResultsTable& table) { table.drop_columns(kPrefix); }
+
+std::vector<std::string> metric_units(const Netlist& nl, const Circuit& circuit) {
+  std::map<std::string, std::string> unit_of;
+  for (const auto& p : circuit.probes) unit_of[p.name] = p.unit;
+  std::vector<std::string> out;
+  for (const auto& m : nl.metrics) {
+    switch (m.kind) {
+      case Kind::max:
+      case Kind::min:
+      case Kind::value:
+      case Kind::final_value: out.push_back(unit_of[m.output]); break;
+      case Kind::crossing: {
+        const units::Dimension d = units::dimension_of(unit_of[m.output]);
+        if (m.level.had_unit && !(m.level.dim == d))
+          throw InputError(m.where, "", "metrics." + m.name,
+                           "metric '" + m.name + "': the level has dimension " + m.level.dim.to_string() +
+                               " but output '" + m.output + "' is in " + unit_of[m.output]);
+        out.push_back("s");
+        break;
+      }
+      case Kind::event_time: out.push_back("s"); break;
+      case Kind::integral:  // the hidden column holds the integral already
+        out.push_back(unit_of.count(kPrefix + m.name) ? unit_of[kPrefix + m.name] : "");
+        break;
+      case Kind::audit: out.push_back(m.output.substr(m.output.find('.') + 1) == "residual" ? "1" : "J"); break;
+      case Kind::expression: out.push_back(m.unit.empty() ? "1" : m.unit); break;
+    }
+  }
+  return out;
+}
+
+std::vector<double> evaluate_metrics(const Netlist& nl, const std::vector<bool>& marked, const RunResult& run,
+                                     const std::vector<EnergyAudit>& audits) {
+  Evaluator ev(nl, run, audits);
+  std::vector<double> out(nl.metrics.size(), kNaN);
+  for (std::size_t i = 0; i < nl.metrics.size() && i < marked.size(); ++i)
+    if (marked[i]) out[i] = ev.value(static_cast<int>(i));
+  return out;
+}
+
+}  // namespace pneumo

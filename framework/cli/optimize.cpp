@@ -1,0 +1,187 @@
+// pneumo optimize: design optimisation over netlist parameters, robust
+// against uncertain operating conditions (framework/study/optimize.hpp).
+#include "framework/cli/optimize.hpp"
+
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <memory>
+
+#include "components/builtin.hpp"
+#include "framework/cli/split_list.hpp"
+#include "framework/study/communicator.hpp"
+#include "framework/study/optimize.hpp"
+
+namespace pneumo::cli {
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace study;
+
+struct OptimizeArgs {
+  std::string netlist, output, robust = "mean", algorithm = "direct+cobyla";
+  std::vector<std::string> design, minimize, constraints, uncertain, at;
+  int samples = 32, threads = 1, max_evaluations = 60, pareto_points = 8;
+  unsigned long seed = 1;
+  bool pareto = false, auto_adjust = false, quiet = false;
+};
+
+// The Pareto front over every feasible point evaluated (gnuplot).
+void plot_front(const OptimizeProblem& p, const OptimizeResult& r, const std::string& prefix) {
+  const int f1 = 0, f2 = 1;
+  {
+    std::ofstream d(prefix + ".dat");
+    d << std::setprecision(10) << "# all points: " << p.objectives[0] << " " << p.objectives[1] << "\n";
+    for (const auto& h : r.history)
+      if (h.feasible()) d << h.robust[f1] << " " << h.robust[f2] << "\n";
+    d << "\n\n# front\n";
+    for (const auto& f : r.front) d << f.f1 << " " << f.f2 << "\n";
+  }
+  std::ofstream g(prefix + ".gnuplot");
+  auto label = [&](int i) { return p.objectives[i] + " [" + r.metric_units[i] + "]"; };
+  for (const char* term : {"pngcairo", "svg"}) {
+    g << "set terminal " << term << " size 700,480" << (std::string(term) == "pngcairo" ? " font 'sans,10'" : "")
+      << "\nset termoption noenhanced\nset output '" << prefix << (std::string(term) == "pngcairo" ? ".png" : ".svg") << "'\n"
+      << "set xlabel '" << label(f1) << "'\nset ylabel '" << label(f2) << "'\nset grid\nset key top right\n"
+      << "plot '" << prefix << ".dat' index 0 with points pt 7 ps 0.5 lc rgb '#aaaaaa' title 'designs evaluated', "
+      << "'' index 1 with linespoints pt 7 lw 2 lc rgb '#d62728' title 'Pareto front'\n";
+  }
+  g.close();
+  if (std::system(("gnuplot '" + prefix + ".gnuplot'").c_str()) != 0)
+    std::cerr << "pneumo optimize: gnuplot failed; the front's data are in " << prefix << ".dat\n";
+}
+
+void print_result(const OptimizeProblem& p, const OptimizeOptions& o, const OptimizeResult& r, bool given) {
+  std::cout << std::setprecision(4);
+  if (!r.found) {
+    std::cout << "no feasible design found" << (r.best.reason.empty() ? "" : ": " + r.best.reason) << "\n";
+    return;
+  }
+  std::cout << (given ? "design:" : "optimum:");
+  for (std::size_t i = 0; i < p.design.size(); ++i)
+    std::cout << " " << p.design[i].parameter.name << " = " << p.design[i].parameter.shown(r.best.x[i])
+              << (p.design[i].parameter.display_unit == "1" ? "" : " " + p.design[i].parameter.display_unit);
+  std::cout << "\n";
+  for (std::size_t m = 0; m < r.metric_names.size(); ++m)
+    std::cout << "  " << r.metric_names[m] << " " << r.best.robust[m] << " " << r.metric_units[m]
+              << (p.uncertain.empty() ? "" : " (" + p.robust.text + ")") << "\n";
+  for (std::size_t i = 0; i < p.constraints.size(); ++i) {
+    const Constraint& c = p.constraints[i];
+    const double v = r.best.constrained[i];
+    std::cout << "  constraint " << c.text << ": " << v << ", margin " << (c.at_least ? v - c.limit : c.limit - v)
+              << "\n";
+  }
+  if (o.auto_adjust)
+    std::cout << "  every constraint holds for " << p.design[0].parameter.name << " from "
+              << p.design[0].parameter.shown(r.feasible_lo) << " to " << p.design[0].parameter.shown(r.feasible_hi)
+              << " " << p.design[0].parameter.display_unit << "\n";
+  std::cout << r.evaluations << " design points, " << r.runs << " runs";
+  if (r.runs_resumed) std::cout << " (+" << r.runs_resumed << " from the journal)";
+  std::cout << "\n";
+}
+
+int optimize_command(const OptimizeArgs& a) {
+  if (process_communicator().size() > 1)
+    throw InputError(SourceLocation{a.netlist, 0, 0}, "", "", "pneumo optimize runs on threads (-j), not under mpirun");
+  const Netlist nl = load_netlist(a.netlist);
+  const Registry& reg = builtin_registry();
+  OptimizeProblem p;
+  if (a.design.empty()) throw InputError(SourceLocation{a.netlist, 1, 1}, "", "", "give --design NAME=LOW:HIGH ...");
+  p.design = parse_design(nl, reg, a.design);
+  for (const auto& m : a.minimize)
+    for (const auto& name : split_list(m)) p.objectives.push_back(name);
+  if (p.objectives.empty() || p.objectives.size() > 2 || (p.objectives.size() == 2 && !a.pareto))
+    throw InputError(SourceLocation{a.netlist, 1, 1}, "", "", "--minimize takes one metric (two with --pareto)");
+  const auto available = select_metrics(nl, reg, {});
+  (void)select_metrics(nl, reg, p.objectives);  // unknown names are errors listing the available ones
+  for (const auto& c : a.constraints) p.constraints.push_back(parse_constraint(available, c));
+  for (const auto& u : a.uncertain) p.uncertain.push_back(parse_uncertain(nl, reg, u));
+  p.robust = parse_robust(a.robust);
+  if (a.samples < 2 && !p.uncertain.empty())
+    throw InputError(SourceLocation{"--samples", 0, 0}, "", "", "--samples must be at least 2");
+  p.samples = a.samples;
+  p.seed = a.seed;
+  if (a.auto_adjust && (p.design.size() != 1 || p.constraints.empty()))
+    throw InputError(SourceLocation{"--auto-adjust", 0, 0}, "", "",
+                     "--auto-adjust answers for one design variable and at least one --constraint");
+  OptimizeOptions o;
+  o.threads = a.threads;
+  o.max_evaluations = a.max_evaluations;
+  o.algorithm = a.algorithm;
+  o.pareto = a.pareto;
+  o.pareto_points = a.pareto_points;
+  o.auto_adjust = a.auto_adjust;
+  o.progress = !a.quiet;
+  const std::string output = a.output.empty() ? fs::path(a.netlist).stem().string() + ".optimum.yaml" : a.output;
+  if (fs::is_directory(output))
+    throw InputError(SourceLocation{"-o", 0, 0}, "", "", "-o " + output + " is a directory, not a file");
+  if (const auto parent = fs::path(output).parent_path(); !parent.empty()) fs::create_directories(parent);
+  o.journal = output + ".journal";
+  OptimizeResult r;
+  if (a.at.empty()) {
+    r = optimize(a.netlist, p, o);
+  } else {  // evaluate one given design on the samples
+    std::vector<double> x;
+    for (const auto& d : p.design) {
+      const auto it = std::find_if(a.at.begin(), a.at.end(), [&](const std::string& s) {
+        return s.substr(0, s.find('=')) == d.parameter.name;
+      });
+      if (it == a.at.end() || it->find('=') == std::string::npos)
+        throw InputError(SourceLocation{"--at", 0, 0}, "", "", "--at: give NAME=VALUE for " + d.parameter.name);
+      x.push_back(parse_value(nl, reg, d.parameter, it->substr(it->find('=') + 1), "--at " + *it));
+    }
+    r = evaluate_design(a.netlist, p, o, x);
+  }
+  write_result_yaml(p, o, r, output);
+  if (!a.quiet) print_result(p, o, r, !a.at.empty());
+  if (a.pareto) plot_front(p, r, (fs::path(output).parent_path() / fs::path(output).stem()).string() + ".pareto");
+  fs::remove(o.journal);
+  if (!a.quiet) std::cout << "wrote " << output << "\n";
+  return r.found ? 0 : 1;
+}
+
+}  // namespace
+
+void add_optimize_command(CLI::App& app, int& status) {
+  auto a = std::make_shared<OptimizeArgs>();
+  auto* c = app.add_subcommand("optimize", "optimise design parameters for a metric, robust against uncertain conditions");
+  c->add_option("netlist", a->netlist, "netlist file (YAML)")->required();
+  c->add_option("--design", a->design, "NAME=LOW:HIGH design variable (repeatable; units allowed)")->take_all();
+  c->add_option("--minimize", a->minimize, "metric to minimise (two, comma separated, with --pareto)");
+  c->add_option("--constraint", a->constraints, "METRIC<=VALUE or METRIC>=VALUE (repeatable; units allowed)")
+      ->take_all();
+  c->add_option("--uncertain", a->uncertain,
+                "NAME=normal:MEAN:SD | uniform:LOW:HIGH | lognormal:MEAN:SD (repeatable; units allowed)")
+      ->take_all();
+  c->add_option("--robust", a->robust, "statistic over the samples: mean, mean+ksd:K or quantile:Q (default mean)");
+  c->add_option("--samples", a->samples, "uncertainty samples (Latin hypercube, the same for every design)");
+  c->add_option("--seed", a->seed, "seed of the samples");
+  c->add_option("--max-evaluations", a->max_evaluations, "design points per optimisation (default 60)")
+      ->check(CLI::PositiveNumber);
+  c->add_option("--algorithm", a->algorithm, "direct+cobyla (default), cobyla, bobyqa or direct")
+      ->check(CLI::IsMember({"direct+cobyla", "cobyla", "bobyqa", "direct"}));
+  c->add_option("--at", a->at, "NAME=VALUE for every design variable: evaluate that design, do not optimise")
+      ->take_all();
+  c->add_flag("--pareto", a->pareto, "two objectives: the Pareto front (epsilon-constraint), plotted");
+  c->add_option("--pareto-points", a->pareto_points, "levels of the front (default 8)")->check(CLI::PositiveNumber);
+  c->add_flag("--auto-adjust", a->auto_adjust,
+              "one design variable: the best setting that meets the constraints, and the range where they hold");
+  c->add_option("-j,--threads", a->threads, "threads")->check(CLI::PositiveNumber);
+  c->add_option("-o,--output", a->output, "result YAML (default: NETLIST_STEM.optimum.yaml)");
+  c->add_flag("-q,--quiet", a->quiet, "no progress or summary");
+  c->callback([a, &status]() {
+    try {
+      status = optimize_command(*a);
+    } catch (const InputError& e) {
+      std::cerr << e.what() << "\n";
+      status = 2;
+    } catch (const std::exception& e) {
+      std::cerr << "pneumo optimize: error: " << e.what() << "\n";
+      status = 2;
+    }
+  });
+}
+
+}  // namespace pneumo::cli

@@ -1,0 +1,34 @@
+// Arithmetic expressions over named values: numbers, names (letters, digits,
+// '_' and '.', e.g. `t_done` or `cylinder.cap_impact`), + - * /, unary minus
+// and parentheses. Parsed once; evaluated with a lookup for the names. Used
+// by netlist metrics (`expr: t_done - t_start`).
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace pneumo {
+
+class Expression {
+ public:
+  // Throws ExpressionError naming the offending column (0-based).
+  explicit Expression(const std::string& text);
+  double evaluate(const std::function<double(const std::string&)>& lookup) const;
+  std::vector<std::string> names() const { return names_; }  // in order of first use (a copy: safe on temporaries)
+
+  struct Node;
+
+ private:
+  std::shared_ptr<const Node> root_;
+  std::vector<std::string> names_;
+};
+
+struct ExpressionError : std::runtime_error {
+  std::size_t column;
+  ExpressionError(const std::string& what, std::size_t column) : std::runtime_error(what), column(column) {}
+};
+
+}  // namespace pneumo
