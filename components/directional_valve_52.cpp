@@ -21,22 +21,11 @@ class DirectionalValve52 final : public SpoolValve<DirectionalValve52> {
         "events) or the signal 'command'.";
     i.parameters = ValvePath::parameters({"PA", "PB", "AR", "BR"});
     for (auto& p : SpoolDrive::parameters()) i.parameters.push_back(std::move(p));
-    i.ports = {{"P", Domain::pneumatic, Causality::acausal, "supply"},
-               {"A", Domain::pneumatic, Causality::acausal, "working port A"},
-               {"B", Domain::pneumatic, Causality::acausal, "working port B"},
-               {"R", Domain::pneumatic, Causality::acausal, "exhaust (of A and B)"},
-               {"command", Domain::signal, Causality::input, "commanded state 0/1 (overrides 'schedule')", true, 0.0}};
+    five_port_valve_info(i);
+    i.ports.push_back(
+        {"command", Domain::signal, Causality::input, "commanded state 0/1 (overrides 'schedule')", true, 0.0});
     i.variables = {{"x", "1", "spool position: 0 rest (P -> B, A -> R), 1 actuated (P -> A, B -> R)", 1.0}};
     i.modes = 1;  // schedule events passed
-    i.equations = {"flow at P",
-                   "flow at A",
-                   "flow at B",
-                   "flow at R",
-                   "temperature out of P",
-                   "temperature out of A",
-                   "temperature out of B",
-                   "temperature out of R",
-                   "spool motion"};
     return i;
   }
 

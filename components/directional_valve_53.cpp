@@ -44,23 +44,11 @@ class DirectionalValve53 final : public SpoolValve<DirectionalValve53> {
                                .open_range(0.0, 1.0));
     for (auto& p : SpoolDrive::parameters("-1 solenoid 12, 0 centre, 1 solenoid 14", -1.0))
       i.parameters.push_back(std::move(p));
-    i.ports = {{"P", Domain::pneumatic, Causality::acausal, "supply (1)"},
-               {"A", Domain::pneumatic, Causality::acausal, "working port A (4)"},
-               {"B", Domain::pneumatic, Causality::acausal, "working port B (2)"},
-               {"R", Domain::pneumatic, Causality::acausal, "exhaust of A and B (3, 5)"},
-               {"command_14", Domain::signal, Causality::input, "solenoid 14 energised (1) or not (0)", true, 0.0},
-               {"command_12", Domain::signal, Causality::input, "solenoid 12 energised (1) or not (0)", true, 0.0}};
+    five_port_valve_info(i);
+    i.ports.push_back({"command_14", Domain::signal, Causality::input, "solenoid 14 energised (1) or not (0)", true});
+    i.ports.push_back({"command_12", Domain::signal, Causality::input, "solenoid 12 energised (1) or not (0)", true});
     i.variables = {{"y", "1", "spool position: -1 solenoid 12, 0 centre, 1 solenoid 14", 1.0}};
     i.modes = 1;  // schedule events passed
-    i.equations = {"flow at P",
-                   "flow at A",
-                   "flow at B",
-                   "flow at R",
-                   "temperature out of P",
-                   "temperature out of A",
-                   "temperature out of B",
-                   "temperature out of R",
-                   "spool motion"};
     return i;
   }
 

@@ -50,8 +50,7 @@ class PressureRegulator final : public ComponentT<PressureRegulator> {
                      {"opening", "1", "open fraction of the supply path"},
                      {"opening_relief", "1", "open fraction of the relief path"},
                      {"p_out", "Pa", "outlet pressure, absolute"}};
-    i.equations = {"flow at in", "flow at out", "flow at exhaust", "temperature out of in", "temperature out of out",
-                   "temperature out of exhaust"};
+    i.equations = series_port_equations("in", "out", "exhaust");
     return i;
   }
 

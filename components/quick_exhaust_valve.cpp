@@ -34,8 +34,7 @@ class QuickExhaustValve final : public ComponentT<QuickExhaustValve> {
                {"A", Domain::pneumatic, Causality::acausal, "working port to the cylinder (2)"},
                {"R", Domain::pneumatic, Causality::acausal, "exhaust (3)"}};
     i.observables = {{"m_flow_PA", "kg/s", "mass flow P -> A"}, {"m_flow_AR", "kg/s", "mass flow A -> R"}};
-    i.equations = {"flow at P", "flow at A", "flow at R", "temperature out of P", "temperature out of A",
-                   "temperature out of R"};
+    i.equations = series_port_equations("P", "A", "R");
     return i;
   }
 

@@ -238,6 +238,24 @@ T mix_temperature(const T& m1_toward, const T& T1, const T& m2_toward, const T& 
   return (w1 * T1 + w2 * T2) / (w1 + w2);
 }
 
+// Ports P, A, B, R and the row names of a five-port valve (exhausts joined
+// in R; the 5/2 and 5/3 valves), the spool's row last.
+inline void five_port_valve_info(ComponentInfo& i) {
+  i.ports = {{"P", Domain::pneumatic, Causality::acausal, "supply (1)"},
+             {"A", Domain::pneumatic, Causality::acausal, "working port A (4)"},
+             {"B", Domain::pneumatic, Causality::acausal, "working port B (2)"},
+             {"R", Domain::pneumatic, Causality::acausal, "exhaust of A and B (3, 5)"}};
+  i.equations = {"flow at P",
+                 "flow at A",
+                 "flow at B",
+                 "flow at R",
+                 "temperature out of P",
+                 "temperature out of A",
+                 "temperature out of B",
+                 "temperature out of R",
+                 "spool motion"};
+}
+
 // The eight port rows of a five-port valve (exhausts joined in R) from its
 // four path flows P -> A, P -> B, A -> R, B -> R (5/2 and 5/3 valves).
 template <class T>
@@ -252,6 +270,13 @@ void five_port_rows(const GasPortView<T>& P, const GasPortView<T>& A, const GasP
   r[5] = A.T_out - mix_temperature(m_PA, P.T_in, T(-m_AR), R.T_in, gas);
   r[6] = B.T_out - mix_temperature(m_PB, P.T_in, T(-m_BR), R.T_in, gas);
   r[7] = R.T_out - mix_temperature(m_AR, A.T_in, m_BR, B.T_in, gas);
+}
+
+// Row names for series_port_rows, with the valve's port names.
+inline std::vector<std::string> series_port_equations(const std::string& in, const std::string& mid,
+                                                      const std::string& ex) {
+  return {"flow at " + in,          "flow at " + mid,          "flow at " + ex,
+          "temperature out of " + in, "temperature out of " + mid, "temperature out of " + ex};
 }
 
 // The six port rows of a valve with a path in -> mid and a path mid -> ex
