@@ -5,7 +5,9 @@
 //     piston moves at the throttle's volume flow (ISO 6358 at that pressure)
 //     over the annulus area, within 5 %;
 //   * conventions: x = 0 retracted, x = stroke extended, events tagged
-//     "extended" at the stroke's end; the flange position equals x;
+//     "extended" at the stroke's end; the flange position equals x; the
+//     example circuit (5/2 valve, meter-out, silencer) extends, waits and
+//     retracts in that order;
 //   * end cushioning: with the needle closed further the piston arrives at
 //     the end slower; the cushioned end's energy audit balances (energy in
 //     = where it went, to 1e-4 of the input) at either end, with the
@@ -138,6 +140,22 @@ TEST(PlainCylinder, CushioningBrakesTheEndOfTheStroke) {
   const double dt_open = impact(open) - entry(open), dt_shut = impact(shut) - entry(shut);
   std::printf("cushion zone crossed in %.4f s (needle open) and %.4f s (nearly shut)\n", dt_open, dt_shut);
   EXPECT_GT(dt_shut, 1.5 * dt_open);
+}
+
+TEST(PlainCylinder, MeterOutCircuitExtendsWaitsAndRetracts) {
+  // netlists/meter_out_cylinder.yaml: the valve switches at 0.1 s and back
+  // at 2 s; the cylinder reaches each end in between, in that order.
+  const RunResult r =
+      run_text(read_file(std::string(PNEUMO_SOURCE_DIR) + "/netlists/meter_out_cylinder.yaml"), "meter_out_cylinder");
+  std::vector<std::string> order;
+  for (const auto& ev : r.solver.events)
+    if (ev.tag == "switched_on" || ev.tag == "switched_off" || ev.tag == "extended" || ev.tag == "retracted")
+      order.push_back(ev.component + "." + ev.tag);
+  const std::vector<std::string> expected = {"valve.switched_on", "cyl.extended", "valve.switched_off",
+                                             "cyl.retracted"};
+  EXPECT_EQ(order, expected);
+  EXPECT_NEAR(at(r.table, "x", 1.9), 0.1, 1e-4);
+  EXPECT_NEAR(column(r.table, "x").back(), 0.0, 1e-4);
 }
 
 // The audit of the cushioned end of `text` (one audit), printed.
