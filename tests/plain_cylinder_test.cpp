@@ -25,6 +25,8 @@
 #include <vector>
 
 #include "framework/analysis/energy_audit.hpp"
+#include "framework/assembly/system.hpp"
+#include "framework/core/error.hpp"
 #include "tests/test_support.hpp"
 
 namespace pneumo {
@@ -156,6 +158,20 @@ TEST(PlainCylinder, MeterOutCircuitExtendsWaitsAndRetracts) {
   EXPECT_EQ(order, expected);
   EXPECT_NEAR(at(r.table, "x", 1.9), 0.1, 1e-4);
   EXPECT_NEAR(column(r.table, "x").back(), 0.0, 1e-4);
+}
+
+TEST(PlainCylinder, IncompleteCushioningIsAnInputErrorAtItsLine) {
+  // A cushioning length without the plug's diameter: the error names the
+  // file and line, the component and the missing parameter.
+  const std::string text = meter_out_circuit(", cap_cushion_length: 20 mm, cap_cushion_C: 0.05 dm3/(s*bar)");
+  try {
+    System system(elaborate(parse_netlist(text, "incomplete.yaml"), builtin_registry()));
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.component(), "cyl");
+    EXPECT_EQ(e.parameter(), "cap_plug_diameter");
+    EXPECT_NE(std::string(e.what()).find("incomplete.yaml:9"), std::string::npos) << e.what();
+  }
 }
 
 // The audit of the cushioned end of `text` (one audit), printed.
