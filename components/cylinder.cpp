@@ -191,8 +191,13 @@ class Cylinder final : public ComponentT<Cylinder> {
     if (p_.friction.has_state()) r[1] = e.der(z_var_) - p_.friction.lugre_zdot(s.v, e.var(z_var_));
   }
 
-  double observe(int k, const Eval<double>& e) const override {
+  double observe(int k, const Eval<double>& e) const override { return observe(k, state(e), e); }
+  // Outputs ask for several observables at one point: the state once.
+  void observe_all(const int* ks, int n, const Eval<double>& e, double* out) const override {
     const State<double> s = state(e);
+    for (int i = 0; i < n; ++i) out[i] = observe(ks[i], s, e);
+  }
+  double observe(int k, const State<double>& s, const Eval<double>& e) const {
     auto inflow = [&](int port) {
       const auto g = e.gas_port(port);
       return enthalpy_inflow(g.m_flow, g.T_in, g.T_out, e.gas());

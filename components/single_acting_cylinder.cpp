@@ -139,8 +139,13 @@ class SingleActingCylinder final : public ComponentT<SingleActingCylinder> {
     if (p_.friction.has_state()) r[row] = e.der(z_var_) - p_.friction.lugre_zdot(fl.v, e.var(z_var_));
   }
 
-  double observe(int k, const Eval<double>& e) const override {
+  double observe(int k, const Eval<double>& e) const override { return observe(k, state(e), e); }
+  // Outputs ask for several observables at one point: the state once.
+  void observe_all(const int* ks, int n, const Eval<double>& e, double* out) const override {
     const State<double> s = state(e);
+    for (int i = 0; i < n; ++i) out[i] = observe(ks[i], s, e);
+  }
+  double observe(int k, const State<double>& s, const Eval<double>& e) const {
     switch (k) {
       case kX: return e.flange(kFlange).s;
       case kV: return e.flange(kFlange).v;
