@@ -280,7 +280,7 @@ inline std::vector<std::string> series_port_equations(const std::string& in, con
 }
 
 // The six port rows of a valve with a path in -> mid and a path mid -> ex
-// (pressure regulator P -> A -> exhaust, quick exhaust valve P -> A -> R).
+// (3/2 valve and quick exhaust valve P -> A -> R, pressure regulator).
 template <class T>
 void series_port_rows(const GasPortView<T>& in, const GasPortView<T>& mid, const GasPortView<T>& ex, const T& m_in,
                       const T& m_ex, const GasModel& gas, T* r) {
