@@ -25,8 +25,12 @@
 // stop contacts (the stop force jumps: the solver re-initialises),
 // "left_retracted" / "left_extended" leaving them, "cap_cushion_entry" /
 // "rod_cushion_entry" and their "_exit" where the plug engages.
+#include <algorithm>
 #include <cmath>
-#include <limits>
+#include <optional>
+#include <string>
+#include <type_traits>
+#include <vector>
 
 #include "components/builtin.hpp"
 #include "components/cylinder_parts.hpp"

@@ -13,7 +13,7 @@
 // friction as in `cylinder` (components/cylinder_parts.hpp). Events:
 // "retracted" / "extended" at the stop contacts.
 #include <cmath>
-#include <limits>
+#include <string>
 
 #include "components/builtin.hpp"
 #include "components/cylinder_parts.hpp"
