@@ -38,6 +38,12 @@ void register_builtin_components(Registry& r) {
   register_sequencer(r);
   register_cylinder(r);
   register_single_acting_cylinder(r);
+  register_two_pressure_valve(r);
+  register_shuttle_valve(r);
+  register_quick_exhaust_valve(r);
+  register_directional_valve_53(r);
+  register_pressure_regulator(r);
+  register_relief_valve(r);
 }
 
 const Registry& builtin_registry() {

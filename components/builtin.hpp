@@ -40,6 +40,12 @@ void register_flip_flop(Registry& r);
 void register_sequencer(Registry& r);
 void register_cylinder(Registry& r);
 void register_single_acting_cylinder(Registry& r);
+void register_two_pressure_valve(Registry& r);
+void register_shuttle_valve(Registry& r);
+void register_quick_exhaust_valve(Registry& r);
+void register_directional_valve_53(Registry& r);
+void register_pressure_regulator(Registry& r);
+void register_relief_valve(Registry& r);
 
 }  // namespace pneumo::components
 

@@ -651,45 +651,25 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
     return {};
   }
 
-  // The cap-end cushioning's energy balance, from the cushion entry to the
-  // piston's first standstill or reversal. The gas leaving the cushion
-  // volume carries its internal energy u = h / kappa and was pushed out with
-  // the flow work p / rho = h (kappa - 1) / kappa: the compression of the
-  // cushion gas (all of it, including what has left) is dU_EC + H_out /
-  // kappa; the flow work is what the throttle and bore opening dissipate.
+  // The cap-end cushioning's energy balance (cylinder_parts.hpp), from the
+  // cushion entry to the piston's first standstill or reversal.
   std::optional<EnergyAuditSpec> energy_audit(const GasModel& gas) const override {
-    using K = EnergyTerm::Kinetic;
-    const double k = gas.kappa;
-    std::vector<std::pair<std::string, double>> drive = {{"P_pdV_A", 1.0}};
-    if (rod_) drive.push_back({"P_pdV_EC_rod", 1.0});
-    std::vector<std::pair<std::string, double>> compression = {{"H_cushion", 1.0 / k}},
-                                                 throttle = {{"H_cushion", (k - 1.0) / k}};
-    if (taps_) {  // the tap's gas leaves the volume too, but not through the throttle
-      compression.push_back({"H_EC", -1.0 / k});
-      throttle.push_back({"H_EC", -(k - 1.0) / k});
-    }
-    EnergyAuditSpec a;
-    a.title = "cap-end cushioning";
-    a.opens_at = "cushion_entry";
-    a.open_description = "cushion entry";
-    a.closes_when_not_positive = "v";
-    a.kinetic_port = "flange";
-    a.terms = {
-        {"kinetic_energy_at_entry", "kinetic energy at cushion entry", true, {}, {}, K::at_open},
-        {"driving_work", "work of the rod-side gas and ambient on the piston", true,
-         {{"x", gas.p_ambient * A_R_}}, drive},
-        {"cushion_gas_compression", "compression of the cushion gas (its internal energy)", false,
-         {{"U_EC", 1.0}}, compression},
-        {"cushion_throttle_dissipation", "flow work through the cushion throttle / bore opening", false, {},
-         throttle},
-        {"heat_to_walls", "heat from the cushion gas to the walls", false, {}, {{"Q_cap", -1.0}}},
-        {"channel_work", "work on the plug column / channel gas (expelled at port B)", false, {},
-         {{"P_pdV_ch", -1.0}}},
-        {"friction", "dissipated by friction", false, {}, {{"P_friction", -1.0}}},
-        {"end_stop", "absorbed by the end stop (damping + spring)", false, {}, {{"P_stop", -1.0}}},
-        {"kinetic_energy_at_end", "kinetic energy left at the end", false, {}, {}, K::at_close},
-    };
-    return a;
+    CushionAuditNames n;
+    n.title = "cap-end cushioning";
+    n.opens_at = "cushion_entry";
+    n.open_description = "cushion entry";
+    n.closes_when = "v";
+    n.drive_description = "work of the rod-side gas and ambient on the piston";
+    n.drive_changes = {{"x", gas.p_ambient * A_R_}};
+    n.drive_integrals = {{"P_pdV_A", 1.0}};
+    if (rod_) n.drive_integrals.push_back({"P_pdV_EC_rod", 1.0});
+    n.U_cushion = "U_EC";
+    n.Q_wall = "Q_cap";
+    n.P_pdV_channel = "P_pdV_ch";
+    n.channel_port = "B";
+    n.outflows = {{"H_cushion", 1.0}};
+    if (taps_) n.outflows.push_back({"H_EC", -1.0});  // the tap's gas leaves too, not through the throttle
+    return cushion_energy_audit(n, gas);
   }
 
   void start(StartValues& sv, const GasModel& gas) const override {

@@ -8,7 +8,8 @@
 //
 // Each chamber has its own mass and energy balance (state m, U); rod: 0
 // makes it rodless (both faces full bore). Friction: the friction_model of
-// components/friction.hpp (seed 000 presets with the chamber pressures,
+// components/friction.hpp (seed 000 presets with the chamber pressures at
+// the piston - the presets' p_A is the rod side, p_B and p_EC the cap side -
 // Coulomb + viscous, LuGre); elastic end stops at x = 0 and x = stroke.
 // Heat: with wall_alpha = 0 the heat ports are at the gas temperature
 // (insulated if unconnected); with wall_alpha > 0 they are the walls and the
@@ -24,8 +25,12 @@
 // stop contacts (the stop force jumps: the solver re-initialises),
 // "left_retracted" / "left_extended" leaving them, "cap_cushion_entry" /
 // "rod_cushion_entry" and their "_exit" where the plug engages.
+#include <algorithm>
 #include <cmath>
-#include <limits>
+#include <optional>
+#include <string>
+#include <type_traits>
+#include <vector>
 
 #include "components/builtin.hpp"
 #include "components/cylinder_parts.hpp"
@@ -37,9 +42,10 @@ class Cylinder final : public ComponentT<Cylinder> {
   enum Port { kCap, kRod, kFlange, kHeatCap, kHeatRod };
   enum Obs {
     kX, kV, kPcap, kProd, kTcap, kTrod, kFpressure, kFfric, kFstop, kZ, kHcap, kHrod, kPdV, kQcap, kQrod, kPfric,
-    kPstop, kEstop, kUgas, kPcapC, kTcapC, kProdC, kTrodC, kMcapC, kMrodC
+    kPstop, kEstop, kUgas, kPcapC, kTcapC, kProdC, kTrodC, kMcapC, kMrodC,
+    // energy audit of a cushioned end
+    kVretract, kPdVcap, kPdVrod, kUcapC, kUrodC, kHcapC, kHrodC, kPdVcapCh, kPdVrodCh
   };
-  enum Root { kRetracted, kExtended };
 
   static ComponentInfo describe() {
     ComponentInfo i;
@@ -58,23 +64,10 @@ class Cylinder final : public ComponentT<Cylinder> {
         P::scalar("dead_volume_rod", "m3", "rod-side volume at x = stroke (with rod cushioning: the channel's)",
                   1e-6)
             .positive(),
-        P::scalar("stop_stiffness", "N/m", "end stop stiffness", 1e7).positive(),
-        P::scalar("stop_damping", "N*s/m", "end stop damping", 3000.0).non_negative(),
-        P::scalar("wall_alpha", "W/(m2*K)",
-                  "gas-to-wall heat transfer coefficient; 0: heat ports at gas temperature (external convection)", 0.0)
-            .non_negative(),
     };
     for (const char* end : {"cap", "rod"})
       for (auto& s : CylinderSide::cushion_parameters(end)) i.parameters.push_back(std::move(s));
-    for (auto& f : FrictionLaw::parameters(false)) i.parameters.push_back(std::move(f));
-    const std::vector<ParameterSpec> initial = {
-        P::scalar("x0", "m", "initial position; default: at rest against the stop at x = 0 at force equilibrium",
-                  std::numeric_limits<double>::quiet_NaN()),
-        P::scalar("p0_cap", "Pa", "initial cap-side pressure, absolute", 101325.0).positive(),
-        P::scalar("p0_rod", "Pa", "initial rod-side pressure, absolute", 101325.0).positive(),
-        P::scalar("T0", "K", "initial gas temperature", 293.15).positive(),
-    };
-    i.parameters.insert(i.parameters.end(), initial.begin(), initial.end());
+    for (auto& s : Piston::parameters("rod-side")) i.parameters.push_back(std::move(s));
     i.ports = {{"cap", Domain::pneumatic, Causality::acausal, "cap-side port: pressure extends (closed if unconnected)",
                 true},
                {"rod", Domain::pneumatic, Causality::acausal, "rod-side port: pressure retracts (closed if unconnected)",
@@ -115,7 +108,16 @@ class Cylinder final : public ComponentT<Cylinder> {
                      {"p_rod_cushion", "Pa", "rod cushion annulus pressure (p_rod without rod cushioning)"},
                      {"T_rod_cushion", "K", "rod cushion annulus temperature (T_rod without rod cushioning)"},
                      {"m_flow_cap_cushion", "kg/s", "flow cap cushion annulus -> channel (0 without)"},
-                     {"m_flow_rod_cushion", "kg/s", "flow rod cushion annulus -> channel (0 without)"}};
+                     {"m_flow_rod_cushion", "kg/s", "flow rod cushion annulus -> channel (0 without)"},
+                     {"v_retract", "m/s", "retracting speed -v"},
+                     {"P_pdV_cap", "W", "p dV/dt of the cap-side gas (power to the piston)"},
+                     {"P_pdV_rod", "W", "p dV/dt of the rod-side gas (power to the piston)"},
+                     {"U_cap_cushion", "J", "internal energy of the cap cushion annulus gas (0 without)"},
+                     {"U_rod_cushion", "J", "internal energy of the rod cushion annulus gas (0 without)"},
+                     {"H_cap_cushion", "W", "enthalpy flow cap cushion annulus -> channel (0 without)"},
+                     {"H_rod_cushion", "W", "enthalpy flow rod cushion annulus -> channel (0 without)"},
+                     {"P_pdV_cap_channel", "W", "p dV/dt of the cap-side channel gas (0 without cushioning)"},
+                     {"P_pdV_rod_channel", "W", "p dV/dt of the rod-side channel gas (0 without cushioning)"}};
     i.equations = {"mass balance cap",     "energy balance cap",     "gas law cap",
                    "outflow temperature cap", "wall heat cap",       "mass balance cap cushion",
                    "energy balance cap cushion", "mass balance rod", "energy balance rod",
@@ -153,28 +155,13 @@ class Cylinder final : public ComponentT<Cylinder> {
     return i;
   }
 
-  explicit Cylinder(const Construction& c)
-      : ComponentT(c),
-        A_(circle_area(c.params["bore"])),
-        A_rod_(circle_area(c.params["rod"])),
-        stroke_(c.params["stroke"]),
-        cap_(c.params, "cap", A_, c.params["dead_volume_cap"], kCylinderPi * c.params["bore"], 0.0, stroke_),
-        rod_(c.params, "rod", A_ - A_rod_, c.params["dead_volume_rod"],
-             kCylinderPi * (c.params["bore"] + c.params["rod"]), A_rod_, stroke_),
-        stops_{c.params["stop_stiffness"], c.params["stop_damping"]},
-        wall_alpha_(c.params["wall_alpha"]),
-        friction_(FrictionLaw::from(c.params)),
-        x0_(c.params["x0"]),
-        p0_cap_(c.params["p0_cap"]),
-        p0_rod_(c.params["p0_rod"]),
-        T0_(c.params["T0"]) {
-    if (c.params["rod"] >= c.params["bore"]) throw ParameterError("rod", "rod diameter must be smaller than the bore");
-    if (cap_.cushioned() && rod_.cushioned() &&
-        cap_.cushion_length() + rod_.cushion_length() >= stroke_)
+  explicit Cylinder(const Construction& c) : ComponentT(c), p_(c.params) {
+    if (p_.cap.cushioned() && p_.rod.cushioned() &&
+        p_.cap.cushion_length() + p_.rod.cushion_length() >= p_.stroke)
       throw ParameterError("rod_cushion_length", "the cushioning zones at both ends overlap");
-    cap_.set_first_variable(0);
-    rod_.set_first_variable(cap_.variables());
-    z_var_ = cap_.variables() + rod_.variables();
+    p_.cap.set_first_variable(0);
+    p_.rod.set_first_variable(p_.cap.variables());
+    z_var_ = p_.cap.variables() + p_.rod.variables();
   }
 
   template <class T>
@@ -188,28 +175,33 @@ class Cylinder final : public ComponentT<Cylinder> {
   State<T> state(const Eval<T>& e) const {
     const auto fl = e.flange(kFlange);
     const double p_amb = e.gas().p_ambient;
-    State<T> s{fl.s, fl.v, friction_.has_state() ? e.var(z_var_) : T(0.0 * fl.v), cap_.gas(e, fl.s),
-               rod_.gas(e, T(stroke_ - fl.s)), T(0.0), T(0.0), T(0.0)};
-    s.F_pressure = cap_.force(s.cap) - rod_.force(s.rod) - p_amb * A_rod_;
-    s.F_fric = piston_friction(friction_, s.v, s.z, s.rod.p_piston, s.cap.p_piston, s.cap.p_piston, p_amb);
-    s.F_stop = stops_.force(s.x, s.v, stroke_);
+    State<T> s{fl.s, fl.v, p_.friction.has_state() ? e.var(z_var_) : T(0.0 * fl.v), p_.cap.gas(e, fl.s),
+               p_.rod.gas(e, T(p_.stroke - fl.s)), T(0.0), T(0.0), T(0.0)};
+    s.F_pressure = p_.cap.force(s.cap) - p_.rod.force(s.rod) - p_amb * p_.A_rod;
+    s.F_fric = piston_friction(p_.friction, s.v, s.z, s.rod.p_piston, s.cap.p_piston, s.cap.p_piston, p_amb);
+    s.F_stop = p_.stops.force(s.x, s.v, p_.stroke);
     return s;
   }
 
   template <class T>
   void equations(const Eval<T>& e, T* r) const {
     const State<T> s = state(e);
-    cap_.equations(e, e.gas_port(kCap), e.heat_port(kHeatCap), s.cap, s.x, s.v, wall_alpha_, r);
-    r += cap_.rows();
-    rod_.equations(e, e.gas_port(kRod), e.heat_port(kHeatRod), s.rod, T(stroke_ - s.x), T(-s.v), wall_alpha_, r);
-    r += rod_.rows();
+    p_.cap.equations(e, e.gas_port(kCap), e.heat_port(kHeatCap), s.cap, s.x, s.v, p_.wall_alpha, r);
+    r += p_.cap.rows();
+    p_.rod.equations(e, e.gas_port(kRod), e.heat_port(kHeatRod), s.rod, T(p_.stroke - s.x), T(-s.v), p_.wall_alpha, r);
+    r += p_.rod.rows();
     // The flange pulls on the cylinder with f = -F.
     r[0] = e.flange(kFlange).f + s.F_pressure + s.F_fric + s.F_stop;
-    if (friction_.has_state()) r[1] = e.der(z_var_) - friction_.lugre_zdot(s.v, e.var(z_var_));
+    if (p_.friction.has_state()) r[1] = e.der(z_var_) - p_.friction.lugre_zdot(s.v, e.var(z_var_));
   }
 
-  double observe(int k, const Eval<double>& e) const override {
+  double observe(int k, const Eval<double>& e) const override { return observe(k, state(e), e); }
+  // Outputs ask for several observables at one point: the state once.
+  void observe_all(const int* ks, int n, const Eval<double>& e, double* out) const override {
     const State<double> s = state(e);
+    for (int i = 0; i < n; ++i) out[i] = observe(ks[i], s, e);
+  }
+  double observe(int k, const State<double>& s, const Eval<double>& e) const {
     auto inflow = [&](int port) {
       const auto g = e.gas_port(port);
       return enthalpy_inflow(g.m_flow, g.T_in, g.T_out, e.gas());
@@ -227,71 +219,87 @@ class Cylinder final : public ComponentT<Cylinder> {
       case kZ: return s.z;
       case kHcap: return inflow(kCap);
       case kHrod: return inflow(kRod);
-      case kPdV: return cap_.p_dV(s.cap, s.v) + rod_.p_dV(s.rod, -s.v);
+      case kPdV: return p_.cap.p_dV(s.cap, s.v) + p_.rod.p_dV(s.rod, -s.v);
       case kQcap: return e.heat_port(kHeatCap).Q;
       case kQrod: return e.heat_port(kHeatRod).Q;
       case kPfric: return s.F_fric * s.v;
       case kPstop: return s.F_stop * s.v;
-      case kEstop: return stops_.energy(s.x, stroke_);
-      case kUgas: return cap_.internal_energy(e) + rod_.internal_energy(e);
+      case kEstop: return p_.stops.energy(s.x, p_.stroke);
+      case kUgas: return p_.cap.internal_energy(e) + p_.rod.internal_energy(e);
       case kPcapC: return s.cap.p_piston;
       case kTcapC: return s.cap.T_piston;
       case kProdC: return s.rod.p_piston;
       case kTrodC: return s.rod.T_piston;
       case kMcapC: return s.cap.m_x;
       case kMrodC: return s.rod.m_x;
+      case kVretract: return -s.v;
+      case kPdVcap: return p_.cap.p_dV(s.cap, s.v);
+      case kPdVrod: return p_.rod.p_dV(s.rod, -s.v);
+      case kUcapC: return p_.cap.cushion_internal_energy(e);
+      case kUrodC: return p_.rod.cushion_internal_energy(e);
+      case kHcapC: return s.cap.H_x;
+      case kHrodC: return s.rod.H_x;
+      case kPdVcapCh: return p_.cap.channel_p_dV(s.cap, s.v);
+      case kPdVrodCh: return p_.rod.channel_p_dV(s.rod, -s.v);
     }
     return 0.0;
   }
 
   void roots(const Eval<double>& e, double* g) const override {
     const double x = e.flange(kFlange).s;
-    g[kRetracted] = x;
-    g[kExtended] = x - stroke_;
+    p_.stop_roots(x, g);
     int k = 2;
-    if (cap_.cushioned()) g[k++] = x - cap_.cushion_length();
-    if (rod_.cushioned()) g[k++] = (stroke_ - x) - rod_.cushion_length();
+    if (p_.cap.cushioned()) g[k++] = x - p_.cap.cushion_length();
+    if (p_.rod.cushioned()) g[k++] = (p_.stroke - x) - p_.rod.cushion_length();
   }
 
-  // A stop contact makes the force jump (the damping term acts from the
-  // first contact on): the solver re-initialises there. Leaving a stop is
-  // continuous (k pen - d v falls to 0 before pen does).
   EventResult on_event(const Eval<double>& e, double*, EventKind, int root, int dir) const override {
     const std::string at = " at v = " + std::to_string(e.flange(kFlange).v) + " m/s";
-    const bool up = dir > 0;  // g growing: x extending (stops), leaving a cushion zone
-    if (root == kRetracted)
-      return up ? EventResult{false, "leaves the retracted end" + at, "left_retracted"}
-                : EventResult{true, "retracted: contact with the cap-end stop" + at, "retracted"};
-    if (root == kExtended)
-      return up ? EventResult{true, "extended: contact with the rod-end stop" + at, "extended"}
-                : EventResult{false, "leaves the extended end" + at, "left_extended"};
-    // Cushion roots: the cap end's first (g falls on entry for both ends).
-    const std::string end = root == 2 && cap_.cushioned() ? "cap" : "rod";
-    return up ? EventResult{false, "leaves the " + end + "-end cushioning zone" + at, end + "_cushion_exit"}
-              : EventResult{false, "enters the " + end + "-end cushioning zone" + at, end + "_cushion_entry"};
+    if (root < 2) return Piston::stop_event(root, dir, at);
+    // Cushion roots: the cap end's first; g falls on entry at both ends.
+    const std::string end = root == 2 && p_.cap.cushioned() ? "cap" : "rod";
+    return dir > 0 ? EventResult{false, "leaves the " + end + "-end cushioning zone" + at, end + "_cushion_exit"}
+                   : EventResult{false, "enters the " + end + "-end cushioning zone" + at, end + "_cushion_entry"};
+  }
+
+  // The energy balance of the cushioned end (the cap end's if both are;
+  // cylinder_parts.hpp), from its cushion entry to the piston's first
+  // standstill or reversal.
+  std::optional<EnergyAuditSpec> energy_audit(const GasModel& gas) const override {
+    if (!p_.cap.cushioned() && !p_.rod.cushioned()) return std::nullopt;
+    const std::string end = p_.cap.cushioned() ? "cap" : "rod", other = p_.cap.cushioned() ? "rod" : "cap";
+    CushionAuditNames n;
+    n.title = end + "-end cushioning";
+    n.opens_at = end + "_cushion_entry";
+    n.open_description = end + "-end cushion entry";
+    n.closes_when = p_.cap.cushioned() ? "v_retract" : "v";  // the speed into the cushioned end
+    n.drive_description = "work of the " + other + "-side gas and ambient on the piston";
+    n.drive_changes = {{"x", -gas.p_ambient * p_.A_rod}};
+    n.drive_integrals = {{"P_pdV_" + other, 1.0}};
+    n.U_cushion = "U_" + end + "_cushion";
+    n.Q_wall = "Q_" + end;
+    n.P_pdV_channel = "P_pdV_" + end + "_channel";
+    n.channel_port = end;
+    n.outflows = {{"H_" + end + "_cushion", 1.0}};
+    return cushion_energy_audit(n, gas);
   }
 
   void start(StartValues& sv, const GasModel& gas) const override {
-    double x = x0_;
+    double x = p_.x0;
     if (std::isnan(x)) {
       // At rest against the stop at x = 0: the stop carries the net pressure
       // force (friction is zero at rest).
-      const double F = p0_cap_ * A_ - p0_rod_ * (A_ - A_rod_) - gas.p_ambient * A_rod_;
-      x = F < 0 ? F / stops_.k : 0.0;
+      const double F = p_.p0_cap * p_.A - p_.p0_rod * (p_.A - p_.A_rod) - gas.p_ambient * p_.A_rod;
+      x = F < 0 ? F / p_.stops.k : 0.0;
     }
     sv.fix_position(kFlange, x);
-    cap_.start(sv, gas, kCap, kHeatCap, p0_cap_, T0_, x);
-    rod_.start(sv, gas, kRod, kHeatRod, p0_rod_, T0_, stroke_ - x);
-    if (friction_.has_state()) sv.fix_var(z_var_, 0.0);
+    p_.cap.start(sv, gas, kCap, kHeatCap, p_.p0_cap, p_.T0, x);
+    p_.rod.start(sv, gas, kRod, kHeatRod, p_.p0_rod, p_.T0, p_.stroke - x);
+    if (p_.friction.has_state()) sv.fix_var(z_var_, 0.0);
   }
 
  private:
-  double A_, A_rod_, stroke_;
-  CylinderSide cap_, rod_;
-  EndStops stops_;
-  double wall_alpha_;
-  FrictionLaw friction_;
-  double x0_, p0_cap_, p0_rod_, T0_;
+  Piston p_;
   int z_var_ = 4;
 };
 

@@ -9,8 +9,10 @@
 //   dm/dt = m_in,   dU/dt = H_in - p dV/dt + Q.
 #pragma once
 
+#include <limits>
 #include <string>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "components/enthalpy_flow.hpp"
@@ -267,10 +269,14 @@ class CylinderSide {
     sv.guess_temperature(heat, T0);
   }
 
-  // Internal energy of the side's gas.
+  // Internal energy of the side's gas, and of its cushion annulus alone
+  // (0 without cushioning).
   double internal_energy(const Eval<double>& e) const {
     return e.var(k_ + 1) + (cushioned_ ? e.var(k_ + 3) : 0.0);
   }
+  double cushion_internal_energy(const Eval<double>& e) const { return cushioned_ ? e.var(k_ + 3) : 0.0; }
+  // p dV/dt of the channel gas alone (the plug column; 0 without cushioning).
+  double channel_p_dV(const Gas<double>& g, double d_dot) const { return cushioned_ ? g.p * A_col_ * d_dot : 0.0; }
 
  private:
   double A_, V0_, perimeter_;
@@ -279,5 +285,117 @@ class CylinderSide {
   Cushion c_{};
   int k_ = 0;
 };
+
+// What `cylinder` and `single_acting_cylinder` share besides their rows: the
+// piston's areas and stroke, its two sides (cushioning read from the
+// <end>_cushion_* parameters where the component offers them), end stops,
+// wall heat, friction and initial state, with their parameters.
+struct Piston {
+  double A, A_rod, stroke;
+  CylinderSide cap, rod;
+  EndStops stops;
+  double wall_alpha;
+  FrictionLaw friction;
+  double x0, p0_cap, p0_rod, T0;
+
+  explicit Piston(const ParameterValues& p)
+      : A(circle_area(p["bore"])),
+        A_rod(circle_area(p["rod"])),
+        stroke(p["stroke"]),
+        cap(p, "cap", A, p["dead_volume_cap"], kCylinderPi * p["bore"], 0.0, stroke),
+        rod(p, "rod", A - A_rod, p["dead_volume_rod"], kCylinderPi * (p["bore"] + p["rod"]), A_rod, stroke),
+        stops{p["stop_stiffness"], p["stop_damping"]},
+        wall_alpha(p["wall_alpha"]),
+        friction(FrictionLaw::from(p)),
+        x0(p["x0"]),
+        p0_cap(p["p0_cap"]),
+        p0_rod(p["p0_rod"]),
+        T0(p["T0"]) {
+    if (p["rod"] >= p["bore"]) throw ParameterError("rod", "rod diameter must be smaller than the bore");
+  }
+
+  // Stops, wall heat, friction; then the initial state.
+  static std::vector<ParameterSpec> parameters(const std::string& p0_rod_meaning) {
+    using P = ParameterSpec;
+    std::vector<ParameterSpec> out = {
+        P::scalar("stop_stiffness", "N/m", "end stop stiffness", 1e7).positive(),
+        P::scalar("stop_damping", "N*s/m", "end stop damping", 3000.0).non_negative(),
+        P::scalar("wall_alpha", "W/(m2*K)",
+                  "gas-to-wall heat transfer coefficient; 0: heat ports at gas temperature (external convection)", 0.0)
+            .non_negative(),
+    };
+    for (auto& f : FrictionLaw::parameters(false)) out.push_back(std::move(f));
+    const std::vector<ParameterSpec> initial = {
+        P::scalar("x0", "m", "initial position; default: at rest against the stop at x = 0 at force equilibrium",
+                  std::numeric_limits<double>::quiet_NaN()),
+        P::scalar("p0_cap", "Pa", "initial cap-side pressure, absolute", 101325.0).positive(),
+        P::scalar("p0_rod", "Pa", "initial " + p0_rod_meaning + " pressure, absolute", 101325.0).positive(),
+        P::scalar("T0", "K", "initial gas temperature", 293.15).positive(),
+    };
+    out.insert(out.end(), initial.begin(), initial.end());
+    return out;
+  }
+
+  // Roots 0 and 1: the stops at x = 0 and x = stroke.
+  void stop_roots(double x, double* g) const {
+    g[0] = x;
+    g[1] = x - stroke;
+  }
+  // A stop contact makes the force jump (the damping term acts from the
+  // first contact on): the solver re-initialises there. Leaving a stop is
+  // continuous (k pen - d v falls to 0 before pen does).
+  static EventResult stop_event(int root, int dir, const std::string& at) {
+    if (root == 0)
+      return dir > 0 ? EventResult{false, "leaves the retracted end" + at, "left_retracted"}
+                     : EventResult{true, "retracted: contact with the cap-end stop" + at, "retracted"};
+    return dir > 0 ? EventResult{true, "extended: contact with the rod-end stop" + at, "extended"}
+                   : EventResult{false, "leaves the extended end" + at, "left_extended"};
+  }
+};
+
+// The energy balance of a cushioned end, from its cushion entry to the
+// piston's first standstill or reversal (cushioned_cylinder, cylinder). The
+// gas leaving the cushion volume carries its internal energy u = h / kappa
+// and was pushed out with the flow work p / rho = h (kappa - 1) / kappa: the
+// compression of the cushion gas (all of it, including what has left) is
+// dU + H_out / kappa; the flow work is what the throttle and bore opening
+// dissipate. `outflows` are the enthalpy flows leaving the cushion volume
+// through the throttle (+1) or elsewhere (a tap: -1, its gas leaves too but
+// not through the throttle).
+struct CushionAuditNames {
+  std::string title, opens_at, open_description, closes_when, drive_description;
+  std::vector<std::pair<std::string, double>> drive_changes, drive_integrals;
+  std::string U_cushion, Q_wall, P_pdV_channel, channel_port;
+  std::vector<std::pair<std::string, double>> outflows;
+};
+inline EnergyAuditSpec cushion_energy_audit(const CushionAuditNames& n, const GasModel& gas) {
+  using K = EnergyTerm::Kinetic;
+  const double k = gas.kappa;
+  std::vector<std::pair<std::string, double>> compression, throttle;
+  for (const auto& [name, sign] : n.outflows) {
+    compression.push_back({name, sign / k});
+    throttle.push_back({name, sign * (k - 1.0) / k});
+  }
+  EnergyAuditSpec a;
+  a.title = n.title;
+  a.opens_at = n.opens_at;
+  a.open_description = n.open_description;
+  a.closes_when_not_positive = n.closes_when;
+  a.kinetic_port = "flange";
+  a.terms = {
+      {"kinetic_energy_at_entry", "kinetic energy at cushion entry", true, {}, {}, K::at_open},
+      {"driving_work", n.drive_description, true, n.drive_changes, n.drive_integrals},
+      {"cushion_gas_compression", "compression of the cushion gas (its internal energy)", false,
+       {{n.U_cushion, 1.0}}, compression},
+      {"cushion_throttle_dissipation", "flow work through the cushion throttle / bore opening", false, {}, throttle},
+      {"heat_to_walls", "heat from the cushion gas to the walls", false, {}, {{n.Q_wall, -1.0}}},
+      {"channel_work", "work on the plug column / channel gas (expelled at port " + n.channel_port + ")", false, {},
+       {{n.P_pdV_channel, -1.0}}},
+      {"friction", "dissipated by friction", false, {}, {{"P_friction", -1.0}}},
+      {"end_stop", "absorbed by the end stop (damping + spring)", false, {}, {{"P_stop", -1.0}}},
+      {"kinetic_energy_at_end", "kinetic energy left at the end", false, {}, {}, K::at_close},
+  };
+  return a;
+}
 
 }  // namespace pneumo::components

@@ -41,12 +41,7 @@ class DirectionalValve32 final : public SpoolValve<DirectionalValve32> {
     const T x = SpoolDrive::actuated_fraction(e, kX);
     const T m_PA = PA_.mass_flow(P, A, x, gas);
     const T m_AR = AR_.mass_flow(A, R, T(1.0 - x), gas);
-    r[0] = P.m_flow - m_PA;
-    r[1] = A.m_flow - (m_AR - m_PA);
-    r[2] = R.m_flow + m_AR;
-    r[3] = P.T_out - A.T_in;
-    r[4] = A.T_out - mix_temperature(m_PA, P.T_in, T(-m_AR), R.T_in, gas);
-    r[5] = R.T_out - A.T_in;
+    series_port_rows(P, A, R, m_PA, m_AR, gas, r);
     r[6] = spool_.equation(e, kCommand, kX);
   }
 

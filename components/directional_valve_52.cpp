@@ -21,22 +21,11 @@ class DirectionalValve52 final : public SpoolValve<DirectionalValve52> {
         "events) or the signal 'command'.";
     i.parameters = ValvePath::parameters({"PA", "PB", "AR", "BR"});
     for (auto& p : SpoolDrive::parameters()) i.parameters.push_back(std::move(p));
-    i.ports = {{"P", Domain::pneumatic, Causality::acausal, "supply"},
-               {"A", Domain::pneumatic, Causality::acausal, "working port A"},
-               {"B", Domain::pneumatic, Causality::acausal, "working port B"},
-               {"R", Domain::pneumatic, Causality::acausal, "exhaust (of A and B)"},
-               {"command", Domain::signal, Causality::input, "commanded state 0/1 (overrides 'schedule')", true, 0.0}};
+    five_port_valve_info(i);
+    i.ports.push_back(
+        {"command", Domain::signal, Causality::input, "commanded state 0/1 (overrides 'schedule')", true, 0.0});
     i.variables = {{"x", "1", "spool position: 0 rest (P -> B, A -> R), 1 actuated (P -> A, B -> R)", 1.0}};
     i.modes = 1;  // schedule events passed
-    i.equations = {"flow at P",
-                   "flow at A",
-                   "flow at B",
-                   "flow at R",
-                   "temperature out of P",
-                   "temperature out of A",
-                   "temperature out of B",
-                   "temperature out of R",
-                   "spool motion"};
     return i;
   }
 
@@ -56,14 +45,7 @@ class DirectionalValve52 final : public SpoolValve<DirectionalValve52> {
     const T m_BR = BR_.mass_flow(B, R, x, gas);
     const T m_PB = PB_.mass_flow(P, B, T(1.0 - x), gas);
     const T m_AR = AR_.mass_flow(A, R, T(1.0 - x), gas);
-    r[0] = P.m_flow - (m_PA + m_PB);
-    r[1] = A.m_flow - (m_AR - m_PA);
-    r[2] = B.m_flow - (m_BR - m_PB);
-    r[3] = R.m_flow + m_AR + m_BR;
-    r[4] = P.T_out - mix_temperature(T(-m_PA), A.T_in, T(-m_PB), B.T_in, gas);
-    r[5] = A.T_out - mix_temperature(m_PA, P.T_in, T(-m_AR), R.T_in, gas);
-    r[6] = B.T_out - mix_temperature(m_PB, P.T_in, T(-m_BR), R.T_in, gas);
-    r[7] = R.T_out - mix_temperature(m_AR, A.T_in, m_BR, B.T_in, gas);
+    five_port_rows(P, A, B, R, m_PA, m_PB, m_AR, m_BR, gas, r);
     r[8] = spool_.equation(e, kCommand, kX);
   }
 

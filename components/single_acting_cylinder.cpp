@@ -13,7 +13,7 @@
 // friction as in `cylinder` (components/cylinder_parts.hpp). Events:
 // "retracted" / "extended" at the stop contacts.
 #include <cmath>
-#include <limits>
+#include <string>
 
 #include "components/builtin.hpp"
 #include "components/cylinder_parts.hpp"
@@ -44,21 +44,8 @@ class SingleActingCylinder final : public ComponentT<SingleActingCylinder> {
                 "vented"),
         P::scalar("dead_volume_cap", "m3", "cap-side volume at x = 0", 1e-6).positive(),
         P::scalar("dead_volume_rod", "m3", "spring chamber volume at x = stroke (closed chamber)", 1e-6).positive(),
-        P::scalar("stop_stiffness", "N/m", "end stop stiffness", 1e7).positive(),
-        P::scalar("stop_damping", "N*s/m", "end stop damping", 3000.0).non_negative(),
-        P::scalar("wall_alpha", "W/(m2*K)",
-                  "gas-to-wall heat transfer coefficient; 0: heat ports at gas temperature (external convection)", 0.0)
-            .non_negative(),
     };
-    for (auto& f : FrictionLaw::parameters(false)) i.parameters.push_back(std::move(f));
-    const std::vector<ParameterSpec> initial = {
-        P::scalar("x0", "m", "initial position; default: at rest against the stop at x = 0 at force equilibrium",
-                  std::numeric_limits<double>::quiet_NaN()),
-        P::scalar("p0_cap", "Pa", "initial cap-side pressure, absolute", 101325.0).positive(),
-        P::scalar("p0_rod", "Pa", "initial spring chamber pressure, absolute (closed chamber)", 101325.0).positive(),
-        P::scalar("T0", "K", "initial gas temperature", 293.15).positive(),
-    };
-    i.parameters.insert(i.parameters.end(), initial.begin(), initial.end());
+    for (auto& s : Piston::parameters("spring chamber (closed chamber)")) i.parameters.push_back(std::move(s));
     i.ports = {{"cap", Domain::pneumatic, Causality::acausal, "cap-side port: pressure extends"},
                {"flange", Domain::translational, Causality::acausal, "rod end; position = x (0 retracted)"},
                {"heat_cap", Domain::thermal, Causality::acausal, "wall of the cap-side chamber", true},
@@ -105,25 +92,12 @@ class SingleActingCylinder final : public ComponentT<SingleActingCylinder> {
 
   explicit SingleActingCylinder(const Construction& c)
       : ComponentT(c),
-        A_(circle_area(c.params["bore"])),
-        A_rod_(circle_area(c.params["rod"])),
-        stroke_(c.params["stroke"]),
+        p_(c.params),
         F0_(c.params["spring_preload"]),
         k_(c.params["spring_rate"]),
-        closed_(c.params.text("spring_chamber") == "closed"),
-        cap_(c.params, "cap", A_, c.params["dead_volume_cap"], kCylinderPi * c.params["bore"], 0.0, stroke_),
-        rod_(c.params, "rod", A_ - A_rod_, c.params["dead_volume_rod"],
-             kCylinderPi * (c.params["bore"] + c.params["rod"]), A_rod_, stroke_),
-        stops_{c.params["stop_stiffness"], c.params["stop_damping"]},
-        wall_alpha_(c.params["wall_alpha"]),
-        friction_(FrictionLaw::from(c.params)),
-        x0_(c.params["x0"]),
-        p0_cap_(c.params["p0_cap"]),
-        p0_rod_(c.params["p0_rod"]),
-        T0_(c.params["T0"]) {
-    if (c.params["rod"] >= c.params["bore"]) throw ParameterError("rod", "rod diameter must be smaller than the bore");
-    cap_.set_first_variable(0);
-    rod_.set_first_variable(2);
+        closed_(c.params.text("spring_chamber") == "closed") {
+    p_.cap.set_first_variable(0);
+    p_.rod.set_first_variable(2);
     z_var_ = closed_ ? 4 : 2;
   }
 
@@ -138,15 +112,15 @@ class SingleActingCylinder final : public ComponentT<SingleActingCylinder> {
     const auto fl = e.flange(kFlange);
     const double p_amb = e.gas().p_ambient;
     State<T> s;
-    s.cap = cap_.gas(e, fl.s);
-    const T spring_side = closed_ ? T(0.0 * fl.s) : T(0.0 * fl.s + p_amb * A_);
-    if (closed_) s.rod = rod_.gas(e, T(stroke_ - fl.s));
+    s.cap = p_.cap.gas(e, fl.s);
+    const T spring_side = closed_ ? T(0.0 * fl.s) : T(0.0 * fl.s + p_amb * p_.A);
+    if (closed_) s.rod = p_.rod.gas(e, T(p_.stroke - fl.s));
     s.F_spring = F0_ + k_ * fl.s;
-    s.F_pressure = cap_.force(s.cap) - (closed_ ? T(rod_.force(s.rod) + p_amb * A_rod_) : spring_side);
-    const T z = friction_.has_state() ? e.var(z_var_) : T(0.0 * fl.v);
+    s.F_pressure = p_.cap.force(s.cap) - (closed_ ? T(p_.rod.force(s.rod) + p_amb * p_.A_rod) : spring_side);
+    const T z = p_.friction.has_state() ? e.var(z_var_) : T(0.0 * fl.v);
     const T& p_rod = closed_ ? s.rod.p_piston : spring_side;
-    s.F_fric = piston_friction(friction_, fl.v, z, p_rod, s.cap.p, s.cap.p, p_amb);
-    s.F_stop = stops_.force(fl.s, fl.v, stroke_);
+    s.F_fric = piston_friction(p_.friction, fl.v, z, p_rod, s.cap.p, s.cap.p, p_amb);
+    s.F_stop = p_.stops.force(fl.s, fl.v, p_.stroke);
     return s;
   }
 
@@ -154,19 +128,24 @@ class SingleActingCylinder final : public ComponentT<SingleActingCylinder> {
   void equations(const Eval<T>& e, T* r) const {
     const State<T> s = state(e);
     const auto fl = e.flange(kFlange);
-    cap_.equations(e, e.gas_port(kCap), e.heat_port(kHeatCap), s.cap, fl.s, fl.v, wall_alpha_, r);
+    p_.cap.equations(e, e.gas_port(kCap), e.heat_port(kHeatCap), s.cap, fl.s, fl.v, p_.wall_alpha, r);
     r[5] = fl.f + s.F_pressure - s.F_spring + s.F_fric + s.F_stop;  // f = -F on the cylinder
     int row = 6;
     if (closed_) {
-      rod_.equations(e, e.gas_port(kRod), e.heat_port(kHeatRod), s.rod, T(stroke_ - fl.s), T(-fl.v), wall_alpha_,
+      p_.rod.equations(e, e.gas_port(kRod), e.heat_port(kHeatRod), s.rod, T(p_.stroke - fl.s), T(-fl.v), p_.wall_alpha,
                      r + row);
-      row += rod_.rows();
+      row += p_.rod.rows();
     }
-    if (friction_.has_state()) r[row] = e.der(z_var_) - friction_.lugre_zdot(fl.v, e.var(z_var_));
+    if (p_.friction.has_state()) r[row] = e.der(z_var_) - p_.friction.lugre_zdot(fl.v, e.var(z_var_));
   }
 
-  double observe(int k, const Eval<double>& e) const override {
+  double observe(int k, const Eval<double>& e) const override { return observe(k, state(e), e); }
+  // Outputs ask for several observables at one point: the state once.
+  void observe_all(const int* ks, int n, const Eval<double>& e, double* out) const override {
     const State<double> s = state(e);
+    for (int i = 0; i < n; ++i) out[i] = observe(ks[i], s, e);
+  }
+  double observe(int k, const State<double>& s, const Eval<double>& e) const {
     switch (k) {
       case kX: return e.flange(kFlange).s;
       case kV: return e.flange(kFlange).v;
@@ -182,42 +161,30 @@ class SingleActingCylinder final : public ComponentT<SingleActingCylinder> {
     return 0.0;
   }
 
-  void roots(const Eval<double>& e, double* g) const override {
-    g[0] = e.flange(kFlange).s;
-    g[1] = e.flange(kFlange).s - stroke_;
-  }
+  void roots(const Eval<double>& e, double* g) const override { p_.stop_roots(e.flange(kFlange).s, g); }
   EventResult on_event(const Eval<double>& e, double*, EventKind, int root, int dir) const override {
-    const std::string at = " at v = " + std::to_string(e.flange(kFlange).v) + " m/s";
-    if (root == 0)
-      return dir > 0 ? EventResult{false, "leaves the retracted end" + at, "left_retracted"}
-                     : EventResult{true, "retracted: contact with the cap-end stop" + at, "retracted"};
-    return dir > 0 ? EventResult{true, "extended: contact with the rod-end stop" + at, "extended"}
-                   : EventResult{false, "leaves the extended end" + at, "left_extended"};
+    return Piston::stop_event(root, dir, " at v = " + std::to_string(e.flange(kFlange).v) + " m/s");
   }
 
   void start(StartValues& sv, const GasModel& gas) const override {
-    double x = x0_;
+    double x = p_.x0;
     if (std::isnan(x)) {
       // Against the stop at x = 0, which carries what the spring and the
       // pressures leave (k_stop (-x) = -(F - k x)).
-      const double side = closed_ ? p0_rod_ * (A_ - A_rod_) + gas.p_ambient * A_rod_ : gas.p_ambient * A_;
-      const double F = p0_cap_ * A_ - side - F0_;
-      x = F < 0 ? F / (stops_.k + k_) : 0.0;
+      const double side = closed_ ? p_.p0_rod * (p_.A - p_.A_rod) + gas.p_ambient * p_.A_rod : gas.p_ambient * p_.A;
+      const double F = p_.p0_cap * p_.A - side - F0_;
+      x = F < 0 ? F / (p_.stops.k + k_) : 0.0;
     }
     sv.fix_position(kFlange, x);
-    cap_.start(sv, gas, kCap, kHeatCap, p0_cap_, T0_, x);
-    if (closed_) rod_.start(sv, gas, kRod, kHeatRod, p0_rod_, T0_, stroke_ - x);
-    if (friction_.has_state()) sv.fix_var(z_var_, 0.0);
+    p_.cap.start(sv, gas, kCap, kHeatCap, p_.p0_cap, p_.T0, x);
+    if (closed_) p_.rod.start(sv, gas, kRod, kHeatRod, p_.p0_rod, p_.T0, p_.stroke - x);
+    if (p_.friction.has_state()) sv.fix_var(z_var_, 0.0);
   }
 
  private:
-  double A_, A_rod_, stroke_, F0_, k_;
+  Piston p_;
+  double F0_, k_;
   bool closed_;
-  CylinderSide cap_, rod_;
-  EndStops stops_;
-  double wall_alpha_;
-  FrictionLaw friction_;
-  double x0_, p0_cap_, p0_rod_, T0_;
   int z_var_ = 2;
 };
 

@@ -1,5 +1,7 @@
 // Spool drive shared by the directional valves (directional_valve_32,
-// directional_valve_52): the spool position x (0 = rest, 1 = actuated) is a
+// directional_valve_52, directional_valve_53): the spool position x (0 =
+// rest, 1 = actuated; the 5/3 valve's -1 / 0 / 1: solenoid 12, centre,
+// solenoid 14) is a
 // differential state moving toward the commanded state at the constant rate
 // 1/t_switch_time, i.e. a LINEAR opening ramp lasting t_switch_time for a
 // full stroke (a command arriving mid-ramp turns the spool around at once).
@@ -32,43 +34,63 @@
 
 namespace pneumo::components {
 
+// A spool state a schedule may command: its value, what it connects (for
+// the event log) and the word of its event tags (command_WORD, switched_WORD).
+struct SpoolState {
+  double value;
+  std::string name, word;
+};
+
 class SpoolDrive {
  public:
-  static std::vector<ParameterSpec> parameters() {
+  // `states` describes the commandable states for the parameter texts;
+  // `lowest` is the lowest of them (the highest is 1).
+  static std::vector<ParameterSpec> parameters(const std::string& states = "0 rest, 1 actuated",
+                                               double lowest = 0.0) {
     return {
         ParameterSpec::scalar("t_switch_time", "s", "duration of a full spool stroke (linear opening ramp)", 0.01)
             .positive(),
-        ParameterSpec::scalar("initial", "1", "spool state before the first command: 0 rest, 1 actuated", 0.0)
-            .range(0.0, 1.0),
+        ParameterSpec::scalar("initial", "1", "spool state before the first command: " + states, 0.0)
+            .range(lowest, 1.0),
         ParameterSpec::table("schedule", {"s", "1"},
-                             "[[t, state], ...]: at time t the spool is commanded to state 0 or 1 (increasing t)",
+                             "[[t, state], ...]: at time t the spool is commanded to a state (" + states +
+                                 "; increasing t)",
                              false),
     };
   }
 
   SpoolDrive(const ParameterValues& p, std::string actuated, std::string rest)
+      : SpoolDrive(p, {{0.0, std::move(rest), "off"}, {1.0, std::move(actuated), "on"}}) {}
+
+  SpoolDrive(const ParameterValues& p, const std::vector<SpoolState>& states)
       : t_switch_(p["t_switch_time"]), x0_(p["initial"]) {
-    if (x0_ != 0.0 && x0_ != 1.0) throw ParameterError("initial", "initial must be 0 or 1");
+    auto state = [&](double v) -> const SpoolState* {
+      for (const auto& s : states)
+        if (s.value == v) return &s;
+      return nullptr;
+    };
+    std::string allowed;
+    for (const auto& s : states) allowed += (allowed.empty() ? "" : ", ") + std::to_string(static_cast<int>(s.value));
+    if (!state(x0_)) throw ParameterError("initial", "initial must be one of " + allowed);
     if (!p.has("schedule")) return;
     const Table& rows = p.table("schedule");
     require_increasing(rows, "schedule", "times");
     double x = x0_;
     for (std::size_t i = 0; i < rows.size(); ++i) {
       const double t = rows[i][0], s = rows[i][1];
-      if (s != 0.0 && s != 1.0) {
+      const SpoolState* st = state(s);
+      if (!st) {
         std::ostringstream msg;
-        msg << "schedule states must be 0 or 1, row " << i + 1 << " has " << s;
+        msg << "schedule states must be one of " << allowed << ", row " << i + 1 << " has " << s;
         throw ParameterError("schedule", msg.str());
       }
       const double t_next = i + 1 < rows.size() ? rows[i + 1][0] : std::numeric_limits<double>::infinity();
       const double rate = s == x ? 0.0 : (s > x ? 1.0 : -1.0) / t_switch_;
-      add(t, rate, "command " + std::to_string(static_cast<int>(s)) + " (" + (s == 1.0 ? actuated : rest) + ")",
-          s == 1.0 ? "command_on" : "command_off");
+      add(t, rate, "command " + std::to_string(static_cast<int>(s)) + " (" + st->name + ")", "command_" + st->word);
       const double t_end = t + std::abs(s - x) * t_switch_;
       if (s != x && t_end <= t_next) {
-        add(t_end, 0.0,
-            "spool at " + std::to_string(static_cast<int>(s)) + ": " + (s == 1.0 ? actuated : rest) + " fully open",
-            s == 1.0 ? "switched_on" : "switched_off");
+        add(t_end, 0.0, "spool at " + std::to_string(static_cast<int>(s)) + ": " + st->name + " fully open",
+            "switched_" + st->word);
         x = s;
       } else if (s != x) {
         x += rate * (t_next - t);  // turned around by the next command
@@ -79,9 +101,17 @@ class SpoolDrive {
   // The spool equation (residual row) for the internal variable `k_x`.
   template <class T>
   T equation(const Eval<T>& e, int command_port, int k_x) const {
-    if (e.connected(command_port)) {
-      return t_switch_ * e.der(k_x) - tanh((e.signal(command_port) - e.var(k_x)) / 0.01);
-    }
+    if (e.connected(command_port)) return driven(e, e.signal(command_port), k_x);
+    return scheduled(e, k_x);
+  }
+  // Driven by the command value u (signal inputs).
+  template <class T>
+  T driven(const Eval<T>& e, const T& u, int k_x) const {
+    return t_switch_ * e.der(k_x) - tanh((u - e.var(k_x)) / 0.01);
+  }
+  // Following the schedule.
+  template <class T>
+  T scheduled(const Eval<T>& e, int k_x) const {
     const auto k = static_cast<std::size_t>(e.mode(0));
     return e.der(k_x) - (k == 0 ? 0.0 : rates_[k - 1]);
   }
@@ -98,7 +128,10 @@ class SpoolDrive {
   std::vector<double> time_events() const { return times_; }
 
   EventResult on_event(const Eval<double>& e, double* modes, int command_port) const {
-    if (e.connected(command_port)) return {};
+    return on_event(e, modes, e.connected(command_port));
+  }
+  EventResult on_event(const Eval<double>& e, double* modes, bool signal_driven) const {
+    if (signal_driven) return {};
     auto k = static_cast<std::size_t>(modes[0]);
     EventResult res;
     const double tol = 1e-12 * std::max(1.0, std::abs(e.t()));
@@ -138,17 +171,31 @@ class SpoolValve : public ComponentT<Derived> {
         spool_(c.params, std::move(actuated), std::move(rest)),
         command_port_(command_port),
         spool_var_(spool_var) {}
+  // A valve with a second command port (-1: none): the spool follows the
+  // signals once either is connected.
+  SpoolValve(const Construction& c, int command_port, int second_command_port, int spool_var,
+             const std::vector<SpoolState>& states)
+      : ComponentT<Derived>(c),
+        spool_(c.params, states),
+        command_port_(command_port),
+        second_command_port_(second_command_port),
+        spool_var_(spool_var) {}
 
   void start(StartValues& s, const GasModel&) const override { s.fix_var(spool_var_, spool_.x0()); }
   void initial_modes(double* modes) const override { modes[0] = 0.0; }
   std::vector<double> time_events() const override { return spool_.time_events(); }
   EventResult on_event(const Eval<double>& e, double* modes, EventKind, int, int) const override {
-    return spool_.on_event(e, modes, command_port_);
+    return spool_.on_event(e, modes, signal_driven(e));
   }
 
  protected:
+  template <class T>
+  bool signal_driven(const Eval<T>& e) const {
+    return e.connected(command_port_) || (second_command_port_ >= 0 && e.connected(second_command_port_));
+  }
+
   SpoolDrive spool_;
-  int command_port_, spool_var_;
+  int command_port_, second_command_port_ = -1, spool_var_;
 };
 
 // One flow path of a valve: an ISO 6358 resistance. Parameters C and b are
@@ -189,6 +236,60 @@ template <class T>
 T mix_temperature(const T& m1_toward, const T& T1, const T& m2_toward, const T& T2, const GasModel& gas) {
   const T w1 = smooth_pos(m1_toward, gas.m_flow_small), w2 = smooth_pos(m2_toward, gas.m_flow_small);
   return (w1 * T1 + w2 * T2) / (w1 + w2);
+}
+
+// Ports P, A, B, R and the row names of a five-port valve (exhausts joined
+// in R; the 5/2 and 5/3 valves), the spool's row last.
+inline void five_port_valve_info(ComponentInfo& i) {
+  i.ports = {{"P", Domain::pneumatic, Causality::acausal, "supply (1)"},
+             {"A", Domain::pneumatic, Causality::acausal, "working port A (4)"},
+             {"B", Domain::pneumatic, Causality::acausal, "working port B (2)"},
+             {"R", Domain::pneumatic, Causality::acausal, "exhaust of A and B (3, 5)"}};
+  i.equations = {"flow at P",
+                 "flow at A",
+                 "flow at B",
+                 "flow at R",
+                 "temperature out of P",
+                 "temperature out of A",
+                 "temperature out of B",
+                 "temperature out of R",
+                 "spool motion"};
+}
+
+// The eight port rows of a five-port valve (exhausts joined in R) from its
+// four path flows P -> A, P -> B, A -> R, B -> R (5/2 and 5/3 valves).
+template <class T>
+void five_port_rows(const GasPortView<T>& P, const GasPortView<T>& A, const GasPortView<T>& B,
+                    const GasPortView<T>& R, const T& m_PA, const T& m_PB, const T& m_AR, const T& m_BR,
+                    const GasModel& gas, T* r) {
+  r[0] = P.m_flow - (m_PA + m_PB);
+  r[1] = A.m_flow - (m_AR - m_PA);
+  r[2] = B.m_flow - (m_BR - m_PB);
+  r[3] = R.m_flow + m_AR + m_BR;
+  r[4] = P.T_out - mix_temperature(T(-m_PA), A.T_in, T(-m_PB), B.T_in, gas);
+  r[5] = A.T_out - mix_temperature(m_PA, P.T_in, T(-m_AR), R.T_in, gas);
+  r[6] = B.T_out - mix_temperature(m_PB, P.T_in, T(-m_BR), R.T_in, gas);
+  r[7] = R.T_out - mix_temperature(m_AR, A.T_in, m_BR, B.T_in, gas);
+}
+
+// Row names for series_port_rows, with the valve's port names.
+inline std::vector<std::string> series_port_equations(const std::string& in, const std::string& mid,
+                                                      const std::string& ex) {
+  return {"flow at " + in,          "flow at " + mid,          "flow at " + ex,
+          "temperature out of " + in, "temperature out of " + mid, "temperature out of " + ex};
+}
+
+// The six port rows of a valve with a path in -> mid and a path mid -> ex
+// (3/2 valve and quick exhaust valve P -> A -> R, pressure regulator).
+template <class T>
+void series_port_rows(const GasPortView<T>& in, const GasPortView<T>& mid, const GasPortView<T>& ex, const T& m_in,
+                      const T& m_ex, const GasModel& gas, T* r) {
+  r[0] = in.m_flow - m_in;
+  r[1] = mid.m_flow - (m_ex - m_in);
+  r[2] = ex.m_flow + m_ex;
+  r[3] = in.T_out - mid.T_in;
+  r[4] = mid.T_out - mix_temperature(m_in, in.T_in, T(-m_ex), ex.T_in, gas);
+  r[5] = ex.T_out - mid.T_in;
 }
 
 }  // namespace pneumo::components

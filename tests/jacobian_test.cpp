@@ -383,6 +383,127 @@ connections:
 )",
        0.03,
        {"cylinder", "single_acting_cylinder"}},
+      {"pressure_valves",
+       // A relief valve opening on a tank being filled (partly open at the
+       // second point), a regulator feeding a load, and a regulator whose
+       // outlet is back-driven into its relief (every node of two ports:
+       // see the hoses snippet on nodes with nearly zero flow).
+       R"(
+components:
+  source: {type: pressure_source, p: 8 bar, T: 300 K}
+  feed:   {type: iso6358_throttle, C: 0.2 dm3/(s*bar), b: 0.3}
+  tank:   {type: volume, V: 0.1 L, p0: 5.9 bar}
+  relief: {type: relief_valve, p_set: 5 barg, band: 0.5 bar, C: 1 dm3/(s*bar)}
+  air:    {type: atmosphere}
+  reg:    {type: pressure_regulator, p_set: 4 barg, C: 1 dm3/(s*bar)}
+  line:   {type: volume, V: 0.05 L, p0: 4.5 bar}
+  load:   {type: iso6358_throttle, C: 0.3 dm3/(s*bar), b: 0.3}
+  air2:   {type: atmosphere}
+  reg2:   {type: pressure_regulator, p_set: 3 barg, C: 0.5 dm3/(s*bar), relief_C: 0.3 dm3/(s*bar)}
+  line2:  {type: volume, V: 0.05 L, p0: 4.2 bar, T0: 310 K}
+  push:   {type: iso6358_throttle, C: 0.1 dm3/(s*bar), b: 0.3}
+  high:   {type: pressure_source, p: 7 bar, T: 320 K}
+  air3:   {type: atmosphere}
+  air4:   {type: atmosphere}
+  src2:   {type: pressure_source, p: 7.5 bar, T: 290 K}
+  src3:   {type: pressure_source, p: 6 bar, T: 300 K}
+connections:
+  - [source.port, feed.a]
+  - [src2.port, reg.in]
+  - [src3.port, reg2.in]
+  - [feed.b, tank.port, relief.in]
+  - [relief.out, air.port]
+  - [reg.out, line.port]
+  - [line.port_b, load.a]
+  - [load.b, air2.port]
+  - [reg.exhaust, air3.port]
+  - [reg2.out, line2.port]
+  - [line2.port_b, push.a]
+  - [push.b, high.port]
+  - [reg2.exhaust, air4.port]
+)",
+       0.02,
+       {"relief_valve", "pressure_regulator"}},
+      {"directional_valve_53",
+       // 5/3 valves: one on a schedule from solenoid 14 towards 12 (second
+       // point mid-ramp just past the centre's overlap: the 12 paths
+       // opening), one with an exhausted centre driven by its solenoid
+       // signals, one with a pressurised centre at rest.
+       R"(
+components:
+  supply: {type: pressure_source, p: 6 bar}
+  v1:     {type: directional_valve_53, C: 0.3 dm3/(s*bar), t_switch_time: 20 ms, initial: 1, centre: exhausted,
+           schedule: [[0.005, -1]]}
+  a1:     {type: volume, V: 0.1 L, p0: 1.5 bar}
+  b1:     {type: volume, V: 0.1 L, p0: 3 bar}
+  air1:   {type: atmosphere}
+  s2:     {type: pressure_source, p: 5 bar}
+  sol14:  {type: signal_source, kind: step, value: 0, height: 1, t_start: 0.004}
+  sol12:  {type: signal_source, kind: constant, value: 0}
+  v2:     {type: directional_valve_53, C: 0.2 dm3/(s*bar), t_switch_time: 10 ms, centre: exhausted}
+  a2:     {type: volume, V: 0.1 L, p0: 2 bar}
+  b2:     {type: volume, V: 0.1 L, p0: 4 bar}
+  air2:   {type: atmosphere}
+  s3:     {type: pressure_source, p: 4 bar}
+  v3:     {type: directional_valve_53, C: 0.2 dm3/(s*bar), centre: pressurised}
+  a3:     {type: volume, V: 0.1 L, p0: 2 bar}
+  b3:     {type: volume, V: 0.1 L, p0: 3 bar}
+  air3:   {type: atmosphere}
+connections:
+  - [supply.port, v1.P]
+  - [v1.A, a1.port]
+  - [v1.B, b1.port]
+  - [v1.R, air1.port]
+  - [s2.port, v2.P]
+  - [v2.A, a2.port]
+  - [v2.B, b2.port]
+  - [v2.R, air2.port]
+  - [sol14.y, v2.command_14]
+  - [sol12.y, v2.command_12]
+  - [s3.port, v3.P]
+  - [v3.A, a3.port]
+  - [v3.B, b3.port]
+  - [v3.R, air3.port]
+)",
+       0.03,
+       {"directional_valve_53"}},
+      {"logic_valves",
+       // A shuttle and a two-pressure valve, each with inlets crossing over
+       // (a ramped inlet pressure passes the other's inside the run), and a
+       // quick exhaust valve venting a tank through R while its line fills.
+       R"(
+components:
+  ramp:   {type: signal_source, kind: ramp, value: 2e5, height: 4e5, t_start: 0, duration: 0.04}
+  s1:     {type: pressure_source, p: 2 bar}
+  s2:     {type: pressure_source, p: 3 bar, T: 310 K}
+  or:     {type: shuttle_valve, C: 0.2 dm3/(s*bar)}
+  t1:     {type: volume, V: 0.1 L, p0: 2.5 bar}
+  s3:     {type: pressure_source, p: 2 bar}
+  s4:     {type: pressure_source, p: 3 bar, T: 310 K}
+  and:    {type: two_pressure_valve, C: 0.2 dm3/(s*bar), ramp: 0.5 bar}
+  t2:     {type: volume, V: 0.1 L, p0: 2.5 bar}
+  line:   {type: volume, V: 0.02 L, p0: 1.5 bar}
+  feed:   {type: iso6358_throttle, C: 0.05 dm3/(s*bar), b: 0.3}
+  s5:     {type: pressure_source, p: 6 bar}
+  qev:    {type: quick_exhaust_valve, C_PA: 0.5 dm3/(s*bar), C_AR: 1 dm3/(s*bar)}
+  t3:     {type: volume, V: 0.1 L, p0: 5 bar}
+  air:    {type: atmosphere}
+connections:
+  - [ramp.y, s1.p_in, s3.p_in]
+  - [s1.port, or.in_1]
+  - [s2.port, or.in_2]
+  - [or.out, t1.port]
+  - [s3.port, and.in_1]
+  - [s4.port, and.in_2]
+  - [and.out, t2.port]
+  - [s5.port, feed.a]
+  - [feed.b, line.port]
+  - [line.port_b, qev.P]
+  - [qev.A, t3.port]
+  - [qev.R, air.port]
+)",
+       0.02,
+       {"shuttle_valve", "two_pressure_valve", "quick_exhaust_valve"}},
   };
   return list;
 }

@@ -5,9 +5,13 @@
 //     piston moves at the throttle's volume flow (ISO 6358 at that pressure)
 //     over the annulus area, within 5 %;
 //   * conventions: x = 0 retracted, x = stroke extended, events tagged
-//     "extended" at the stroke's end; the flange position equals x;
+//     "extended" at the stroke's end; the flange position equals x; the
+//     example circuit (5/2 valve, meter-out, silencer) extends, waits and
+//     retracts in that order;
 //   * end cushioning: with the needle closed further the piston arrives at
-//     the end slower;
+//     the end slower; the cushioned end's energy audit balances (energy in
+//     = where it went, to 1e-4 of the input) at either end, with the
+//     kinetic energy at entry 1/2 m v^2 of the load;
 //   * single-acting: the spring alone returns the piston (without it, the
 //     piston stays); at rest the spring and pressure forces balance (closed
 //     form for a vented spring chamber, the observed pressures for a closed
@@ -16,9 +20,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
 #include <string>
 #include <vector>
 
+#include "framework/analysis/energy_audit.hpp"
+#include "framework/assembly/system.hpp"
+#include "framework/core/error.hpp"
 #include "tests/test_support.hpp"
 
 namespace pneumo {
@@ -28,11 +36,15 @@ using namespace test_support;
 
 constexpr double kPi = 3.14159265358979323846;
 
-// Supply through a large valve on the cap port, the rod side exhausted through a meter-out
-// throttle; both chambers start at supply pressure (the valve has just
-// switched), the piston at rest retracted. Viscous friction damps the gas
-// spring's oscillation, so the speed settles.
-std::string meter_out_circuit(const std::string& cylinder_extra) {
+// Supply through a large valve on the cap port, the rod side exhausted
+// through a meter-out throttle (`retract`: the other way round); both
+// chambers start at supply pressure (the valve has just switched), the
+// piston at rest retracted unless `cylinder_extra` sets x0. Viscous friction
+// damps the gas spring's oscillation, so the speed settles. `more` adds
+// components, `more_connections` connections.
+std::string meter_out_circuit(const std::string& cylinder_extra, bool retract = false, const std::string& more = "",
+                              const std::string& more_connections = "") {
+  const std::string driven = retract ? "rod" : "cap", metered = retract ? "cap" : "rod";
   return R"(
 ambient: {p: 101325 Pa, T: 293.15 K}
 components:
@@ -43,13 +55,14 @@ components:
   load:      {type: translational_mass, m: 2 kg}
   cyl:       {type: cylinder, bore: 32 mm, rod: 12 mm, stroke: 200 mm, p0_cap: 6 bar, p0_rod: 6 bar,
               friction_model: coulomb_viscous, friction_viscous: 200 N*s/m)" +
-         cylinder_extra + R"(}
+         cylinder_extra + "}\n" + more + R"(
 connections:
   - [supply.port, valve.a]
-  - [valve.b, cyl.cap]
-  - [cyl.rod, meter_out.a]
+  - [valve.b, cyl.)" + driven + R"(]
+  - [cyl.)" + metered + R"(, meter_out.a]
   - [meter_out.b, exhaust.port]
   - [cyl.flange, load.flange]
+)" + more_connections + R"(
 outputs:
   x: cyl.x
   v: cyl.v
@@ -129,6 +142,80 @@ TEST(PlainCylinder, CushioningBrakesTheEndOfTheStroke) {
   const double dt_open = impact(open) - entry(open), dt_shut = impact(shut) - entry(shut);
   std::printf("cushion zone crossed in %.4f s (needle open) and %.4f s (nearly shut)\n", dt_open, dt_shut);
   EXPECT_GT(dt_shut, 1.5 * dt_open);
+}
+
+TEST(PlainCylinder, MeterOutCircuitExtendsWaitsAndRetracts) {
+  // netlists/meter_out_cylinder.yaml: the valve switches at 0.1 s and back
+  // at 2 s; the cylinder reaches each end in between, in that order.
+  const RunResult r =
+      run_text(read_file(std::string(PNEUMO_SOURCE_DIR) + "/netlists/meter_out_cylinder.yaml"), "meter_out_cylinder");
+  std::vector<std::string> order;
+  for (const auto& ev : r.solver.events)
+    if (ev.tag == "switched_on" || ev.tag == "switched_off" || ev.tag == "extended" || ev.tag == "retracted")
+      order.push_back(ev.component + "." + ev.tag);
+  const std::vector<std::string> expected = {"valve.switched_on", "cyl.extended", "valve.switched_off",
+                                             "cyl.retracted"};
+  EXPECT_EQ(order, expected);
+  EXPECT_NEAR(at(r.table, "x", 1.9), 0.1, 1e-4);
+  EXPECT_NEAR(column(r.table, "x").back(), 0.0, 1e-4);
+}
+
+TEST(PlainCylinder, IncompleteCushioningIsAnInputErrorAtItsLine) {
+  // A cushioning length without the plug's diameter: the error names the
+  // file and line, the component and the missing parameter.
+  const std::string text = meter_out_circuit(", cap_cushion_length: 20 mm, cap_cushion_C: 0.05 dm3/(s*bar)");
+  try {
+    System system(elaborate(parse_netlist(text, "incomplete.yaml"), builtin_registry()));
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.component(), "cyl");
+    EXPECT_EQ(e.parameter(), "cap_plug_diameter");
+    EXPECT_NE(std::string(e.what()).find("incomplete.yaml:9"), std::string::npos) << e.what();
+  }
+}
+
+// The audit of the cushioned end of `text` (one audit), printed.
+EnergyAudit audit_of(const std::string& text, const std::string& name) {
+  Netlist nl = parse_netlist(text, name);
+  const auto plans = prepare_energy_audit(nl, builtin_registry());
+  const RunResult r = run_simulation(nl, builtin_registry());
+  EXPECT_TRUE(r.solver.ok) << r.solver.message;
+  const auto audits = energy_audit(plans, r);
+  EXPECT_EQ(audits.size(), 1u);
+  if (audits.empty()) return {};
+  std::ostringstream s;
+  print_audit(audits[0], s);
+  std::printf("%s", s.str().c_str());
+  return audits[0];
+}
+
+double audit_term(const std::vector<AuditTerm>& terms, const std::string& name) {
+  for (const auto& t : terms)
+    if (t.name == name) return t.joules;
+  ADD_FAILURE() << "no audit term " << name;
+  return NAN;
+}
+
+TEST(PlainCylinder, CushionEnergyAuditBalancesAtEitherEnd) {
+  // Extending into the rod-end cushion.
+  const EnergyAudit rod = audit_of(
+      meter_out_circuit(", rod_cushion_length: 20 mm, rod_plug_diameter: 18 mm, rod_cushion_C: 0.05 dm3/(s*bar)"),
+      "audit_rod.yaml");
+  ASSERT_TRUE(rod.opened);
+  EXPECT_EQ(rod.title, "rod-end cushioning");
+  EXPECT_LT(std::abs(rod.residual()), 1e-4 * rod.total_in);
+  EXPECT_NEAR(audit_term(rod.in, "kinetic_energy_at_entry"), 0.5 * 2 * rod.speed_at_open * rod.speed_at_open, 1e-12);
+  // Retracting into the cap-end cushion, with wall heat.
+  const EnergyAudit cap = audit_of(
+      meter_out_circuit(", x0: 200 mm, cap_cushion_length: 20 mm, cap_plug_diameter: 16 mm, "
+                        "cap_cushion_C: 0.05 dm3/(s*bar), wall_alpha: 100 W/(m2*K), friction_FC: 10 N",
+                        true, "  wall: {type: thermal_mass, C: 50 J/K, T0: 293.15 K}", "  - [cyl.heat_cap, wall.port]"),
+      "audit_cap.yaml");
+  ASSERT_TRUE(cap.opened);
+  EXPECT_EQ(cap.title, "cap-end cushioning");
+  EXPECT_LT(std::abs(cap.residual()), 1e-4 * cap.total_in);
+  EXPECT_GT(audit_term(cap.out, "heat_to_walls"), 0.0);  // compression-heated cushion gas
+  EXPECT_GT(audit_term(cap.out, "cushion_gas_compression"), 0.0);
 }
 
 // A single-acting cylinder, bore 20 mm, rod 8 mm, stroke 50 mm; `cap` is

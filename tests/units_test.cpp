@@ -158,6 +158,30 @@ TEST(ParseQuantity, Pressures) {
   EXPECT_FALSE(parse_quantity("6 bar").gauge);
 }
 
+TEST(ParseQuantity, GaugeWrittenAsASeparateWord) {
+  // Issue #18: "6 bar g" was read as 6 bar times 1 gram. Every spelling of
+  // 6 bar gauge means 6e5 Pa above the ambient pressure.
+  for (const char* text : {"6 bar g", "6 bar(g)", "6 barg", "6 bar gauge", "6 bar (g)", "6  bar  gauge"}) {
+    const Quantity q = parse_quantity(text, 95000.0);
+    EXPECT_TRUE(Near(q.si_value, 695000)) << text;
+    EXPECT_TRUE(q.gauge) << text;
+    EXPECT_EQ(q.dim, dims::pressure) << text;
+  }
+  EXPECT_TRUE(Near(si("600 kPa g"), 701325));
+  EXPECT_TRUE(Near(si("0.6 MPa gauge"), 701325));
+  EXPECT_TRUE(Near(si("1 psi g"), 6894.757293168361 + 101325));
+  for (const char* text : {"6 bar a", "6 bar abs", "6 bar absolute"}) {
+    const Quantity q = parse_quantity(text, 95000.0);
+    EXPECT_TRUE(Near(q.si_value, 6e5)) << text;
+    EXPECT_FALSE(q.gauge) << text;
+  }
+  // Only after a pressure unit: elsewhere a "g" stays a gram.
+  EXPECT_TRUE(Near(si("3 m g"), 3e-3));
+  EXPECT_EQ(parse_quantity("3 m g").dim, parse_unit("m*g").dim);
+  // A gauge word inside a compound unit is refused like "barg" there.
+  EXPECT_THROW(parse_quantity("1 dm3/(s*bar g)"), ParseError);
+}
+
 TEST(ParseQuantity, Temperatures) {
   EXPECT_TRUE(Near(si("20 degC"), 293.15));
   EXPECT_TRUE(Near(si("20 \xC2\xB0" "C"), 293.15));  // °C

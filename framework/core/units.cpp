@@ -503,6 +503,20 @@ class Parser {
         break;
       }
     }
+    // "6 bar g", "6 bar gauge", "6 bar abs": a separate word after a pressure
+    // unit names its reference (bar times gram would be no pressure at all).
+    if (after > pos_) {
+      std::size_t word_end = after;
+      while (word_end < text_.size() && (is_ascii_letter(text_[word_end]) || text_[word_end] == '_')) ++word_end;
+      const std::string_view word = text_.substr(after, word_end - after);
+      const char* suffix = word == "g" || word == "gauge"                    ? "g"
+                           : word == "a" || word == "abs" || word == "absolute" ? "_abs"
+                                                                                : nullptr;
+      if (suffix && table.contains(name + "_abs") && table.contains(name + suffix)) {
+        name += suffix;
+        pos_ = word_end;
+      }
+    }
     const auto it = table.find(name);
     if (it == table.end()) unknown_unit(name, begin);
     const Unit& u = it->second;
