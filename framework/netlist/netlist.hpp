@@ -84,7 +84,7 @@ struct SimulationSettings {
   double output_interval = 1e-3;
   double max_step = 0.0;  // 0 = solver's choice
   // Recombine the last Newton matrix's parts when only cj changed (see
-  // SolverOptions::reuse_jacobian); false reproduces IDA's own behaviour.
+  // SolverOptions::jacobian_reuse); false reproduces IDA's own behaviour.
   bool jacobian_reuse = true;
 };
 

@@ -10,7 +10,7 @@ SolverOptions solver_options(const SimulationSettings& s) {
   o.atol = s.atol;
   o.output_interval = s.output_interval;
   o.max_step = s.max_step;
-  o.reuse_jacobian = s.jacobian_reuse;
+  o.jacobian_reuse = s.jacobian_reuse;
   return o;
 }
 

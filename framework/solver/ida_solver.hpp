@@ -31,7 +31,7 @@ struct SolverOptions {
   // the last evaluation (see NewtonMatrixParts in ida_solver.cpp), when IDA
   // integrates no algebraic unknown. Off: every request is a fresh
   // evaluation, as IDA alone does.
-  bool reuse_jacobian = true;
+  bool jacobian_reuse = true;
 };
 
 struct SolverStats {
