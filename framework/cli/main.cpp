@@ -19,6 +19,7 @@
 #include "framework/core/units.hpp"
 #include "framework/core/version.hpp"
 #include "framework/io/plot.hpp"
+#include "framework/model/simulation_options.hpp"
 #include "framework/plugin/plugin.hpp"
 #include "framework/cli/study_commands.hpp"
 #include "framework/cli/split_list.hpp"
@@ -173,6 +174,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
 
   auto* sim = app.add_subcommand("simulate", "simulate a netlist and write the outputs to CSV");
+  sim->footer("The netlist's simulation: keys (unit, default, valid range):\n" + simulation_options_help());
   std::string netlist, output;
   std::vector<std::string> sets;
   bool stats = false, quiet = false;

@@ -1,0 +1,63 @@
+#include "framework/model/simulation_options.hpp"
+
+#include <sstream>
+
+namespace pneumo {
+
+namespace {
+
+using S = SimulationSettings;
+
+// A quantity; its default is SimulationSettings' initialiser.
+SimulationOption number(double S::*member, const char* name, const char* unit, const char* description) {
+  return {ParameterSpec::scalar(name, unit, description, S{}.*member), member, nullptr};
+}
+SimulationOption positive(SimulationOption o) {
+  o.spec = std::move(o.spec).positive();
+  return o;
+}
+SimulationOption non_negative(SimulationOption o) {
+  o.spec = std::move(o.spec).non_negative();
+  return o;
+}
+SimulationOption open_range(SimulationOption o, double lo, double hi) {
+  o.spec = std::move(o.spec).open_range(lo, hi);
+  return o;
+}
+
+SimulationOption flag(bool S::*member, const char* name, const char* description) {
+  return {ParameterSpec::text(name, {"true", "false"}, description, S{}.*member ? "true" : "false"), nullptr, member};
+}
+
+}  // namespace
+
+const std::vector<SimulationOption>& simulation_options() {
+  static const std::vector<SimulationOption> table{
+      number(&S::t_start, "t_start", "s", "start time"),
+      number(&S::t_end, "t_end", "s", "end time; must be after t_start"),
+      open_range(number(&S::rtol, "rtol", "1", "relative tolerance of IDA's error test"), 0.0, 1.0),
+      positive(number(&S::atol, "atol", "1",
+                      "absolute tolerance as a fraction of each unknown's typical magnitude (pressures ~1e5 Pa "
+                      "and chamber masses ~1e-6 kg cannot share one number)")),
+      positive(number(&S::output_interval, "output_interval", "s", "time between output rows")),
+      non_negative(number(&S::max_step, "max_step", "s", "largest step IDA may take; 0: the solver's choice")),
+      flag(&S::jacobian_reuse, "jacobian_reuse",
+           "answer IDA's requests for a Newton matrix that only follow a change of its step size by recombining "
+           "the last evaluation's parts dF/dy, dF/dy'; false: every matrix evaluated afresh, as IDA alone does"),
+  };
+  return table;
+}
+
+std::string simulation_options_help() {
+  std::ostringstream out;
+  for (const auto& o : simulation_options()) {
+    const ParameterSpec& s = o.spec;
+    out << "  " << s.name;
+    if (o.number) out << " [" << s.unit << "]  default " << *s.default_value << ", " << s.range_text();
+    else out << " [true|false]  default " << *s.default_text;
+    out << ": " << s.description << "\n";
+  }
+  return out.str();
+}
+
+}  // namespace pneumo
