@@ -392,6 +392,27 @@ void System::build_pattern() {
   }
 }
 
+namespace {
+
+// The nodes reachable from `start` by alternating paths of a bipartite
+// matching: from a node to its neighbours (`touched`), and on from each
+// neighbour to the node it is matched with (`partner`, -1 if none).
+void alternating_closure(const std::vector<int>& start, const std::vector<std::vector<int>>& next,
+                         const std::vector<int>& partner, std::set<int>& reached, std::set<int>& touched) {
+  std::vector<int> stack(start);
+  while (!stack.empty()) {
+    const int a = stack.back();
+    stack.pop_back();
+    if (!reached.insert(a).second) continue;
+    for (int b : next[a]) {
+      touched.insert(b);
+      if (partner[b] >= 0) stack.push_back(partner[b]);
+    }
+  }
+}
+
+}  // namespace
+
 void System::check_structure() const {
   // Candidate (equation, variable) pairs for an index-1 matching.
   std::vector<std::vector<int>> adj(n_);
@@ -429,26 +450,8 @@ void System::check_structure() const {
   for (int r = 0; r < n_; ++r)
     for (int c : adj[r]) col_rows[c].push_back(r);
   std::set<int> over_rows, over_cols, under_rows, under_cols;
-  std::vector<int> stack(free_rows);
-  while (!stack.empty()) {
-    const int r = stack.back();
-    stack.pop_back();
-    if (!over_rows.insert(r).second) continue;
-    for (int c : adj[r]) {
-      over_cols.insert(c);
-      if (match_col[c] >= 0) stack.push_back(match_col[c]);
-    }
-  }
-  stack = free_cols;
-  while (!stack.empty()) {
-    const int c = stack.back();
-    stack.pop_back();
-    if (!under_cols.insert(c).second) continue;
-    for (int r : col_rows[c]) {
-      under_rows.insert(r);
-      if (match_row[r] >= 0) stack.push_back(match_row[r]);
-    }
-  }
+  alternating_closure(free_rows, adj, match_col, over_rows, over_cols);
+  alternating_closure(free_cols, col_rows, match_row, under_cols, under_rows);
   std::string msg = "the circuit's equations are structurally singular (or of index > 1): " +
                     std::to_string(free_rows.size()) + " equation(s) cannot be paired with an unknown.\n";
   msg += "  over-determined - these " + std::to_string(over_rows.size()) + " equations constrain only " +

@@ -21,12 +21,11 @@ namespace {
 namespace fs = std::filesystem;
 using namespace pneumo::study;
 
-struct SensitivityArgs {
-  std::string netlist, output, method = "morris", metrics;
+struct SensitivityArgs : StudyArgs {
+  std::string method = "morris";
   std::vector<std::string> params;
-  int trajectories = 20, levels = 4, base = 256, threads = 1;
+  int trajectories = 20, levels = 4, base = 256;
   long seed = 1;
-  bool quiet = false, eliminate = true;  // alias elimination is the default
 };
 
 void write_atomic(const std::string& path, const std::string& text) {
@@ -132,24 +131,17 @@ int sensitivity_command(const SensitivityArgs& a) {
 Command add_sensitivity_command(CLI::App& app) {
   auto sa = std::make_shared<SensitivityArgs>();
   auto* se = app.add_subcommand("sensitivity", "Morris screening or Sobol indices of the run metrics over parameter ranges");
-  se->add_option("netlist", sa->netlist, "netlist file (YAML)")->required();
+  add_study_options(se, *sa);
   se->add_option("--param", sa->params, "NAME=LOW:HIGH (repeatable)")->take_all();
   se->add_option("--method", sa->method, "morris (screening) or sobol (variance-based indices)");
   se->add_option("--trajectories", sa->trajectories, "Morris: trajectories (runs = trajectories * (k + 1))");
   se->add_option("--levels", sa->levels, "Morris: grid levels (even)");
   se->add_option("--base-samples", sa->base, "Sobol: base samples N (runs = N * (k + 2))");
   se->add_option("--seed", sa->seed, "random seed of the design");
-  se->add_option("-j,--threads", sa->threads, "threads (per MPI rank)")->check(CLI::PositiveNumber);
-  se->add_option("--metrics", sa->metrics, "metrics, comma separated (default: all the netlist provides)");
   se->add_option("-o,--output", sa->output,
                  "indices CSV (default: NETLIST_STEM.sensitivity.csv); the runs go to OUTPUT_STEM.runs.csv");
   se->add_flag("-q,--quiet", sa->quiet, "no progress bar or tables");
-  se->add_flag("--eliminate-aliases,!--keep-aliases", sa->eliminate,
-               "substitute alias equations before solving (the default; --keep-aliases: hand IDA every unknown)");
-  return {.app = se,
-          .run = [sa] { return sensitivity_command(*sa); },
-          .input = [sa] { return sa->netlist; },
-          .on_error = stop_ranks};
+  return study_command(se, sa, sensitivity_command);
 }
 
 }  // namespace pneumo::cli

@@ -10,6 +10,14 @@ namespace pneumo::cli {
 namespace fs = std::filesystem;
 using namespace pneumo::study;
 
+void add_study_options(CLI::App* cmd, StudyArgs& a) {
+  cmd->add_option("netlist", a.netlist, "netlist file (YAML)")->required();
+  cmd->add_option("-j,--threads", a.threads, "threads (per MPI rank)")->check(CLI::PositiveNumber);
+  cmd->add_option("--metrics", a.metrics, "metrics, comma separated (default: all the netlist provides)");
+  cmd->add_flag("--eliminate-aliases,!--keep-aliases", a.eliminate,
+                "substitute alias equations before solving (the default; --keep-aliases: hand IDA every unknown)");
+}
+
 std::string default_output(const std::string& netlist, const char* suffix) {
   return fs::path(netlist).stem().string() + suffix;
 }

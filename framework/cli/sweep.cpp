@@ -19,11 +19,9 @@ namespace {
 
 using namespace pneumo::study;
 
-struct SweepArgs {
-  std::string netlist, output, samples, metrics;
+struct SweepArgs : StudyArgs {
+  std::string samples;
   std::vector<std::string> grid;
-  int threads = 1;
-  bool quiet = false, eliminate = true;  // alias elimination is the default
 };
 
 int sweep_command(const SweepArgs& a) {
@@ -54,21 +52,14 @@ int sweep_command(const SweepArgs& a) {
 Command add_sweep_command(CLI::App& app) {
   auto a = std::make_shared<SweepArgs>();
   auto* sw = app.add_subcommand("sweep", "run a netlist over a parameter grid or sample list; metrics per run to CSV");
-  sw->add_option("netlist", a->netlist, "netlist file (YAML)")->required();
+  add_study_options(sw, *a);
   sw->add_option("--grid", a->grid,
                  "NAME=FROM:TO:COUNT (repeatable; full factorial). NAME: top-level parameter or COMPONENT.PARAMETER")
       ->take_all();
   sw->add_option("--samples", a->samples, "CSV of runs: header of parameter names, one row per run");
-  sw->add_option("-j,--threads", a->threads, "threads (per MPI rank)")->check(CLI::PositiveNumber);
   sw->add_option("-o,--output", a->output, "results CSV (default: NETLIST_STEM.sweep.csv)");
-  sw->add_option("--metrics", a->metrics, "metrics, comma separated (default: all the netlist provides)");
   sw->add_flag("-q,--quiet", a->quiet, "no progress bar or summary");
-  sw->add_flag("--eliminate-aliases,!--keep-aliases", a->eliminate,
-               "substitute alias equations before solving (the default; --keep-aliases: hand IDA every unknown)");
-  return {.app = sw,
-          .run = [a] { return sweep_command(*a); },
-          .input = [a] { return a->netlist; },
-          .on_error = stop_ranks};
+  return study_command(sw, a, sweep_command);
 }
 
 }  // namespace pneumo::cli
