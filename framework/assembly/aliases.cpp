@@ -134,7 +134,7 @@ struct AliasClasses {
 
 void System::eliminate_aliases() {
   const int n = n_;
-  n_full_ = n;
+  aliases_.n_full = n;
   std::vector<Candidate> cand = alias_candidates(blocks_, dep_y_, dep_yp_, n);
   // Check linearity at the start point and two perturbed points, at three
   // far-apart times: a row that sets a variable to a function of time (a
@@ -200,18 +200,18 @@ std::vector<int> System::renumber_aliases(AliasClasses& classes, const std::vect
     }
     nominal[g] = std::min(nominal[g], nominal_[v]);
   }
-  row_of_.assign(n, -1);
-  eliminated_.clear();
+  aliases_.row_of.assign(n, -1);
+  aliases_.eliminated.clear();
   int kept = 0;
   for (int r = 0; r < n; ++r) {
-    if (eliminated[r]) eliminated_.push_back(r);
-    else row_of_[r] = kept++;
+    if (eliminated[r]) aliases_.eliminated.push_back(r);
+    else aliases_.row_of[r] = kept++;
   }
   if (kept != m)
     throw StructureError("internal error: alias elimination left " + std::to_string(kept) + " equations for " +
                          std::to_string(m) + " unknowns");
-  eliminated_nominal_.clear();
-  for (int r : eliminated_) eliminated_nominal_.push_back(nominal_[dep_y_[r][0]]);
+  aliases_.eliminated_nominal.clear();
+  for (int r : aliases_.eliminated) aliases_.eliminated_nominal.push_back(nominal_[dep_y_[r][0]]);
   var_names_ = std::move(names);
   start_value_ = std::move(start);
   start_kind_ = std::move(kind);
@@ -222,20 +222,20 @@ std::vector<int> System::renumber_aliases(AliasClasses& classes, const std::vect
 // Pattern and differential flags of the reduced system; each block's
 // locals read their class root times its sign, or its constant.
 void System::reduce_pattern(AliasClasses& classes, const std::vector<int>& reduced) {
-  const int n = n_full_;
+  const int n = aliases_.n_full;
   const int m = static_cast<int>(var_names_.size());
   std::vector<std::set<int>> cols(m);
   std::vector<double> id(m, 0.0);
   for (int r = 0; r < n; ++r) {
-    if (row_of_[r] < 0) continue;
+    if (aliases_.row_of[r] < 0) continue;
     for (int c : dep_y_[r]) {
       const auto [root, s] = classes.find(c);
-      if (!classes.constant[root]) cols[reduced[root]].insert(row_of_[r]);
+      if (!classes.constant[root]) cols[reduced[root]].insert(aliases_.row_of[r]);
     }
     for (int c : dep_yp_[r]) {
       const auto [root, s] = classes.find(c);
       if (classes.constant[root]) continue;
-      cols[reduced[root]].insert(row_of_[r]);
+      cols[reduced[root]].insert(aliases_.row_of[r]);
       id[reduced[root]] = 1.0;
     }
   }
@@ -256,7 +256,7 @@ void System::reduce_pattern(AliasClasses& classes, const std::vector<int>& reduc
     }
     b->jac_pos.assign(static_cast<std::size_t>(b->n_rows) * nl, -1);
     for (int k = 0; k < b->n_rows; ++k) {
-      const int r = row_of_[b->row0 + k];
+      const int r = aliases_.row_of[b->row0 + k];
       if (r < 0) continue;
       for (int i = 0; i < nl; ++i) {
         if (b->vars[i] < 0) continue;
@@ -267,7 +267,7 @@ void System::reduce_pattern(AliasClasses& classes, const std::vector<int>& reduc
   }
   id_ = std::move(id);
   n_ = m;
-  F_full_.assign(n_full_, 0.0);
+  work_.F_full.assign(aliases_.n_full, 0.0);
 }
 
 }  // namespace pneumo

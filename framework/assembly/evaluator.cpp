@@ -14,47 +14,47 @@
 namespace pneumo {
 
 void System::block_inputs(double t, const double*& y, const double*& yp, bool read_explicit) const {
-  if (explicit_.empty()) return;
+  if (plan_.unknowns.empty()) return;
   if (read_explicit) {
     expand(t, y, yp);
   } else {
     for (int i = 0; i < n_; ++i) {
-      yw_[ida_to_m_[i]] = y[i];
-      ypw_[ida_to_m_[i]] = yp[i];
+      work_.y[plan_.ida_to_m[i]] = y[i];
+      work_.yp[plan_.ida_to_m[i]] = yp[i];
     }
-    cache_valid_ = false;  // yw_'s states no longer match the cached expansion
+    work_.cache_valid = false;  // work_.y's states no longer match the cached expansion
   }
-  y = yw_.data();
-  yp = ypw_.data();
+  y = work_.y.data();
+  yp = work_.yp.data();
 }
 
 bool System::expand(double t, const double* y, const double* yp) const {
-  for (int i = 0; i < n_; ++i) ypw_[ida_to_m_[i]] = yp[i];
-  if (cache_valid_ && t == cache_t_ && std::equal(y, y + n_, cache_y_.begin())) return cache_invalid_;
-  for (int i = 0; i < n_; ++i) yw_[ida_to_m_[i]] = y[i];
+  for (int i = 0; i < n_; ++i) work_.yp[plan_.ida_to_m[i]] = yp[i];
+  if (work_.cache_valid && t == work_.cache_t && std::equal(y, y + n_, work_.cache_y.begin())) return work_.cache_invalid;
+  for (int i = 0; i < n_; ++i) work_.y[plan_.ida_to_m[i]] = y[i];
   // Each explicit unknown is solved from its start value, not from the last
   // call's: the result is then a function of (t, y) alone, without rounding
   // noise from the call history (which stalled IDA's initialisation Newton
   // at rtol 1e-9); a start value also keeps blocks that read an unknown
   // before its level from seeing zero pressures.
-  for (const auto& x : explicit_) yw_[x.var] = m_start_[x.var];
+  for (const auto& x : plan_.unknowns) work_.y[x.var] = plan_.m_start[x.var];
   bool invalid = false;
   EvalContext ctx{&circuit_.gas, modes_.data(), &invalid};
   double ly[kMaxLocal], lyp[kMaxLocal];
-  for (const auto& stage : stages_)
+  for (const auto& stage : plan_.stages)
     for (const auto& [bi, list] : stage) {
       const Block& b = *blocks_[bi];
-      gather(b, yw_.data(), ypw_.data(), ly, lyp);
-      b.residual(t, ly, lyp, F_full_.data() + b.row0, ctx);
+      gather(b, work_.y.data(), work_.yp.data(), ly, lyp);
+      b.residual(t, ly, lyp, work_.F_full.data() + b.row0, ctx);
       for (int e : list) {
-        const auto& x = explicit_[e];
-        yw_[x.var] -= F_full_[x.row] / x.coef;
+        const auto& x = plan_.unknowns[e];
+        work_.y[x.var] -= work_.F_full[x.row] / x.coef;
       }
     }
-  std::copy_n(y, n_, cache_y_.begin());
-  cache_t_ = t;
-  cache_valid_ = true;
-  cache_invalid_ = invalid;
+  std::copy_n(y, n_, work_.cache_y.begin());
+  work_.cache_t = t;
+  work_.cache_valid = true;
+  work_.cache_invalid = invalid;
   return invalid;
 }
 
@@ -62,27 +62,27 @@ int System::residual(double t, const double* y, const double* yp, double* F) con
   bool invalid = false;
   EvalContext ctx{&circuit_.gas, modes_.data(), &invalid};
   double ly[kMaxLocal], lyp[kMaxLocal];
-  const bool reduced = n_full_ != n_;
-  if (!explicit_.empty()) {
+  const bool reduced = aliases_.n_full != n_;
+  if (!plan_.unknowns.empty()) {
     invalid = expand(t, y, yp);
-    y = yw_.data();
-    yp = ypw_.data();
+    y = work_.y.data();
+    yp = work_.yp.data();
   }
   // Blocks whose rows were all substituted as aliases are not evaluated:
   // their rows are identities after substitution, checked at assembly at
   // three points and times, and such a block has no discrete modes that
   // could change them. The other blocks' eliminated rows are checked here.
-  double* Ff = reduced ? F_full_.data() : F;
-  for (int bi : final_blocks_) {
+  double* Ff = reduced ? work_.F_full.data() : F;
+  for (int bi : plan_.final_blocks) {
     const Block& b = *blocks_[bi];
     gather(b, y, yp, ly, lyp);
     b.residual(t, ly, lyp, Ff + b.row0, ctx);
   }
   if (reduced)
-    for (const auto& [r, q] : kept_full_rows_) F[q] = Ff[r];
-  for (int e : checked_aliases_) {
-    const int r = eliminated_[e];
-    if (std::abs(Ff[r]) > 1e-10 * eliminated_nominal_[e] && std::isfinite(Ff[r])) {
+    for (const auto& [r, q] : plan_.kept_full_rows) F[q] = Ff[r];
+  for (int e : aliases_.checked) {
+    const int r = aliases_.eliminated[e];
+    if (std::abs(Ff[r]) > 1e-10 * aliases_.eliminated_nominal[e] && std::isfinite(Ff[r])) {
       throw std::runtime_error("equation '" + equation_name(r) + "', substituted as an alias at assembly, no longer holds at t = " +
                                std::to_string(t) + " (residual " + std::to_string(Ff[r]) +
                                "); a component must not change such an equation at an event");
@@ -95,28 +95,28 @@ int System::residual(double t, const double* y, const double* yp, double* F) con
 }
 
 int System::jacobian(double t, const double* y, const double* yp, double cj, double* values) const {
-  if (explicit_.empty()) return jacobian_blocks(t, y, yp, cj, values);
+  if (plan_.unknowns.empty()) return jacobian_blocks(t, y, yp, cj, values);
   const bool invalid = expand(t, y, yp);
-  const int flag = jacobian_blocks(t, yw_.data(), ypw_.data(), cj, j1_values_.data());
-  // Adds a dF/d(column c) entry to the row being reduced (scatter_, over
+  const int flag = jacobian_blocks(t, work_.y.data(), work_.yp.data(), cj, work_.j1_values.data());
+  // Adds a dF/d(column c) entry to the row being reduced (work_.scatter, over
   // IDA's columns): directly for an unknown of IDA, through dc/dy for an
   // explicit one.
   auto accumulate = [&](double a, int c) {
     if (a == 0.0) return;
-    const int j = explicit_of_m_[c];
+    const int j = plan_.of_m[c];
     if (j < 0) {
-      scatter_[m_to_ida_[c]] += a;
+      work_.scatter[plan_.m_to_ida[c]] += a;
       return;
     }
-    const auto& xj = explicit_[j];
-    for (int k = 0; k < xj.dn; ++k) scatter_[d_cols_[xj.d0 + k]] += a * d_values_[xj.d0 + k];
+    const auto& xj = plan_.unknowns[j];
+    for (int k = 0; k < xj.dn; ++k) work_.scatter[plan_.d_cols[xj.d0 + k]] += a * work_.d_values[xj.d0 + k];
   };
   // d var / d y_IDA of each explicit unknown, in level order:
   //   coef dvar + sum_c F_row,c dc = 0, dc of an explicit c known already.
-  for (const auto& x : explicit_) {
-    for (int k = 0; k < x.dn; ++k) scatter_[d_cols_[x.d0 + k]] = 0.0;
+  for (const auto& x : plan_.unknowns) {
+    for (int k = 0; k < x.dn; ++k) work_.scatter[plan_.d_cols[x.d0 + k]] = 0.0;
     for (const auto& [p, c] : x.entries) {
-      const double a = j1_values_[p];
+      const double a = work_.j1_values[p];
       if (c == x.var) {
         if (std::abs(a - x.coef) > 1e-9 * std::abs(x.coef)) {
           throw std::runtime_error("equation '" + equation_name(x.row) + "', solved explicitly at assembly (linear, dF/dy " +
@@ -127,20 +127,20 @@ int System::jacobian(double t, const double* y, const double* yp, double cj, dou
       }
       accumulate(a, c);
     }
-    for (int k = 0; k < x.dn; ++k) d_values_[x.d0 + k] = -scatter_[d_cols_[x.d0 + k]] / x.coef;
+    for (int k = 0; k < x.dn; ++k) work_.d_values[x.d0 + k] = -work_.scatter[plan_.d_cols[x.d0 + k]] / x.coef;
   }
   // IDA's rows: F_row,y + sum over explicit c of F_row,c dc/dy.
   std::fill(values, values + nnz(), 0.0);
-  for (const auto& kr : kept_rows_) {
-    for (const auto& [c, p] : kr.out) scatter_[c] = 0.0;
-    for (const auto& [p, c] : kr.entries) accumulate(j1_values_[p], c);
-    for (const auto& [c, p] : kr.out) values[p] = scatter_[c];
+  for (const auto& kr : plan_.kept_rows) {
+    for (const auto& [c, p] : kr.out) work_.scatter[c] = 0.0;
+    for (const auto& [p, c] : kr.entries) accumulate(work_.j1_values[p], c);
+    for (const auto& [c, p] : kr.out) values[p] = work_.scatter[c];
   }
   return invalid || flag ? 1 : 0;
 }
 
 int System::jacobian_blocks(double t, const double* y, const double* yp, double cj, double* values) const {
-  std::fill(values, values + j1_row_idx_.size(), 0.0);
+  std::fill(values, values + plan_.j1_row_idx.size(), 0.0);
   bool invalid = false;
   EvalContext ctx{&circuit_.gas, modes_.data(), &invalid};
   static thread_local std::vector<Dual> ly(kMaxLocal), lyp(kMaxLocal), r(kMaxLocal * 2);
@@ -175,7 +175,7 @@ int System::jacobian_blocks(double t, const double* y, const double* yp, double 
     if (static_cast<int>(r.size()) < b->n_rows) r.resize(b->n_rows);
     b->residual(t, ly.data(), lyp.data(), r.data(), ctx);
     for (int k = 0; k < b->n_rows; ++k) {
-      if (row_of_[b->row0 + k] < 0) continue;
+      if (aliases_.row_of[b->row0 + k] < 0) continue;
       const Dual& f = r[k];
       const int directions = std::min(f.n, static_cast<int>(b->slot_local.size()));  // without the padding
       for (int i = 0; i < directions; ++i) {
@@ -183,7 +183,7 @@ int System::jacobian_blocks(double t, const double* y, const double* yp, double 
         if (d == 0.0) continue;
         const int p = b->jac_pos[static_cast<std::size_t>(k) * nl + b->slot_local[i]];
         if (p >= 0) values[p] += d;
-        else ++pattern_misses_;
+        else ++work_.pattern_misses;
       }
     }
   }
@@ -202,7 +202,7 @@ void System::jacobian_parts(double t, const double* y, const double* yp, std::ve
                             std::vector<double>& dFdyp) const {
   dFdy.assign(static_cast<std::size_t>(n_) * n_, 0.0);
   dFdyp.assign(static_cast<std::size_t>(n_) * n_, 0.0);
-  if (!explicit_.empty()) {
+  if (!plan_.unknowns.empty()) {
     std::vector<double> j0(nnz()), j1(nnz());
     newton_matrix_parts(t, y, yp, j0.data(), j1.data());
     for (int c = 0; c < n_; ++c)
@@ -229,7 +229,7 @@ void System::jacobian_parts(double t, const double* y, const double* yp, std::ve
       b->residual(t, ly.data(), lyp.data(), r.data(), ctx);
       auto& out = part == 0 ? dFdy : dFdyp;
       for (int k = 0; k < b->n_rows; ++k) {
-        const int row = row_of_[b->row0 + k];
+        const int row = aliases_.row_of[b->row0 + k];
         if (row < 0) continue;
         for (int i = 0; i < nl; ++i)
           if (b->vars[i] >= 0) out[static_cast<std::size_t>(row) * n_ + b->vars[i]] += r[k].deriv(i);

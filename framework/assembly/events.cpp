@@ -12,13 +12,13 @@ namespace pneumo {
 void System::reset_modes() {
   for (const auto& b : blocks_)
     if (b->component) b->component->initial_modes(modes_.data() + b->mode0);
-  yw_ = m_start_;
-  ypw_.assign(m_start_.size(), 0.0);
-  cache_valid_ = false;
+  work_.y = plan_.m_start;
+  work_.yp.assign(plan_.m_start.size(), 0.0);
+  work_.cache_valid = false;
 }
 
 void System::roots(double t, const double* y, const double* yp, double* g) const {
-  block_inputs(t, y, yp, any_roots_read_explicit_);
+  block_inputs(t, y, yp, plan_.any_roots_read_explicit);
   bool invalid = false;
   double ly[kMaxLocal], lyp[kMaxLocal];
   for (int bi : root_blocks_) {
@@ -53,9 +53,9 @@ bool System::fire_event(int bi, double t, const double* y, const double* yp, Eve
   Eval<double> e(*b.component, t, ly, lyp, modes, b.connected.get(), circuit_.gas, &invalid);
   const std::vector<double> before(modes, modes + b.component->info().modes);
   const EventResult res = b.component->on_event(e, modes, kind, root, dir);
-  if (!explicit_.empty() && !std::equal(before.begin(), before.end(), modes)) {
+  if (!plan_.unknowns.empty() && !std::equal(before.begin(), before.end(), modes)) {
     verify_explicit(bi, t);
-    cache_valid_ = false;
+    work_.cache_valid = false;
   }
   if (!res.message.empty()) log.push_back({t, b.component->name(), res.message});
   return res.changed;

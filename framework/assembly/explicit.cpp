@@ -148,25 +148,25 @@ void System::eliminate_explicit() {
   std::vector<std::string> names;
   std::vector<double> start, nominal;
   std::vector<unsigned char> kind;
-  for (int v : ida_to_m_) {
+  for (int v : plan_.ida_to_m) {
     names.push_back(var_names_[v]);
     start.push_back(start_value_[v]);
     kind.push_back(start_kind_[v]);
     nominal.push_back(nominal_[v]);
   }
-  m_start_ = start_value_;
-  m_names_ = var_names_;
+  plan_.m_start = start_value_;
+  plan_.m_names = var_names_;
   var_names_ = std::move(names);
   start_value_ = std::move(start);
   start_kind_ = std::move(kind);
   nominal_ = std::move(nominal);
   id_ = id;
-  n_ = static_cast<int>(ida_to_m_.size());
+  n_ = static_cast<int>(plan_.ida_to_m.size());
   find_root_inputs();
-  j1_values_.assign(j1_row_idx_.size(), 0.0);
-  d_values_.assign(d_cols_.size(), 0.0);
-  scatter_.assign(n_, 0.0);
-  cache_y_.assign(n_, 0.0);
+  work_.j1_values.assign(plan_.j1_row_idx.size(), 0.0);
+  work_.d_values.assign(plan_.d_cols.size(), 0.0);
+  work_.scatter.assign(n_, 0.0);
+  work_.cache_y.assign(n_, 0.0);
 }
 
 ExplicitRows System::explicit_rows() const {
@@ -183,7 +183,7 @@ ExplicitRows System::explicit_rows() const {
   for (std::size_t bi = 0; bi < blocks_.size(); ++bi) {
     const Block& b = *blocks_[bi];
     for (int k = 0; k < b.n_rows; ++k) {
-      const int q = row_of_[b.row0 + k];
+      const int q = aliases_.row_of[b.row0 + k];
       if (q < 0) continue;
       rows.full_row[q] = b.row0 + k;
       rows.row_block[q] = static_cast<int>(bi);
@@ -202,7 +202,7 @@ ExplicitRows System::explicit_rows() const {
       if (bp->all_eliminated) continue;
       evaluate_structure(*bp, kCheckTimes[pass], y0.data(), yp0.data(), ctx, pr, dr);
       for (int k = 0; k < bp->n_rows; ++k) {
-        const int q = row_of_[bp->row0 + k];
+        const int q = aliases_.row_of[bp->row0 + k];
         if (q >= 0) record_row(*bp, pr[k], dr[k], pass, rows, q);
       }
     }
@@ -252,7 +252,7 @@ std::vector<int> System::number_explicit(const ExplicitRows& rows, const Explici
   std::iota(idx.begin(), idx.end(), 0);
   std::stable_sort(idx.begin(), idx.end(),
                    [&](int a, int b) { return o.level[o.order_var[a]] < o.level[o.order_var[b]]; });
-  explicit_of_m_.assign(m, -1);
+  plan_.of_m.assign(m, -1);
   for (int a : idx) {
     ExplicitUnknown x;
     x.var = o.order_var[a];
@@ -260,17 +260,17 @@ std::vector<int> System::number_explicit(const ExplicitRows& rows, const Explici
     x.coef = rows.coef[o.order_row[a]].at(x.var);
     x.level = o.level[x.var];
     x.deps.assign(rows.dy[o.order_row[a]].begin(), rows.dy[o.order_row[a]].end());
-    explicit_of_m_[x.var] = static_cast<int>(explicit_.size());
-    explicit_.push_back(std::move(x));
+    plan_.of_m[x.var] = static_cast<int>(plan_.unknowns.size());
+    plan_.unknowns.push_back(std::move(x));
   }
-  m_to_ida_.assign(m, -1);
-  ida_to_m_.clear();
+  plan_.m_to_ida.assign(m, -1);
+  plan_.ida_to_m.clear();
   for (int v = 0; v < m; ++v)
-    if (explicit_of_m_[v] < 0) {
-      m_to_ida_[v] = static_cast<int>(ida_to_m_.size());
-      ida_to_m_.push_back(v);
+    if (plan_.of_m[v] < 0) {
+      plan_.m_to_ida[v] = static_cast<int>(plan_.ida_to_m.size());
+      plan_.ida_to_m.push_back(v);
     }
-  const int n = static_cast<int>(ida_to_m_.size());
+  const int n = static_cast<int>(plan_.ida_to_m.size());
   std::vector<int> ida_row_of_m(m, -1);
   int count = 0;
   for (int q = 0; q < m; ++q)
@@ -278,9 +278,9 @@ std::vector<int> System::number_explicit(const ExplicitRows& rows, const Explici
   if (count != n)
     throw StructureError("internal error: explicit elimination left " + std::to_string(count) + " equations for " +
                          std::to_string(n) + " unknowns");
-  ida_row_of_full_.assign(n_full_, -1);
-  for (int r = 0; r < n_full_; ++r)
-    if (row_of_[r] >= 0) ida_row_of_full_[r] = ida_row_of_m[row_of_[r]];
+  plan_.ida_row_of_full.assign(aliases_.n_full, -1);
+  for (int r = 0; r < aliases_.n_full; ++r)
+    if (aliases_.row_of[r] >= 0) plan_.ida_row_of_full[r] = ida_row_of_m[aliases_.row_of[r]];
   return ida_row_of_m;
 }
 
@@ -289,33 +289,33 @@ std::vector<int> System::number_explicit(const ExplicitRows& rows, const Explici
 std::vector<double> System::schur_pattern(const ExplicitRows& rows, const ExplicitOrder& o,
                                           const std::vector<int>& ida_row_of_m) {
   const int m = n_;
-  const int n = static_cast<int>(ida_to_m_.size());
+  const int n = static_cast<int>(plan_.ida_to_m.size());
   // Rows of the alias-level Jacobian, by row.
   std::vector<std::vector<std::pair<long, int>>> j1_rows(m);
   for (int c = 0; c < m; ++c)
-    for (long p = j1_col_ptr_[c]; p < j1_col_ptr_[c + 1]; ++p) j1_rows[j1_row_idx_[p]].push_back({p, c});
-  std::vector<std::vector<int>> d_pattern(explicit_.size());
+    for (long p = plan_.j1_col_ptr[c]; p < plan_.j1_col_ptr[c + 1]; ++p) j1_rows[plan_.j1_row_idx[p]].push_back({p, c});
+  std::vector<std::vector<int>> d_pattern(plan_.unknowns.size());
   // IDA's columns a row reaches through its entries (as accumulate() in
   // jacobian()), leaving out column `skip`.
   auto ida_columns = [&](const std::vector<std::pair<long, int>>& entries, int skip) {
     std::set<int> cols;
     for (const auto& [p, c] : entries) {
       if (c == skip) continue;
-      const int j = explicit_of_m_[c];
+      const int j = plan_.of_m[c];
       if (j >= 0) cols.insert(d_pattern[j].begin(), d_pattern[j].end());
-      else cols.insert(m_to_ida_[c]);
+      else cols.insert(plan_.m_to_ida[c]);
     }
     return cols;
   };
-  d_cols_.clear();
-  for (std::size_t e = 0; e < explicit_.size(); ++e) {
-    auto& x = explicit_[e];
-    x.entries = j1_rows[row_of_[x.row]];
+  plan_.d_cols.clear();
+  for (std::size_t e = 0; e < plan_.unknowns.size(); ++e) {
+    auto& x = plan_.unknowns[e];
+    x.entries = j1_rows[aliases_.row_of[x.row]];
     const std::set<int> cols = ida_columns(x.entries, x.var);
     d_pattern[e].assign(cols.begin(), cols.end());
-    x.d0 = static_cast<int>(d_cols_.size());
+    x.d0 = static_cast<int>(plan_.d_cols.size());
     x.dn = static_cast<int>(cols.size());
-    d_cols_.insert(d_cols_.end(), cols.begin(), cols.end());
+    plan_.d_cols.insert(plan_.d_cols.end(), cols.begin(), cols.end());
   }
   std::vector<std::set<int>> cols(n);  // IDA pattern: column -> rows
   std::vector<std::vector<int>> kept_cols(m);
@@ -325,17 +325,17 @@ std::vector<double> System::schur_pattern(const ExplicitRows& rows, const Explic
     const std::set<int> cs = ida_columns(j1_rows[q], -1);
     for (int c : cs) cols[c].insert(ida_row_of_m[q]);
     kept_cols[q].assign(cs.begin(), cs.end());
-    for (int v : rows.dyp[q]) id[m_to_ida_[v]] = 1.0;
+    for (int v : rows.dyp[q]) id[plan_.m_to_ida[v]] = 1.0;
   }
   const auto pos = compress_columns(cols, col_ptr_, row_idx_);
-  kept_rows_.clear();
+  plan_.kept_rows.clear();
   for (int q = 0; q < m; ++q) {
     if (o.used[q]) continue;
     KeptRow k;
     k.row = rows.full_row[q];
     k.entries = j1_rows[q];
     for (int c : kept_cols[q]) k.out.push_back({c, pos.at({ida_row_of_m[q], c})});
-    kept_rows_.push_back(std::move(k));
+    plan_.kept_rows.push_back(std::move(k));
   }
   return id;
 }
@@ -345,21 +345,21 @@ std::vector<double> System::schur_pattern(const ExplicitRows& rows, const Explic
 void System::plan_stages(const ExplicitRows& rows, const ExplicitOrder& o) {
   const int m = n_;
   int max_level = 0;
-  for (const auto& x : explicit_) max_level = std::max(max_level, x.level);
-  stages_.assign(max_level, {});
+  for (const auto& x : plan_.unknowns) max_level = std::max(max_level, x.level);
+  plan_.stages.assign(max_level, {});
   std::vector<char> keeps(blocks_.size(), 0);
-  for (std::size_t e = 0; e < explicit_.size(); ++e) {
-    const int bi = rows.row_block[row_of_[explicit_[e].row]];
-    auto& stage = stages_[explicit_[e].level - 1];
+  for (std::size_t e = 0; e < plan_.unknowns.size(); ++e) {
+    const int bi = rows.row_block[aliases_.row_of[plan_.unknowns[e].row]];
+    auto& stage = plan_.stages[plan_.unknowns[e].level - 1];
     auto it = std::find_if(stage.begin(), stage.end(), [&](const auto& s) { return s.first == bi; });
     if (it == stage.end()) stage.push_back({bi, {static_cast<int>(e)}});
     else it->second.push_back(static_cast<int>(e));
   }
   for (int q = 0; q < m; ++q)
     if (!o.used[q] && rows.row_block[q] >= 0) keeps[rows.row_block[q]] = 1;
-  final_blocks_.clear();
+  plan_.final_blocks.clear();
   for (std::size_t bi = 0; bi < blocks_.size(); ++bi)
-    if (keeps[bi]) final_blocks_.push_back(static_cast<int>(bi));
+    if (keeps[bi]) plan_.final_blocks.push_back(static_cast<int>(bi));
 }
 
 // Root functions usually read a position or a time only. Evaluated with
@@ -368,21 +368,21 @@ void System::plan_stages(const ExplicitRows& rows, const ExplicitOrder& o) {
 // output) then skip expand().
 void System::find_root_inputs() {
   bool invalid = false;
-  roots_read_explicit_.assign(blocks_.size(), 0);
+  plan_.roots_read_explicit.assign(blocks_.size(), 0);
   for (std::size_t bi = 0; bi < blocks_.size(); ++bi) {
     const Block& b = *blocks_[bi];
     if (!b.component || b.component->info().roots == 0) continue;
     std::mt19937 rng2(13579);
     std::vector<double> g(b.component->info().roots);
     double ly[kMaxLocal], lyp[kMaxLocal];
-    for (int pass = 0; pass < 3 && !roots_read_explicit_[bi]; ++pass) {
+    for (int pass = 0; pass < 3 && !plan_.roots_read_explicit[bi]; ++pass) {
       poisoned_locals(b, pass, rng2, true, false, ly, lyp);
       Eval<double> e(*b.component, 0.1 * pass, ly, lyp, modes_.data() + b.mode0, b.connected.get(), circuit_.gas,
                      &invalid);
       b.component->roots(e, g.data());
-      for (double x : g) roots_read_explicit_[bi] |= !std::isfinite(x);
+      for (double x : g) plan_.roots_read_explicit[bi] |= !std::isfinite(x);
     }
-    any_roots_read_explicit_ |= roots_read_explicit_[bi] != 0;
+    plan_.any_roots_read_explicit |= plan_.roots_read_explicit[bi] != 0;
   }
 }
 
@@ -393,8 +393,8 @@ void System::verify_explicit(int block, double t) const {
   EvalContext ctx{&circuit_.gas, modes_.data(), &invalid};
   std::vector<Pattern> pr;
   std::vector<Dual> dr;
-  evaluate_structure(b, t, yw_.data(), ypw_.data(), ctx, pr, dr);
-  for (const auto& x : explicit_) {
+  evaluate_structure(b, t, work_.y.data(), work_.yp.data(), ctx, pr, dr);
+  for (const auto& x : plan_.unknowns) {
     if (x.row < b.row0 || x.row >= b.row0 + b.n_rows) continue;
     const int k = x.row - b.row0;
     bool ok = true;
@@ -410,7 +410,7 @@ void System::verify_explicit(int block, double t) const {
       }
     }
     if (ok && c == x.coef) continue;
-    throw std::runtime_error("equation '" + equation_name(x.row) + "' of " + b.label + ", solved explicitly for '" + m_names_[x.var] +
+    throw std::runtime_error("equation '" + equation_name(x.row) + "' of " + b.label + ", solved explicitly for '" + plan_.m_names[x.var] +
                              "' at assembly, no longer gives it linearly with the same coefficient after an event "
                              "changed the component's modes; assemble with eliminate_explicit = false");
   }

@@ -16,8 +16,8 @@ void System::poisoned_locals(const Block& b, int pass, std::mt19937& rng, bool n
   const double nan = std::numeric_limits<double>::quiet_NaN();
   for (std::size_t i = 0; i < b.vars.size(); ++i) {
     const int v = b.vars[i];
-    const double y0 = v >= 0 ? b.scale[i] * m_start_[v] * (1.0 + 0.01 * pass * u(rng)) : b.offset[i];
-    ly[i] = nan_explicit && v >= 0 && explicit_of_m_[v] >= 0 ? nan : y0;
+    const double y0 = v >= 0 ? b.scale[i] * plan_.m_start[v] * (1.0 + 0.01 * pass * u(rng)) : b.offset[i];
+    ly[i] = nan_explicit && v >= 0 && plan_.of_m[v] >= 0 ? nan : y0;
     lyp[i] = nan_yp ? nan : 0.0;
   }
 }
@@ -65,7 +65,7 @@ ProbeSet System::probe_set(const std::vector<Probe>& probes) const {
   bool explicit_read = false, yp_read = false;
   for (const auto& lp : set.locals) {
     const int v = blocks_[lp.component]->vars[lp.index];
-    explicit_read |= v >= 0 && explicit_of_m_[v] >= 0;
+    explicit_read |= v >= 0 && plan_.of_m[v] >= 0;
   }
   std::mt19937 rng(97531);
   bool invalid = false;
@@ -82,7 +82,7 @@ ProbeSet System::probe_set(const std::vector<Probe>& probes) const {
         for (std::size_t k = 0; k < g.observables.size(); ++k)
           if (!std::isfinite(set.scratch[k])) (poison == 0 ? explicit_read : yp_read) = true;
       }
-  set.reads_explicit = explicit_read && !explicit_.empty();
+  set.reads_explicit = explicit_read && !plan_.unknowns.empty();
   set.reads_yp = yp_read;
   return set;
 }

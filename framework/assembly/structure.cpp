@@ -513,7 +513,7 @@ std::string System::equation_name(int row) const {
 
 std::string System::row_name(int ida_row) const {
   int row = ida_row;  // the full row behind IDA's row
-  for (const auto& [r, q] : kept_full_rows_)
+  for (const auto& [r, q] : plan_.kept_full_rows)
     if (q == ida_row) row = r;
   for (const auto& b : blocks_)
     if (row >= b->row0 && row < b->row0 + b->n_rows)

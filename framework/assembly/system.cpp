@@ -15,42 +15,42 @@ System::System(Circuit circuit, const AssemblyOptions& options) : circuit_(std::
   if (options.eliminate_aliases) {
     eliminate_aliases();
   } else {
-    n_full_ = n_;
-    row_of_.resize(n_);
-    std::iota(row_of_.begin(), row_of_.end(), 0);
-    F_full_.assign(n_, 0.0);
+    aliases_.n_full = n_;
+    aliases_.row_of.resize(n_);
+    std::iota(aliases_.row_of.begin(), aliases_.row_of.end(), 0);
+    work_.F_full.assign(n_, 0.0);
     for (auto& b : blocks_) {
       b->scale.assign(b->vars.size(), 1.0);
       b->offset.assign(b->vars.size(), 0.0);
     }
   }
   build_slots();
-  m_ = n_;
-  j1_col_ptr_ = col_ptr_;
-  j1_row_idx_ = row_idx_;
-  ida_row_of_full_ = row_of_;
-  ida_to_m_.resize(n_);
-  std::iota(ida_to_m_.begin(), ida_to_m_.end(), 0);
-  m_to_ida_ = ida_to_m_;
-  explicit_of_m_.assign(n_, -1);
-  m_start_ = start_value_;
+  plan_.m = n_;
+  plan_.j1_col_ptr = col_ptr_;
+  plan_.j1_row_idx = row_idx_;
+  plan_.ida_row_of_full = aliases_.row_of;
+  plan_.ida_to_m.resize(n_);
+  std::iota(plan_.ida_to_m.begin(), plan_.ida_to_m.end(), 0);
+  plan_.m_to_ida = plan_.ida_to_m;
+  plan_.of_m.assign(n_, -1);
+  plan_.m_start = start_value_;
   if (options.eliminate_aliases && options.eliminate_explicit) eliminate_explicit();
-  if (explicit_.empty())
+  if (plan_.unknowns.empty())
     for (std::size_t bi = 0; bi < blocks_.size(); ++bi)
-      if (!blocks_[bi]->all_eliminated) final_blocks_.push_back(static_cast<int>(bi));
+      if (!blocks_[bi]->all_eliminated) plan_.final_blocks.push_back(static_cast<int>(bi));
   // Row maps of the residual's hot loop: IDA's rows, and the substituted
   // rows of blocks that are evaluated (the others are never written).
-  for (int r = 0; r < n_full_; ++r)
-    if (ida_row_of_full_[r] >= 0) kept_full_rows_.push_back({r, ida_row_of_full_[r]});
+  for (int r = 0; r < aliases_.n_full; ++r)
+    if (plan_.ida_row_of_full[r] >= 0) plan_.kept_full_rows.push_back({r, plan_.ida_row_of_full[r]});
   std::vector<char> evaluated(blocks_.size(), 0);
-  for (int bi : final_blocks_) evaluated[bi] = 1;
-  for (const auto& stage : stages_)
+  for (int bi : plan_.final_blocks) evaluated[bi] = 1;
+  for (const auto& stage : plan_.stages)
     for (const auto& entry : stage) evaluated[entry.first] = 1;
-  for (std::size_t e = 0; e < eliminated_.size(); ++e)
+  for (std::size_t e = 0; e < aliases_.eliminated.size(); ++e)
     for (std::size_t bi = 0; bi < blocks_.size(); ++bi) {
       const Block& b = *blocks_[bi];
-      if (evaluated[bi] && eliminated_[e] >= b.row0 && eliminated_[e] < b.row0 + b.n_rows)
-        checked_aliases_.push_back(static_cast<int>(e));
+      if (evaluated[bi] && aliases_.eliminated[e] >= b.row0 && aliases_.eliminated[e] < b.row0 + b.n_rows)
+        aliases_.checked.push_back(static_cast<int>(e));
     }
   reset_modes();
 }
@@ -64,7 +64,7 @@ void System::build_slots() {
       else b->constants.push_back({static_cast<int>(i), b->offset[i]});
     }
     b->all_eliminated = true;
-    for (int k = 0; k < b->n_rows; ++k) b->all_eliminated &= row_of_[b->row0 + k] < 0;
+    for (int k = 0; k < b->n_rows; ++k) b->all_eliminated &= aliases_.row_of[b->row0 + k] < 0;
     const int nl = static_cast<int>(b->vars.size());
     b->slot.assign(nl, -1);
     b->slot_local.clear();

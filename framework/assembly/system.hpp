@@ -103,9 +103,9 @@ class System {
 
   int size() const { return n_; }
   // Unknowns before alias elimination (size() counts those left for IDA).
-  int full_size() const { return n_full_; }
+  int full_size() const { return aliases_.n_full; }
   // Unknowns solved explicitly inside the residual (eliminate_explicit).
-  int explicit_size() const { return static_cast<int>(explicit_.size()); }
+  int explicit_size() const { return static_cast<int>(plan_.unknowns.size()); }
   const Circuit& circuit() const { return circuit_; }
   const GasModel& gas() const { return circuit_.gas; }
 
@@ -152,7 +152,7 @@ class System {
 
   // Number of Jacobian entries that AD found outside the structural pattern
   // (should stay 0; reported in the statistics).
-  long pattern_misses() const { return pattern_misses_; }
+  long pattern_misses() const { return work_.pattern_misses; }
 
   // Group `probes` by component; out[i] of probe_all is probes[i]'s value,
   // equal to probe(probes[i], t, y, yp).
@@ -198,7 +198,7 @@ class System {
   // The evaluator (evaluator.cpp).
   // Unknowns the blocks read (after alias elimination, before explicit
   // elimination) from IDA's y: copies the states and solves the explicit
-  // unknowns into yw_/ypw_ (cached for the last t and y). Returns true if a
+  // unknowns into work_.y/yp (cached for the last t and y). Returns true if a
   // component rejected the point.
   bool expand(double t, const double* y, const double* yp) const;
   // Points y and yp at the unknowns the blocks read: expanded, or with
@@ -206,7 +206,7 @@ class System {
   // stale values the caller promises not to read). Unchanged without
   // explicit elimination.
   void block_inputs(double t, const double*& y, const double*& yp, bool read_explicit = true) const;
-  // AD Jacobian over the alias-reduced unknowns into values (pattern j1_*).
+  // AD Jacobian over the alias-reduced unknowns into values (plan_.j1_* pattern).
   int jacobian_blocks(double t, const double* y, const double* yp, double cj, double* values) const;
 
   // Events and probes (events.cpp, probes.cpp).
@@ -231,25 +231,28 @@ class System {
   std::vector<double> modes_;
   int n_roots_ = 0;
   std::vector<int> root_blocks_;  // the blocks of components with root functions
-  mutable long pattern_misses_ = 0;
-  // Alias elimination: rows solved by substitution (y_b = +-y_a, or a node
-  // with one port: flow = 0, an unconnected input = its default) are still
-  // evaluated and must stay exactly satisfied; kept rows map to IDA's rows.
-  int n_full_ = 0;
-  std::vector<int> row_of_;        // full row -> IDA row, -1 if eliminated
-  std::vector<int> eliminated_;    // full rows eliminated
-  std::vector<double> eliminated_nominal_;  // scale of each, for the check
-  mutable std::vector<double> F_full_;
 
-  // Explicit elimination. "m-level": the m_ unknowns after alias
-  // elimination, which the blocks' vars index; IDA sees n_ of them.
+  // The alias reduction (aliases.cpp): rows solved by substitution (y_b =
+  // +-y_a, or a node with one port: flow = 0, an unconnected input = its
+  // default) are still evaluated and must stay exactly satisfied; kept rows
+  // map to the alias level's rows.
+  struct AliasMap {
+    int n_full = 0;                          // the netlist's unknowns (and rows)
+    std::vector<int> row_of;                 // full row -> alias-level row, -1 if eliminated
+    std::vector<int> eliminated;             // full rows eliminated
+    std::vector<double> eliminated_nominal;  // scale of each, for the check
+    std::vector<int> checked;                // indices into eliminated of rows evaluated per residual
+  } aliases_;
+
+  // The explicit reduction (explicit.cpp). "m-level": the m unknowns after
+  // alias elimination, which the blocks' vars index; IDA sees n_ of them.
   struct ExplicitUnknown {
     int var = -1;    // m-level unknown
     int row = -1;    // full row that gives it
     double coef = 0.0;  // dF_row / dy_var (constant)
     int level = 0;   // 1 + the highest level among the unknowns the row reads
     std::vector<std::pair<long, int>> entries;  // (j1 position, m-level column) of the row
-    int d0 = 0, dn = 0;  // its derivative d var / d y_IDA: d_cols_[d0, d0 + dn)
+    int d0 = 0, dn = 0;  // its derivative d var / d y_IDA: d_cols[d0, d0 + dn)
     std::vector<int> deps;  // m-level unknowns the row may read (its level's basis)
   };
   struct KeptRow {
@@ -257,27 +260,38 @@ class System {
     std::vector<std::pair<long, int>> entries;  // (j1 position, m-level column)
     std::vector<std::pair<int, long>> out;      // (IDA column, IDA CSC position)
   };
-  int m_ = 0;
-  std::vector<ExplicitUnknown> explicit_;   // in level order
-  std::vector<int> explicit_of_m_;          // m-level unknown -> explicit index or -1
-  std::vector<int> ida_to_m_, m_to_ida_;    // IDA unknown <-> m-level unknown (-1: explicit)
-  std::vector<int> ida_row_of_full_;        // full row -> IDA row, -1 if eliminated
-  std::vector<std::vector<std::pair<int, std::vector<int>>>> stages_;  // per level: (block, explicit indices)
-  std::vector<int> final_blocks_;           // blocks evaluated for IDA's rows (and the alias checks)
-  std::vector<std::pair<int, int>> kept_full_rows_;  // (full row, IDA row) of IDA's rows
-  std::vector<int> checked_aliases_;        // indices into eliminated_ of rows evaluated per residual
-  std::vector<double> m_start_;
-  std::vector<std::string> m_names_;
-  std::vector<long> j1_col_ptr_, j1_row_idx_;
-  std::vector<int> d_cols_;
-  std::vector<KeptRow> kept_rows_;
-  mutable std::vector<double> yw_, ypw_, j1_values_, d_values_, scatter_, cache_y_;
-  // Blocks whose root functions read explicit unknowns (the others are
-  // evaluated on the states alone, without expand()).
-  std::vector<char> roots_read_explicit_;
-  bool any_roots_read_explicit_ = false;
-  mutable double cache_t_ = 0.0;
-  mutable bool cache_valid_ = false, cache_invalid_ = false;
+  struct ExplicitPlan {
+    int m = 0;
+    std::vector<ExplicitUnknown> unknowns;  // in level order
+    std::vector<int> of_m;                  // m-level unknown -> index in unknowns or -1
+    std::vector<int> ida_to_m, m_to_ida;    // IDA unknown <-> m-level unknown (-1: explicit)
+    std::vector<int> ida_row_of_full;       // full row -> IDA row, -1 if eliminated
+    std::vector<std::vector<std::pair<int, std::vector<int>>>> stages;  // per level: (block, unknowns' indices)
+    std::vector<int> final_blocks;          // blocks evaluated for IDA's rows (and the alias checks)
+    std::vector<std::pair<int, int>> kept_full_rows;  // (full row, IDA row) of IDA's rows
+    std::vector<double> m_start;
+    std::vector<std::string> m_names;
+    std::vector<long> j1_col_ptr, j1_row_idx;  // the m-level Jacobian's pattern
+    std::vector<int> d_cols;
+    std::vector<KeptRow> kept_rows;
+    // Blocks whose root functions read explicit unknowns (the others are
+    // evaluated on the states alone, without expand()).
+    std::vector<char> roots_read_explicit;
+    bool any_roots_read_explicit = false;
+  } plan_;
+
+  // The evaluator's scratch and its cache of the last expansion
+  // (evaluator.cpp); mutable, since evaluating changes no result.
+  struct Workspace {
+    std::vector<double> y, yp;     // the m-level unknowns the blocks read (expand())
+    std::vector<double> F_full;    // every full row's residual
+    std::vector<double> j1_values, d_values, scatter;  // m-level Jacobian, d explicit / d y_IDA, one row's sums
+    std::vector<double> cache_y;   // IDA's y of the last expansion, at cache_t
+    double cache_t = 0.0;
+    bool cache_valid = false, cache_invalid = false;
+    long pattern_misses = 0;       // AD entries outside the pattern (should stay 0)
+  };
+  mutable Workspace work_;
 };
 
 }  // namespace pneumo
