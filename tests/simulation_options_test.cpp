@@ -3,6 +3,7 @@
 // what the table says - every key, its unit, default and range.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -147,6 +148,54 @@ TEST(SimulationOptions, ReadmeTableAgreesWithTheDeclaration) {
       EXPECT_EQ(cells[3], *o.spec.default_text);
     }
   }
+}
+
+// `--set simulation.KEY=VALUE` goes through the same table: every key takes
+// a value in its unit, and the reader's ranges hold there too.
+TEST(SimulationOptions, SetOverridesEveryKeyWithinItsRange) {
+  const SourceLocation where{"cli.yaml", 1, 1};
+  for (const auto& o : simulation_options()) {
+    SCOPED_TRACE(o.spec.name);
+    SimulationSettings s;
+    if (o.flag) {
+      ASSERT_TRUE(apply_simulation_override(s, "simulation." + o.spec.name + "=false", where));
+      EXPECT_FALSE(s.*(o.flag));
+      EXPECT_THROW(apply_simulation_override(s, "simulation." + o.spec.name + "=maybe", where), InputError);
+      continue;
+    }
+    const double v = SimulationSettings{}.*(o.number) != 0.0 ? 0.5 * SimulationSettings{}.*(o.number) : 0.5;
+    const std::string text = o.spec.unit == "s" ? num(v * 1e3) + " ms" : num(v);
+    ASSERT_TRUE(apply_simulation_override(s, "simulation." + o.spec.name + "=" + text, where));
+    EXPECT_NEAR(s.*(o.number), v, 1e-15 * v);
+    for (double bad : outside(o.spec)) {
+      try {
+        apply_simulation_override(s, "simulation." + o.spec.name + "=" + num(bad), where);
+        ADD_FAILURE() << "accepted " << bad;
+      } catch (const InputError& e) {
+        EXPECT_EQ(e.parameter(), "simulation." + o.spec.name);
+        EXPECT_NE(e.message().find(o.spec.range_text()), std::string::npos) << e.message();
+      }
+    }
+  }
+  SimulationSettings s;
+  EXPECT_FALSE(apply_simulation_override(s, "p_supply=7 bar", where));  // a top-level parameter
+  EXPECT_THROW(apply_simulation_override(s, "simulation.dt=1 ms", where), InputError);
+  EXPECT_THROW(apply_simulation_override(s, "simulation.t_end=5 kg", where), InputError);
+  EXPECT_THROW(apply_simulation_override(s, "simulation.t_end=-1 s", where), InputError);  // before t_start
+}
+
+// Through the CLI: the tank filling (outputs every 10 ms) stopped at 0.1 s
+// writes the rows t = 0, 0.01, ..., 0.1.
+TEST(SimulationOptions, CliSetShortensTheRun) {
+  test_support::TempDir dir;
+  const std::string csv = (dir.path() / "tank.csv").string();
+  const auto [status, out] = test_support::run_cli("simulate " + std::string(PNEUMO_SOURCE_DIR) +
+                                                   "/netlists/tank_filling.yaml -q -o " + csv +
+                                                   " --set 'simulation.t_end=100 ms'");
+  ASSERT_EQ(status, 0) << out;
+  const std::string text = test_support::read_file(csv);
+  EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 1 + 11) << text;  // header and 11 rows
+  EXPECT_NE(text.find("\n0.1"), std::string::npos) << text;
 }
 
 }  // namespace

@@ -80,7 +80,8 @@ int simulate_command(const SimulateArgs& a) {
   const bool stats = a.stats, quiet = a.quiet;
   const std::string &plot_prefix = a.plot_prefix, &plot_columns = a.plot_columns, &audit_path = a.audit_path;
   Netlist nl = load_netlist(netlist_path);
-  for (const auto& s : sets) apply_override(nl, s);
+  for (const auto& s : sets)
+    if (!apply_simulation_override(nl.simulation, s, SourceLocation{nl.file, 1, 1})) apply_override(nl, s);
   const bool user_outputs = !nl.outputs.empty();
   if (!audit_path.empty() && prepare_energy_audit(nl).empty())
     throw InputError(SourceLocation{nl.file, 1, 1}, "", "",
@@ -134,7 +135,8 @@ Command add_simulate_command(CLI::App& app) {
   sim->footer("The netlist's simulation: keys (unit, default, valid range):\n" + simulation_options_help());
   sim->add_option("netlist", a->netlist, "netlist file (YAML)")->required();
   sim->add_option("--set", a->sets,
-                  "override a top-level parameter: NAME=VALUE, VALUE an SI number or a quantity ('7 bar')")
+                  "override a top-level parameter: NAME=VALUE, VALUE an SI number or a quantity ('7 bar'); or a "
+                  "simulation: key, simulation.KEY=VALUE ('simulation.t_end=0.5 s')")
       ->take_all();
   sim->add_option("-o,--output", a->output, "results CSV (default: NETLIST_STEM.csv)");
   sim->add_flag("--stats", a->stats, "print solver statistics");

@@ -1,6 +1,9 @@
 #include "framework/model/simulation_options.hpp"
 
+#include <algorithm>
 #include <sstream>
+
+#include "framework/core/units.hpp"
 
 namespace pneumo {
 
@@ -46,6 +49,47 @@ const std::vector<SimulationOption>& simulation_options() {
            "the last evaluation's parts dF/dy, dF/dy'; false: every matrix evaluated afresh, as IDA alone does"),
   };
   return table;
+}
+
+std::string simulation_settings_problem(const SimulationSettings& s) {
+  if (s.t_end > s.t_start) return "";
+  return "t_end (" + units::format_si(s.t_end, units::dims::time) + ") must be > t_start (" +
+         units::format_si(s.t_start, units::dims::time) + ")";
+}
+
+bool apply_simulation_override(SimulationSettings& s, const std::string& assignment, const SourceLocation& where) {
+  const std::string prefix = "simulation.";
+  if (assignment.rfind(prefix, 0) != 0) return false;
+  const std::string option = "--set " + assignment;
+  const auto eq = assignment.find('=');
+  const std::string key = assignment.substr(prefix.size(), eq == std::string::npos ? eq : eq - prefix.size());
+  const std::string text = eq == std::string::npos ? "" : assignment.substr(eq + 1);
+  const auto& table = simulation_options();
+  auto o = std::find_if(table.begin(), table.end(), [&](const SimulationOption& x) { return x.spec.name == key; });
+  std::string keys;
+  for (const auto& x : table) keys += (keys.empty() ? "" : ", ") + x.spec.name;
+  if (o == table.end() || eq == std::string::npos)
+    throw InputError(where, "", prefix + key, option + ": expected simulation.KEY=VALUE, KEY one of " + keys);
+  auto fail = [&](const std::string& why) { throw InputError(where, "", prefix + key, option + ": " + why); };
+  if (o->flag) {
+    if (text != "true" && text != "false") fail(key + " must be true or false, not '" + text + "'");
+    s.*(o->flag) = text == "true";
+    return true;
+  }
+  units::Quantity q{};
+  try {
+    q = units::parse_quantity(text);
+  } catch (const units::ParseError& e) {
+    fail("cannot read '" + text + "': " + e.what());
+  }
+  const units::Dimension dim = units::dimension_of(o->spec.unit);
+  if (q.had_unit && !(q.dim == dim)) fail("'" + text + "' is not in " + o->spec.unit);
+  if (!o->spec.in_range(q.si_value))
+    fail(key + " = " + units::format_si(q.si_value, dim) + " is out of range; valid: " + o->spec.range_text() + " (" +
+         o->spec.unit + ")");
+  s.*(o->number) = q.si_value;
+  if (const std::string problem = simulation_settings_problem(s); !problem.empty()) fail(problem);
+  return true;
 }
 
 std::string simulation_options_help() {

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "framework/core/error.hpp"
 #include "framework/model/component.hpp"
 
 namespace pneumo {
@@ -36,6 +37,16 @@ struct SimulationOption {
 };
 
 const std::vector<SimulationOption>& simulation_options();
+
+// What is wrong with settings whose values are each in range, as a whole
+// ("t_end (...) must be > t_start (...)"), or "" if nothing.
+std::string simulation_settings_problem(const SimulationSettings& s);
+
+// `--set simulation.KEY=VALUE`: KEY a row of the table, VALUE a number, a
+// quantity in the row's unit ("20 ms") or true/false. Returns false, and
+// changes nothing, if `assignment` does not start with "simulation.". Bad
+// keys and values are InputErrors at `where` naming simulation.KEY.
+bool apply_simulation_override(SimulationSettings& s, const std::string& assignment, const SourceLocation& where);
 
 // One line per setting: "  rtol [1]  default 1e-06, (0, 1): relative ...".
 std::string simulation_options_help();

@@ -269,10 +269,8 @@ void read_simulation(Reader& r, const YAML::Node& section, Netlist& nl) {
     s.*(o->number) = v;
     if (e.key == "t_end") t_end_node = e.value;
   }
-  if (!(s.t_end > s.t_start))
-    r.fail(t_end_node, "", "simulation.t_end",
-           "t_end (" + units::format_si(s.t_end, units::dims::time) + ") must be > t_start (" +
-               units::format_si(s.t_start, units::dims::time) + ")");
+  if (const std::string problem = simulation_settings_problem(s); !problem.empty())
+    r.fail(t_end_node, "", "simulation.t_end", problem);
 }
 
 }  // namespace

@@ -67,7 +67,9 @@ int fresh_matrix(UserData& u, double t, double cj, N_Vector y, N_Vector yp, doub
 
 int residual_cb(realtype t, N_Vector y, N_Vector yp, N_Vector rr, void* user) {
   auto* u = static_cast<UserData*>(user);
-  return guarded(u, [&] { return u->system->residual(t, u->physical_y(y), u->physical_yp(yp), N_VGetArrayPointer(rr)); });
+  return guarded(u, [&] {
+    return u->system->residual(t, u->physical_y(y), u->physical_yp(yp), N_VGetArrayPointer(rr));
+  });
 }
 
 int jacobian_cb(realtype t, realtype cj, N_Vector y, N_Vector yp, N_Vector, SUNMatrix J, void* user, N_Vector,
