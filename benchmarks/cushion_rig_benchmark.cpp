@@ -14,7 +14,7 @@
 // System assembled without alias elimination (every unknown of the
 // netlist handed to IDA, as `--keep-aliases`), for comparison. Both the
 // framework and the floor are timed with and without reuse of the Newton
-// matrix (SolverOptions::reuse_jacobian, the framework's default); the
+// matrix (SolverOptions::jacobian_reuse, the framework's default); the
 // target ratio is taken against the faster floor.
 #include <algorithm>
 #include <chrono>
@@ -80,7 +80,7 @@ int main(int argc, char** argv) {
   const Netlist nl = load_netlist(path);
   const SolverOptions opt = solver_options(nl.simulation);
   SolverOptions opt_fresh = opt;
-  opt_fresh.reuse_jacobian = false;
+  opt_fresh.jacobian_reuse = false;
   std::printf("cushion rig benchmark: %s, t_end %.3g s, rtol %.1e, output every %.3g s, %d runs, one thread\n",
               path.c_str(), opt.t_end, opt.rtol, opt.output_interval, runs);
 
@@ -158,7 +158,7 @@ int main(int argc, char** argv) {
   print_timing("elaborate + solve, CPU", full);
   print_timing("elaborate only, wall", elab);
   const auto& sf = first_fresh.solver.stats;
-  std::printf("framework, every Newton matrix evaluated afresh (reuse_jacobian = false):\n");
+  std::printf("framework, every Newton matrix evaluated afresh (jacobian_reuse = false):\n");
   std::printf("  steps %ld, residual evaluations %ld, Jacobian evaluations %ld, convergence failures %ld\n", sf.steps,
               sf.residual_evals, sf.jacobian_evals, sf.nonlinear_failures);
   const Timing fresh = summarise(fresh_cpu);

@@ -429,7 +429,7 @@ namespace {
 // cylinder per row): it must give what System::probe gives, probe by probe.
 // ---------------------------------------------------------------------------
 
-// Newton matrix reuse (the default, SolverOptions::reuse_jacobian) against
+// Newton matrix reuse (the default, SolverOptions::jacobian_reuse) against
 // every matrix evaluated afresh: the same equations at the same tolerance, so
 // the strokes differ by integration error only, which at rtol 1e-6 is far
 // inside the cross-check's bounds against the floor (1 mm, 2 % of peak p_EC):

@@ -94,7 +94,7 @@ TEST(ClosedForm, AdiabaticTankFillingThroughApi) {
   EXPECT_GT(T, 325.0);
 }
 
-// The Newton matrix reuse (SolverOptions::reuse_jacobian) changes how IDA's
+// The Newton matrix reuse (SolverOptions::jacobian_reuse) changes how IDA's
 // Newton iteration converges, not what it converges to: with and without it
 // the filling ends at the closed form within the bounds above. The run with
 // reuse must actually have recombined matrices (else this checks nothing),

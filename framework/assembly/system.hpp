@@ -1,17 +1,21 @@
-// Assembly: a Circuit becomes one DAE F(t, y, y') = 0.
+// Assembly: a Circuit becomes one DAE F(t, y, y') = 0. System is the face
+// the solver, run/ and the tests use; its rooms are one file each:
 //
-//  * Nodes: every connection set shares one across variable; through
-//    variables sum to zero; pneumatic stream temperatures are routed (two
-//    ports: each sees the other's T_out) or mixed (three or more ports).
-//  * Equation blocks: each component owns a contiguous block of residual
-//    rows and reads its local variables through an index map (gather); the
-//    framework adds node blocks. Nothing advances a shared offset at run time.
-//  * Sparsity is found once by evaluating every block with the Pattern
-//    scalar, and stays fixed; IDASetId comes from the same pass.
-//  * A structural check (maximum matching of equations to variables, with
-//    differential variables matched through y' and algebraic ones through y)
-//    rejects structurally singular and higher-index systems before solving,
-//    naming the components and ports involved.
+//  * blocks.cpp     - equation blocks and their gather of locals;
+//  * structure.cpp  - nodes, unknowns, blocks, the sparsity pattern (found
+//                     once with the Pattern scalar; IDASetId from the same
+//                     pass) and the structural (index-1) check;
+//  * aliases.cpp    - the first reduction: y_b = +-y_a and constants
+//                     substituted;
+//  * explicit.cpp   - the second: unknowns one equation gives explicitly,
+//                     solved inside the residual in dependency order;
+//  * evaluator.cpp  - residual and Newton matrix (AD, Schur complement);
+//  * events.cpp     - roots, time events, modes;
+//  * probes.cpp     - outputs and integrands at a point.
+//
+// Three numberings of unknowns: "full" (the netlist's, before reductions),
+// "m-level" (after alias elimination: what the blocks' vars index) and
+// IDA's (the m-level unknowns that are not solved explicitly).
 #pragma once
 
 #include <memory>
@@ -19,55 +23,10 @@
 #include <string>
 #include <vector>
 
+#include "framework/assembly/blocks.hpp"
 #include "framework/model/circuit.hpp"
 
 namespace pneumo {
-
-struct EvalContext {
-  const GasModel* gas = nullptr;
-  const double* modes = nullptr;  // all discrete modes of the system
-  bool* invalid = nullptr;
-};
-
-// One block of residual rows over a gathered set of variables.
-class Block {
- public:
-  virtual ~Block() = default;
-  virtual void residual(double t, const double* y, const double* yp, double* r, const EvalContext& c) const = 0;
-  virtual void residual(double t, const Dual* y, const Dual* yp, Dual* r, const EvalContext& c) const = 0;
-  virtual void residual(double t, const Pattern* y, const Pattern* yp, Pattern* r, const EvalContext& c) const = 0;
-
-  std::string label;             // for diagnostics
-  SourceLocation where;          // of the component / connection
-  std::vector<int> vars;         // local -> global variable index
-  std::vector<std::string> row_names;
-  int row0 = 0;
-  int n_rows = 0;
-  const Component* component = nullptr;  // null for framework node blocks
-  int component_index = -1;
-  int mode0 = 0;
-  int root0 = 0;
-  std::unique_ptr<bool[]> connected;
-  std::vector<int> jac_pos;      // (local row * n_local + local var) -> CSC position or -1
-  // After alias elimination local i is scale[i] * y[vars[i]], or the
-  // constant offset[i] when vars[i] == -1.
-  std::vector<double> scale, offset;
-  // The same, compiled for gather(): locals read from an unknown, constants.
-  struct Mapped {
-    int local, var;
-    double scale;
-  };
-  std::vector<Mapped> mapped;
-  std::vector<std::pair<int, double>> constants;
-  // AD directions: one per distinct unknown the block reads (aliases share
-  // one; constants have none, slot -1), so a Dual carries n_slots
-  // derivatives instead of one per local variable.
-  std::vector<int> slot;         // local -> direction or -1
-  std::vector<int> slot_local;   // direction -> a local variable with it
-  // Every row of the block was eliminated as an alias: its Jacobian rows
-  // are not needed, and a framework block's rows hold by construction.
-  bool all_eliminated = false;
-};
 
 struct EventLogEntry {
   double t = 0.0;
@@ -127,6 +86,13 @@ struct ProbeSet {
   bool reads_yp = true;
 };
 
+// Working state of the rooms' builders (structure.cpp, aliases.cpp,
+// explicit.cpp), defined there.
+struct NodeLayout;
+struct AliasClasses;
+struct ExplicitRows;
+struct ExplicitOrder;
+
 class System {
  public:
   // Takes ownership of the circuit. Throws InputError (dangling or
@@ -138,9 +104,9 @@ class System {
 
   int size() const { return n_; }
   // Unknowns before alias elimination (size() counts those left for IDA).
-  int full_size() const { return n_full_; }
+  int full_size() const { return aliases_.n_full; }
   // Unknowns solved explicitly inside the residual (eliminate_explicit).
-  int explicit_size() const { return static_cast<int>(explicit_.size()); }
+  int explicit_size() const { return static_cast<int>(plan_.unknowns.size()); }
   const Circuit& circuit() const { return circuit_; }
   const GasModel& gas() const { return circuit_.gas; }
 
@@ -193,7 +159,7 @@ class System {
 
   // Number of Jacobian entries that AD found outside the structural pattern
   // (should stay 0; reported in the statistics).
-  long pattern_misses() const { return pattern_misses_; }
+  long pattern_misses() const { return work_.pattern_misses; }
 
   // Group `probes` by component; out[i] of probe_all is probes[i]'s value,
   // equal to probe(probes[i], t, y, yp).
@@ -201,15 +167,45 @@ class System {
   void probe_all(const ProbeSet& set, double t, const double* y, const double* yp, double* out) const;
 
  private:
+  // The structure (structure.cpp).
   void build_nodes();
+  int new_var(std::string name, double start, unsigned char kind, double nominal);
+  void add_node_variables(NodeLayout& l);
+  void add_component_block(int ci, NodeLayout& l, int& mode, int& root);
+  void add_internal_variables(const Component& comp, Block& b);
+  void add_node_block(std::unique_ptr<Block> b, std::string label, std::string row_name, NodeLayout& l, int node);
+  void route_streams(NodeLayout& l);
+  void add_node_balances(NodeLayout& l);
   void build_pattern();
   void check_structure() const;
-  void eliminate_aliases();
-  void eliminate_explicit();
+  // "component: equation [file:line]" of full row `row`.
+  std::string equation_name(int row) const;
+  // The start values (pass 0) or a random perturbation of them (passes 1,
+  // 2): the points at which assembly probes the equations' structure.
+  void check_point(int pass, std::mt19937& rng, std::vector<double>& y0, std::vector<double>& yp0) const;
   void build_slots();
+
+  // The reductions (aliases.cpp, explicit.cpp).
+  void eliminate_aliases();
+  std::vector<int> renumber_aliases(AliasClasses& classes, const std::vector<char>& eliminated);
+  void reduce_pattern(AliasClasses& classes, const std::vector<int>& reduced);
+  void eliminate_explicit();
+  ExplicitRows explicit_rows() const;
+  void record_row(const Block& b, const Pattern& p, const Dual& d, int pass, ExplicitRows& rows, int q) const;
+  std::vector<int> number_explicit(const ExplicitRows& rows, const ExplicitOrder& o);
+  std::vector<double> schur_pattern(const ExplicitRows& rows, const ExplicitOrder& o,
+                                    const std::vector<int>& ida_row_of_m);
+  void plan_stages(const ExplicitRows& rows, const ExplicitOrder& o);
+  void find_root_inputs();
+  // After an event changed the modes of a component that gives explicit
+  // unknowns: its rows must still give them linearly, with the same
+  // coefficient and no new dependencies (throws otherwise).
+  void verify_explicit(int block, double t) const;
+
+  // The evaluator (evaluator.cpp).
   // Unknowns the blocks read (after alias elimination, before explicit
   // elimination) from IDA's y: copies the states and solves the explicit
-  // unknowns into yw_/ypw_ (cached for the last t and y). Returns true if a
+  // unknowns into work_.y/yp (cached for the last t and y). Returns true if a
   // component rejected the point.
   bool expand(double t, const double* y, const double* yp) const;
   // Points y and yp at the unknowns the blocks read: expanded, or with
@@ -217,18 +213,17 @@ class System {
   // stale values the caller promises not to read). Unchanged without
   // explicit elimination.
   void block_inputs(double t, const double*& y, const double*& yp, bool read_explicit = true) const;
-  // "component: equation [file:line]" of full row `row`.
-  std::string equation_name(int row) const;
-  // The start values (pass 0) or a random perturbation of them (passes 1,
-  // 2): the points at which assembly probes the equations' structure.
-  void check_point(int pass, std::mt19937& rng, std::vector<double>& y0, std::vector<double>& yp0) const;
+  // AD Jacobian over the alias-reduced unknowns into values (plan_.j1_* pattern).
+  int jacobian_blocks(double t, const double* y, const double* yp, double cj, double* values) const;
+
+  // Events and probes (events.cpp, probes.cpp).
+  bool fire_event(int block, double t, const double* y, const double* yp, EventKind kind, int root, int dir,
+                  std::vector<EventLogEntry>& log);
   // Block b's locals at the start values (perturbed by pass), with the
   // explicit unknowns and/or all y' set to NaN: a root function or probe that
   // stays finite does not read them.
   void poisoned_locals(const Block& b, int pass, std::mt19937& rng, bool nan_explicit, bool nan_yp, double* ly,
                        double* lyp) const;
-  // AD Jacobian over the alias-reduced unknowns into values (pattern j1_*).
-  int jacobian_blocks(double t, const double* y, const double* yp, double cj, double* values) const;
 
   Circuit circuit_;
   std::vector<std::unique_ptr<Block>> blocks_;
@@ -243,58 +238,67 @@ class System {
   std::vector<double> modes_;
   int n_roots_ = 0;
   std::vector<int> root_blocks_;  // the blocks of components with root functions
-  mutable long pattern_misses_ = 0;
-  // Alias elimination: rows solved by substitution (y_b = +-y_a, or a node
-  // with one port: flow = 0, an unconnected input = its default) are still
-  // evaluated and must stay exactly satisfied; kept rows map to IDA's rows.
-  int n_full_ = 0;
-  std::vector<int> row_of_;        // full row -> IDA row, -1 if eliminated
-  std::vector<int> eliminated_;    // full rows eliminated
-  std::vector<double> eliminated_nominal_;  // scale of each, for the check
-  mutable std::vector<double> F_full_;
 
-  // Explicit elimination. "m-level": the m_ unknowns after alias
-  // elimination, which the blocks' vars index; IDA sees n_ of them.
+  // The alias reduction (aliases.cpp): rows solved by substitution (y_b =
+  // +-y_a, or a node with one port: flow = 0, an unconnected input = its
+  // default) are still evaluated and must stay exactly satisfied; kept rows
+  // map to the alias level's rows.
+  struct AliasMap {
+    int n_full = 0;                          // the netlist's unknowns (and rows)
+    std::vector<int> row_of;                 // full row -> alias-level row, -1 if eliminated
+    std::vector<int> eliminated;             // full rows eliminated
+    std::vector<double> eliminated_nominal;  // scale of each, for the check
+    std::vector<int> checked;                // indices into eliminated of rows evaluated per residual
+  } aliases_;
+
+  // The explicit reduction (explicit.cpp). "m-level": the m unknowns after
+  // alias elimination, which the blocks' vars index; IDA sees n_ of them.
   struct ExplicitUnknown {
     int var = -1;    // m-level unknown
     int row = -1;    // full row that gives it
     double coef = 0.0;  // dF_row / dy_var (constant)
     int level = 0;   // 1 + the highest level among the unknowns the row reads
     std::vector<std::pair<long, int>> entries;  // (j1 position, m-level column) of the row
-    int d0 = 0, dn = 0;  // its derivative d var / d y_IDA: d_cols_[d0, d0 + dn)
+    int d0 = 0, dn = 0;  // its derivative d var / d y_IDA: d_cols[d0, d0 + dn)
     std::vector<int> deps;  // m-level unknowns the row may read (its level's basis)
   };
-  // After an event changed the modes of a component that gives explicit
-  // unknowns: its rows must still give them linearly, with the same
-  // coefficient and no new dependencies (throws otherwise).
-  void verify_explicit(int block, double t) const;
-  void after_event(const Block& b, const std::vector<double>& modes_before, double t) const;
   struct KeptRow {
     int row = -1;  // full row
     std::vector<std::pair<long, int>> entries;  // (j1 position, m-level column)
     std::vector<std::pair<int, long>> out;      // (IDA column, IDA CSC position)
   };
-  int m_ = 0;
-  std::vector<ExplicitUnknown> explicit_;   // in level order
-  std::vector<int> explicit_of_m_;          // m-level unknown -> explicit index or -1
-  std::vector<int> ida_to_m_, m_to_ida_;    // IDA unknown <-> m-level unknown (-1: explicit)
-  std::vector<int> ida_row_of_full_;        // full row -> IDA row, -1 if eliminated
-  std::vector<std::vector<std::pair<int, std::vector<int>>>> stages_;  // per level: (block, explicit indices)
-  std::vector<int> final_blocks_;           // blocks evaluated for IDA's rows (and the alias checks)
-  std::vector<std::pair<int, int>> kept_full_rows_;  // (full row, IDA row) of IDA's rows
-  std::vector<int> checked_aliases_;        // indices into eliminated_ of rows evaluated per residual
-  std::vector<double> m_start_;
-  std::vector<std::string> m_names_;
-  std::vector<long> j1_col_ptr_, j1_row_idx_;
-  std::vector<int> d_cols_;
-  std::vector<KeptRow> kept_rows_;
-  mutable std::vector<double> yw_, ypw_, j1_values_, d_values_, scatter_, cache_y_;
-  // Blocks whose root functions read explicit unknowns (the others are
-  // evaluated on the states alone, without expand()).
-  std::vector<char> roots_read_explicit_;
-  bool any_roots_read_explicit_ = false;
-  mutable double cache_t_ = 0.0;
-  mutable bool cache_valid_ = false, cache_invalid_ = false;
+  struct ExplicitPlan {
+    int m = 0;
+    std::vector<ExplicitUnknown> unknowns;  // in level order
+    std::vector<int> of_m;                  // m-level unknown -> index in unknowns or -1
+    std::vector<int> ida_to_m, m_to_ida;    // IDA unknown <-> m-level unknown (-1: explicit)
+    std::vector<int> ida_row_of_full;       // full row -> IDA row, -1 if eliminated
+    std::vector<std::vector<std::pair<int, std::vector<int>>>> stages;  // per level: (block, unknowns' indices)
+    std::vector<int> final_blocks;          // blocks evaluated for IDA's rows (and the alias checks)
+    std::vector<std::pair<int, int>> kept_full_rows;  // (full row, IDA row) of IDA's rows
+    std::vector<double> m_start;
+    std::vector<std::string> m_names;
+    std::vector<long> j1_col_ptr, j1_row_idx;  // the m-level Jacobian's pattern
+    std::vector<int> d_cols;
+    std::vector<KeptRow> kept_rows;
+    // Blocks whose root functions read explicit unknowns (the others are
+    // evaluated on the states alone, without expand()).
+    std::vector<char> roots_read_explicit;
+    bool any_roots_read_explicit = false;
+  } plan_;
+
+  // The evaluator's scratch and its cache of the last expansion
+  // (evaluator.cpp); mutable, since evaluating changes no result.
+  struct Workspace {
+    std::vector<double> y, yp;     // the m-level unknowns the blocks read (expand())
+    std::vector<double> F_full;    // every full row's residual
+    std::vector<double> j1_values, d_values, scatter;  // m-level Jacobian, d explicit / d y_IDA, one row's sums
+    std::vector<double> cache_y;   // IDA's y of the last expansion, at cache_t
+    double cache_t = 0.0;
+    bool cache_valid = false, cache_invalid = false;
+    long pattern_misses = 0;       // AD entries outside the pattern (should stay 0)
+  };
+  mutable Workspace work_;
 };
 
 }  // namespace pneumo

@@ -1,30 +1,45 @@
 // pneumo diagnose MODEL.yaml --runs DIR --effects CATALOGUE.yaml --out REPORT_DIR
-#include "framework/cli/diagnose.hpp"
-
 #include <filesystem>
 #include <iostream>
+#include <memory>
 
 #include "components/builtin.hpp"
+#include "framework/cli/command.hpp"
 #include "framework/diagnose/diagnose.hpp"
 
-namespace pneumo {
+namespace pneumo::cli {
 
 namespace {
-struct Args {
+
+struct DiagnoseArgs {
   std::string model, runs, effects, out;
   int threads = 2, max_effects = 2;
   bool quiet = false;
 };
-Args& args() {
-  static Args a;
-  return a;
+
+int diagnose_command(const DiagnoseArgs& a) {
+  diagnose::DiagnoseOptions opt;
+  opt.threads = std::max(1, a.threads);
+  opt.max_effects = std::max(1, a.max_effects);
+  opt.progress = !a.quiet;
+  const auto rep = diagnose::diagnose(a.model, a.runs, a.effects, builtin_registry(), opt);
+  std::filesystem::create_directories(a.out);
+  diagnose::write_report_json(rep, (std::filesystem::path(a.out) / "report.json").string());
+  diagnose::write_report_html(rep, (std::filesystem::path(a.out) / "report.html").string());
+  std::cout << "verdict:";
+  for (const auto& v : rep.verdict) std::cout << " " << v;
+  if (rep.verdict.empty()) std::cout << " (none: the model explains the data within noise)";
+  std::cout << "\nvalidation gap " << rep.validation_before.total.rms << " -> " << rep.validation_after.total.rms
+            << " (noise = 1)\nwrote " << a.out << "/report.json and report.html\n";
+  return 0;
 }
+
 }  // namespace
 
-CLI::App* add_diagnose_command(CLI::App& app) {
+Command add_diagnose_command(CLI::App& app) {
+  auto a = std::make_shared<DiagnoseArgs>();
   auto* cmd = app.add_subcommand(
       "diagnose", "find which unmodelled effect explains the gap between a model and measured runs");
-  Args* a = &args();
   cmd->add_option("model", a->model, "model netlist (YAML)")->required();
   cmd->add_option("--runs", a->runs, "directory of measured runs (NAME.yaml + NAME.csv)")->required();
   cmd->add_option("--effects", a->effects, "catalogue of candidate effects (YAML)")->required();
@@ -32,28 +47,7 @@ CLI::App* add_diagnose_command(CLI::App& app) {
   cmd->add_option("--threads", a->threads, "parallel simulations (default 2)");
   cmd->add_option("--max-effects", a->max_effects, "forward selection depth (default 2)");
   cmd->add_flag("-q,--quiet", a->quiet, "no progress display");
-  return cmd;
+  return {.app = cmd, .run = [a] { return diagnose_command(*a); }, .input = [a] { return a->model; }};
 }
 
-// Input errors propagate to main's handler (exit status 2).
-int run_diagnose_command() {
-  Args* a = &args();
-  {
-    diagnose::DiagnoseOptions opt;
-    opt.threads = std::max(1, a->threads);
-    opt.max_effects = std::max(1, a->max_effects);
-    opt.progress = !a->quiet;
-    const auto rep = diagnose::diagnose(a->model, a->runs, a->effects, builtin_registry(), opt);
-    std::filesystem::create_directories(a->out);
-    diagnose::write_report_json(rep, (std::filesystem::path(a->out) / "report.json").string());
-    diagnose::write_report_html(rep, (std::filesystem::path(a->out) / "report.html").string());
-    std::cout << "verdict:";
-    for (const auto& v : rep.verdict) std::cout << " " << v;
-    if (rep.verdict.empty()) std::cout << " (none: the model explains the data within noise)";
-    std::cout << "\nvalidation gap " << rep.validation_before.total.rms << " -> " << rep.validation_after.total.rms
-              << " (noise = 1)\nwrote " << a->out << "/report.json and report.html\n";
-  }
-  return 0;
-}
-
-}  // namespace pneumo
+}  // namespace pneumo::cli

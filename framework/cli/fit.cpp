@@ -1,15 +1,15 @@
 // pneumo fit friction DATA.csv --model eq4|eq7|eq8 [--pressure pAB-|pAB+|pEC] [-o preset.yaml]
 // pneumo fit throttle DATA.csv [-o throttle.yaml]
-#include "framework/cli/fit.hpp"
-
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <memory>
 #include <sstream>
 
+#include "framework/cli/command.hpp"
 #include "framework/fit/friction_fit.hpp"
 #include "framework/fit/throttle_fit.hpp"
 
@@ -38,9 +38,9 @@ std::string bar_rel(double p_abs, double p_amb) {
   return buf;
 }
 
-class FitCommandImpl final : public FitCommand {
+class FitCommand {
  public:
-  explicit FitCommandImpl(CLI::App& app) {
+  explicit FitCommand(CLI::App& app) {
     fit_ = app.add_subcommand("fit", "identify friction or throttle coefficients from measured data (Ceres)");
     fit_->require_subcommand(1);
     fric_ = fit_->add_subcommand(
@@ -63,9 +63,8 @@ class FitCommandImpl final : public FitCommand {
     thr_->add_option("-o,--output", toutput_, "write the netlist-ready parameters (YAML) here");
   }
 
-  bool selected() const override { return fit_->parsed(); }
-
-  int run() override { return fric_->parsed() ? run_friction() : run_throttle(); }
+  CLI::App* app() const { return fit_; }
+  int run() { return fric_->parsed() ? run_friction() : run_throttle(); }
 
  private:
   InputError data_error(const std::string& file, const std::string& msg) const {
@@ -177,6 +176,9 @@ class FitCommandImpl final : public FitCommand {
 
 }  // namespace
 
-std::unique_ptr<FitCommand> add_fit_command(CLI::App& app) { return std::make_unique<FitCommandImpl>(app); }
+Command add_fit_command(CLI::App& app) {
+  auto fit = std::make_shared<FitCommand>(app);
+  return {.app = fit->app(), .run = [fit] { return fit->run(); }};
+}
 
 }  // namespace pneumo::cli

@@ -1,6 +1,7 @@
 // pneumo optimize: design optimisation over netlist parameters, robust
 // against uncertain operating conditions (framework/study/optimize.hpp).
-#include "framework/cli/optimize.hpp"
+#include <algorithm>
+#include "framework/cli/command.hpp"
 
 #include <filesystem>
 #include <fstream>
@@ -9,6 +10,7 @@
 #include <memory>
 
 #include "components/builtin.hpp"
+#include "framework/cli/command.hpp"
 #include "framework/cli/split_list.hpp"
 #include "framework/study/communicator.hpp"
 #include "framework/study/optimize.hpp"
@@ -144,7 +146,7 @@ int optimize_command(const OptimizeArgs& a) {
 
 }  // namespace
 
-void add_optimize_command(CLI::App& app, int& status) {
+Command add_optimize_command(CLI::App& app) {
   auto a = std::make_shared<OptimizeArgs>();
   auto* c = app.add_subcommand("optimize", "optimise design parameters for a metric, robust against uncertain conditions");
   c->add_option("netlist", a->netlist, "netlist file (YAML)")->required();
@@ -171,17 +173,7 @@ void add_optimize_command(CLI::App& app, int& status) {
   c->add_option("-j,--threads", a->threads, "threads")->check(CLI::PositiveNumber);
   c->add_option("-o,--output", a->output, "result YAML (default: NETLIST_STEM.optimum.yaml)");
   c->add_flag("-q,--quiet", a->quiet, "no progress or summary");
-  c->callback([a, &status]() {
-    try {
-      status = optimize_command(*a);
-    } catch (const InputError& e) {
-      std::cerr << e.what() << "\n";
-      status = 2;
-    } catch (const std::exception& e) {
-      std::cerr << "pneumo optimize: error: " << e.what() << "\n";
-      status = 2;
-    }
-  });
+  return {.app = c, .run = [a] { return optimize_command(*a); }, .input = [a] { return a->netlist; }};
 }
 
 }  // namespace pneumo::cli

@@ -8,11 +8,10 @@
 #include <cstdio>
 #include <fstream>
 #include <iostream>
-#include <mutex>
 #include <numeric>
-#include <thread>
 
 #include "framework/analysis/run_metrics.hpp"
+#include "framework/core/parallel.hpp"
 #include "framework/run/run.hpp"
 
 namespace pneumo::diagnose {
@@ -21,30 +20,6 @@ namespace pneumo::diagnose {
 namespace {
 
 constexpr double kFailedResidual = 1e4;  // per sample, for a run the solver could not finish
-
-void parallel_for(int n, int threads, const std::function<void(int)>& fn) {
-  if (threads <= 1 || n <= 1) {
-    for (int i = 0; i < n; ++i) fn(i);
-    return;
-  }
-  std::atomic<int> next{0};
-  std::vector<std::thread> pool;
-  std::exception_ptr error;
-  std::mutex m;
-  for (int k = 0; k < std::min(threads, n); ++k)
-    pool.emplace_back([&] {
-      for (int i; (i = next++) < n;) {
-        try {
-          fn(i);
-        } catch (...) {
-          std::lock_guard<std::mutex> lock(m);
-          if (!error) error = std::current_exception();
-        }
-      }
-    });
-  for (auto& t : pool) t.join();
-  if (error) std::rethrow_exception(error);
-}
 
 double interp(const std::vector<double>& t, const std::vector<double>& y, double tq) {
   if (tq <= t.front()) return y.front();
@@ -220,8 +195,8 @@ class Engine {
   std::vector<std::vector<double>> residuals(const std::vector<Model>& models, const Layout& L) {
     const int nr = static_cast<int>(L.runs.size());
     std::vector<std::vector<std::vector<double>>> out_sim(models.size() * nr);
-    parallel_for(static_cast<int>(models.size()) * nr, options_.threads,
-                 [&](int j) { out_sim[j] = simulate(models[j / nr], L.runs[j % nr]); });
+    parallel_for(static_cast<long>(models.size()) * nr, options_.threads,
+                 [&](int, long j) { out_sim[j] = simulate(models[j / nr], L.runs[j % nr]); });
     std::vector<std::vector<double>> r(models.size(), std::vector<double>(L.size));
     for (std::size_t m = 0; m < models.size(); ++m)
       for (const auto& seg : L.segments) {

@@ -240,6 +240,43 @@ Unclosed find_unclosed(const std::string& text, std::size_t end) {
 
 }  // namespace
 
+namespace {
+
+// The `simulation:` section: every key a row of simulation_options(), read
+// in its unit and checked against its range.
+void read_simulation(Reader& r, const YAML::Node& section, Netlist& nl) {
+  auto& s = nl.simulation;
+  const auto& table = simulation_options();
+  std::vector<std::string> keys;
+  for (const auto& o : table) keys.push_back(o.spec.name);
+  YAML::Node t_end_node = section;
+  for (const auto& e : r.mapping(section, "simulation", "", Reader::Keys::parameters, "simulation.")) {
+    const std::string p = "simulation." + e.key;
+    auto o = std::find_if(table.begin(), table.end(), [&](const SimulationOption& x) { return x.spec.name == e.key; });
+    if (o == table.end())
+      r.fail(e.key_node, "", p, "unknown key '" + e.key + "' in simulation; " + choices_hint(e.key, keys));
+    const ParameterSpec& spec = o->spec;
+    if (o->flag) {
+      const std::string text = r.scalar_text(e.value, "", p, e.key);
+      if (text != "true" && text != "false")
+        r.fail(e.value, "", p, e.key + " must be true or false, not '" + text + "'");
+      s.*(o->flag) = text == "true";
+      continue;
+    }
+    const Dimension dim = units::dimension_of(spec.unit);
+    const double v = r.quantity(e.value, nl.gas.p_ambient, dim, spec.unit, "", p);
+    if (!spec.in_range(v))
+      r.fail(e.value, "", p, e.key + " = " + units::format_si(v, dim) + " is out of range; valid: " +
+                                 spec.range_text() + " (" + spec.unit + ")");
+    s.*(o->number) = v;
+    if (e.key == "t_end") t_end_node = e.value;
+  }
+  if (const std::string problem = simulation_settings_problem(s); !problem.empty())
+    r.fail(t_end_node, "", "simulation.t_end", problem);
+}
+
+}  // namespace
+
 Netlist parse_netlist(const std::string& text, const std::string& file_name) {
   Reader r(file_name);
   YAML::Node root;
@@ -454,41 +491,7 @@ Netlist parse_netlist(const std::string& text, const std::string& file_name) {
       nl.plugins.push_back(std::move(d));
     }
   }
-  if (top.count("simulation") && !top["simulation"].IsNull()) {
-    auto& s = nl.simulation;
-    const double a = nl.gas.p_ambient;
-    std::map<std::string, YAML::Node> value_of;
-    for (const auto& e : r.mapping(top["simulation"], "simulation", "", Reader::Keys::parameters, "simulation.")) {
-      value_of[e.key] = e.value;
-      const std::string p = "simulation." + e.key;
-      if (e.key == "t_start") s.t_start = r.quantity(e.value, a, time, "s", "", p);
-      else if (e.key == "t_end") s.t_end = r.quantity(e.value, a, time, "s", "", p);
-      else if (e.key == "rtol") s.rtol = r.quantity(e.value, a, none, "1", "", p);
-      else if (e.key == "atol") s.atol = r.quantity(e.value, a, none, "1", "", p);
-      else if (e.key == "output_interval") s.output_interval = r.quantity(e.value, a, time, "s", "", p);
-      else if (e.key == "max_step") s.max_step = r.quantity(e.value, a, time, "s", "", p);
-      else if (e.key == "jacobian_reuse") {
-        const std::string text = r.scalar_text(e.value, "", p, "jacobian_reuse");
-        if (text == "true") s.jacobian_reuse = true;
-        else if (text == "false") s.jacobian_reuse = false;
-        else r.fail(e.value, "", p, "jacobian_reuse must be true or false, not '" + text + "'");
-      } else
-        r.fail(e.key_node, "", p,
-               "unknown key '" + e.key + "' in simulation; " +
-                   choices_hint(e.key, {"t_start", "t_end", "rtol", "atol", "output_interval", "max_step", "jacobian_reuse"}));
-    }
-    auto at_key = [&](const char* k) { return value_of.count(k) ? value_of[k] : top["simulation"]; };
-    if (!(s.t_end > s.t_start))
-      r.fail(at_key("t_end"), "", "simulation.t_end",
-             "t_end (" + units::format_si(s.t_end, time) + ") must be > t_start (" + units::format_si(s.t_start, time) +
-                 ")");
-    if (!(s.rtol > 0 && s.rtol < 1)) r.fail(at_key("rtol"), "", "simulation.rtol", "rtol must be in (0, 1)");
-    if (!(s.atol > 0)) r.fail(at_key("atol"), "", "simulation.atol", "atol must be > 0");
-    if (!(s.output_interval > 0))
-      r.fail(at_key("output_interval"), "", "simulation.output_interval", "output_interval must be > 0");
-    if (!(s.max_step >= 0))
-      r.fail(at_key("max_step"), "", "simulation.max_step", "max_step must be > 0 (or 0 for the solver's choice)");
-  }
+  if (top.count("simulation") && !top["simulation"].IsNull()) read_simulation(r, top["simulation"], nl);
   if (top.count("metrics")) nl.metrics = read_metrics(top["metrics"], nl);
   return nl;
 }

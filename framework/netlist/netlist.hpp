@@ -27,6 +27,7 @@
 #include "framework/core/units.hpp"
 #include "framework/model/circuit.hpp"
 #include "framework/model/registry.hpp"
+#include "framework/model/simulation_options.hpp"
 
 namespace pneumo {
 
@@ -112,20 +113,6 @@ struct PluginDecl {
   std::string path;      // as written
   std::string resolved;  // relative paths taken from the netlist's directory
   SourceLocation where;
-};
-
-struct SimulationSettings {
-  double t_start = 0.0;
-  double t_end = 1.0;
-  double rtol = 1e-6;
-  // Absolute tolerance as a fraction of each variable's nominal magnitude
-  // (pressures ~1e5 Pa and masses ~1e-6 kg cannot share one absolute number).
-  double atol = 1e-6;
-  double output_interval = 1e-3;
-  double max_step = 0.0;  // 0 = solver's choice
-  // Recombine the last Newton matrix's parts when only cj changed (see
-  // SolverOptions::reuse_jacobian); false reproduces IDA's own behaviour.
-  bool jacobian_reuse = true;
 };
 
 struct Netlist {

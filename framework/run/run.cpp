@@ -4,13 +4,7 @@ namespace pneumo {
 
 SolverOptions solver_options(const SimulationSettings& s) {
   SolverOptions o;
-  o.t_start = s.t_start;
-  o.t_end = s.t_end;
-  o.rtol = s.rtol;
-  o.atol = s.atol;
-  o.output_interval = s.output_interval;
-  o.max_step = s.max_step;
-  o.reuse_jacobian = s.jacobian_reuse;
+  static_cast<SimulationSettings&>(o) = s;
   return o;
 }
 

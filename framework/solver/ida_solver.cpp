@@ -1,579 +1,444 @@
 #include "framework/solver/ida_solver.hpp"
 
-#include "framework/solver/serial_vector_ops.hpp"
-
 // IDAS (not IDA): the same integrator plus quadratures, which integrate
 // requested outputs (energy accounts) to the solver's accuracy.
 #include <idas/idas.h>
 #include <idas/idas_ls.h>
 #include <nvector/nvector_serial.h>
-#include <sundials/sundials_context.h>
 #include <sunlinsol/sunlinsol_klu.h>
 #include <sunmatrix/sunmatrix_sparse.h>
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
-#include <exception>
 #include <limits>
-#include <memory>
+
+#include "framework/solver/ida_callbacks.hpp"
+#include "framework/solver/ida_handles.hpp"
+#include "framework/solver/output_grid.hpp"
+#include "framework/solver/root_locator.hpp"
+#include "framework/solver/serial_vector_ops.hpp"
 
 namespace pneumo {
 
 namespace {
 
-// RAII owners for the SUNDIALS handles.
-struct ContextOwner {
-  SUNContext ctx = nullptr;
-  ContextOwner() {
-    if (SUNContext_Create(nullptr, &ctx) != 0) throw std::runtime_error("SUNContext_Create failed");
-  }
-  ~ContextOwner() { SUNContext_Free(&ctx); }
-  ContextOwner(const ContextOwner&) = delete;
-  ContextOwner& operator=(const ContextOwner&) = delete;
-};
-struct VectorDeleter {
-  void operator()(_generic_N_Vector* v) const { N_VDestroy(v); }
-};
-struct MatrixDeleter {
-  void operator()(_generic_SUNMatrix* m) const { SUNMatDestroy(m); }
-};
-struct SolverDeleter {
-  void operator()(_generic_SUNLinearSolver* s) const { SUNLinSolFree(s); }
-};
-struct IdaDeleter {
-  void operator()(void* mem) const { IDAFree(&mem); }
-};
-using VectorPtr = std::unique_ptr<_generic_N_Vector, VectorDeleter>;
-using MatrixPtr = std::unique_ptr<_generic_SUNMatrix, MatrixDeleter>;
-using SolverPtr = std::unique_ptr<_generic_SUNLinearSolver, SolverDeleter>;
-using IdaPtr = std::unique_ptr<void, IdaDeleter>;
+// One run of IDA over [t_start, t_end]: IDA takes one step per call
+// (IDA_ONE_STEP); after each step the state events in it are located and
+// handled, the output times it passed are read off its interpolating
+// polynomial, and a time event or t_end it stopped at is handled.
+class Integration {
+ public:
+  Integration(System& system, const SolverOptions& opt, const OutputFn& output, const Quadratures* quad);
+  SolverResult run();
 
-// IDA's Newton matrix dF/dy + cj dF/dy' kept in its two parts, so that a
-// request for a new matrix that only follows a change of cj is answered by
-// recombining them (CVODE does this for its own Newton matrix; IDA does
-// not). cj = alpha / h changes with every change of step size or order, and
-// IDA asks for a new matrix once cj is more than 25 % off the one the
-// factorisation used; most of its requests are these, while the state has
-// hardly moved. Recombining is exact in cj, since F is linear in y' and the
-// explicitly solved unknowns have no y' (System::newton_matrix_parts). The parts
-// are evaluated afresh when they may be too old for the Newton iteration:
-// after a nonlinear convergence failure, after kMaxAgeSteps steps (CVODE's
-// limit), after an event or a re-initialisation, after KLU rejected a
-// pivot, and throughout IDACalcIC, which starts from far-off values. Used
-// only when IDA integrates no algebraic unknown (see simulate).
-struct NewtonMatrixParts {
-  static constexpr long kMaxAgeSteps = 50;
-  bool enabled = true;
-  bool valid = false;
-  bool in_calc_ic = false;
-  std::vector<double> dFdy, dFdyp;  // in IDA's scaled variables, in the matrix's order
-  long steps_at = 0, convergence_failures_at = 0;
-  long recombined = 0;  // requests answered without an evaluation
-};
+ private:
+  void create_vectors();
+  void create_ida();
+  void init_quadratures();
+  void check(int flag, const char* what) const {
+    if (flag < 0) throw std::runtime_error(std::string(what) + " failed: " + flag_text(flag, user_));
+  }
+  void fail(const std::string& msg);
+  bool consistent_ic();
+  bool settle();
+  void accumulate_stats();
+  bool restart(const std::vector<int>* fired);
+  void restart_roots(const std::vector<int>* fired);
+  void roots_at(double tr, N_Vector yy, N_Vector yyp, std::vector<double>& g);
+  void interpolate(double tr, N_Vector yy, N_Vector yyp, bool with_yp);
+  void emit();
+  void emit_at(double t_out, N_Vector yy, N_Vector yyp);
+  void emit_interpolated(double t_out) {
+    interpolate(t_out, y_out_.get(), yp_out_.get(), opt_.outputs_read_yp);
+    emit_at(t_out, y_out_.get(), yp_out_.get());
+  }
+  enum class Next { step, restarted, stop };
+  Next step();
+  Next state_events(double t_ret);
+  Next stopped_at(double t_event);
+  void finish();
 
-struct UserData {
-  System* system = nullptr;
-  std::exception_ptr error;  // exceptions never cross the C callbacks
-  std::string last_message;
-  std::vector<sunindextype> col_ptr, row_idx;
-  SUNLinearSolver klu = nullptr;
-  void* ida = nullptr;
-  NewtonMatrixParts parts;
-  const ProbeSet* integrands = nullptr;
-  // IDA integrates scaled variables y / nominal: pressures (1e5 Pa) and
-  // masses (1e-6 kg) in one Newton matrix would otherwise differ by 1e11 and
-  // leave the sparse LU numerically singular.
-  std::vector<double> nominal, y_phys, yp_phys;
-  const double* physical_y(N_Vector y) {
-    const double* s = N_VGetArrayPointer(y);
-    for (std::size_t i = 0; i < nominal.size(); ++i) y_phys[i] = s[i] * nominal[i];
-    return y_phys.data();
-  }
-  const double* physical_yp(N_Vector yp) {
-    const double* s = N_VGetArrayPointer(yp);
-    for (std::size_t i = 0; i < nominal.size(); ++i) yp_phys[i] = s[i] * nominal[i];
-    return yp_phys.data();
-  }
+  System& system_;
+  const SolverOptions& opt_;
+  const OutputFn& output_;
+  const Quadratures* quad_;
+  SolverResult result_;
+  const int n_;
+  const int n_quad_;
+  ContextOwner context_;
+  UserData user_;
+  VectorPtr y_, yp_, atol_, id_, q_, y_out_, yp_out_, y_ev_, yp_ev_;
+  MatrixPtr A_;
+  SolverPtr LS_;
+  IdaPtr mem_;
+  void* ida_ = nullptr;
+  ProbeSet integrands_;
+  double t_;
+  const double eps_t_;
+  std::vector<double> events_;  // time events up to t_end
+  std::size_t next_event_ = 0;
+  OutputGrid grid_;
+  RootLocator roots_;
+  long steps_without_output_ = 0;
 };
 
-int residual_cb(realtype t, N_Vector y, N_Vector yp, N_Vector rr, void* user) {
-  auto* u = static_cast<UserData*>(user);
-  try {
-    return u->system->residual(t, u->physical_y(y), u->physical_yp(yp), N_VGetArrayPointer(rr));
-  } catch (...) {
-    u->error = std::current_exception();
-    return -1;
-  }
+Integration::Integration(System& system, const SolverOptions& opt, const OutputFn& output, const Quadratures* quad)
+    : system_(system),
+      opt_(opt),
+      output_(output),
+      quad_(quad),
+      n_(system.size()),
+      n_quad_(quad ? static_cast<int>(quad->integrands.size()) : 0),
+      t_(opt.t_start),
+      eps_t_(1e-12 * std::max(1.0, std::abs(opt.t_end))),
+      grid_(opt.t_start, opt.t_end, opt.output_interval),
+      roots_(system.n_roots()) {
+  user_.system = &system;
+  user_.col_ptr.assign(system.col_ptr().begin(), system.col_ptr().end());
+  user_.row_idx.assign(system.row_idx().begin(), system.row_idx().end());
+  create_vectors();
+  create_ida();
+  if (n_quad_ > 0) init_quadratures();
 }
 
-int jacobian_cb(realtype t, realtype cj, N_Vector y, N_Vector yp, N_Vector, SUNMatrix J, void* user, N_Vector,
-                N_Vector, N_Vector) {
-  auto* u = static_cast<UserData*>(user);
-  try {
-    // IDA zeroes the matrix (structure included) before each call.
-    std::memcpy(SUNSparseMatrix_IndexPointers(J), u->col_ptr.data(), u->col_ptr.size() * sizeof(sunindextype));
-    std::memcpy(SUNSparseMatrix_IndexValues(J), u->row_idx.data(), u->row_idx.size() * sizeof(sunindextype));
-    // SUNLinSol_KLU refactors with the pivot order of its first factorisation
-    // and gives up (recoverably) when one of those pivots is now exactly zero
-    // - e.g. a throttle that went choked has dm/dp_down == 0. After such a
-    // failure, ask for a fresh factorisation with new pivots.
-    long last = 0;
-    const bool klu_rejected =
-        u->klu && u->ida && IDAGetLastLinFlag(u->ida, &last) == IDA_SUCCESS && last == SUNLS_PACKAGE_FAIL_REC;
-    if (klu_rejected) SUNLinSol_KLUReInit(u->klu, J, SUNSparseMatrix_NNZ(J), SUNKLU_REINIT_PARTIAL);
-    double* values = SUNSparseMatrix_Data(J);
-    auto& parts = u->parts;
-    const std::size_t nz = u->row_idx.size();
-    long steps = 0, convergence_failures = 0;
-    if (u->ida) {
-      IDAGetNumSteps(u->ida, &steps);
-      IDAGetNumNonlinSolvConvFails(u->ida, &convergence_failures);
-    }
-    if (parts.valid && !parts.in_calc_ic && !klu_rejected && convergence_failures == parts.convergence_failures_at &&
-        steps >= parts.steps_at && steps - parts.steps_at < NewtonMatrixParts::kMaxAgeSteps) {
-      for (std::size_t k = 0; k < nz; ++k) values[k] = parts.dFdy[k] + cj * parts.dFdyp[k];
-      ++parts.recombined;
-      return 0;
-    }
-    const double* py = u->physical_y(y);
-    const double* pyp = u->physical_yp(yp);
-    // Chain rule for the scaling: column c is multiplied by nominal[c].
-    auto scale_columns = [&](double* v) {
-      for (std::size_t c = 0; c + 1 < u->col_ptr.size(); ++c)
-        for (auto k = u->col_ptr[c]; k < u->col_ptr[c + 1]; ++k) v[k] *= u->nominal[c];
-    };
-    parts.valid = false;
-    if (!parts.enabled || parts.in_calc_ic) {
-      const int flag = u->system->jacobian(t, py, pyp, cj, values);
-      scale_columns(values);
-      return flag;
-    }
-    parts.dFdy.resize(nz);
-    parts.dFdyp.resize(nz);
-    const int flag = u->system->newton_matrix_parts(t, py, pyp, parts.dFdy.data(), parts.dFdyp.data());
-    scale_columns(parts.dFdy.data());
-    scale_columns(parts.dFdyp.data());
-    for (std::size_t k = 0; k < nz; ++k) values[k] = parts.dFdy[k] + cj * parts.dFdyp[k];
-    parts.valid = flag == 0;
-    parts.steps_at = steps;
-    parts.convergence_failures_at = convergence_failures;
-    return flag;
-  } catch (...) {
-    u->error = std::current_exception();
-    return -1;
-  }
-}
-
-// Integrands of the quadratures (outputs declared as integrals).
-int quadrature_cb(realtype t, N_Vector y, N_Vector yp, N_Vector q, void* user) {
-  auto* u = static_cast<UserData*>(user);
-  try {
-    const double* py = u->physical_y(y);
-    const double* pyp = u->physical_yp(yp);
-    u->system->probe_all(*u->integrands, t, py, pyp, N_VGetArrayPointer(q));
-    return 0;
-  } catch (...) {
-    u->error = std::current_exception();
-    return -1;
-  }
-}
-
-void error_cb(int, const char* module, const char* function, char* msg, void* user) {
-  auto* u = static_cast<UserData*>(user);
-  u->last_message = std::string(module) + "/" + function + ": " + msg;
-}
-
-std::string flag_text(long flag, const UserData& u) {
-  char* name = IDAGetReturnFlagName(flag);
-  std::string s = name ? name : "IDA error";
-  free(name);
-  if (!u.last_message.empty()) s += " (" + u.last_message + ")";
-  return s;
-}
-
-}  // namespace
-
-SolverResult simulate(System& system, const SolverOptions& opt, const OutputFn& output, const Quadratures* quad) {
-  SolverResult result;
-  const int n = system.size();
-  ContextOwner context;
-  UserData user;
-  user.system = &system;
-  user.col_ptr.assign(system.col_ptr().begin(), system.col_ptr().end());
-  user.row_idx.assign(system.row_idx().begin(), system.row_idx().end());
-
-  VectorPtr y(N_VNew_Serial(n, context.ctx)), yp(N_VNew_Serial(n, context.ctx));
-  VectorPtr atol(N_VNew_Serial(n, context.ctx)), id(N_VNew_Serial(n, context.ctx));
+// y and y' scaled by each unknown's nominal magnitude (see UserData).
+void Integration::create_vectors() {
+  y_.reset(N_VNew_Serial(n_, context_.ctx));
+  yp_.reset(N_VNew_Serial(n_, context_.ctx));
+  atol_.reset(N_VNew_Serial(n_, context_.ctx));
+  id_.reset(N_VNew_Serial(n_, context_.ctx));
   // Compiled vector kernels (serial_vector_ops.hpp: Debian's serial N_Vector
   // is built unoptimised) with the fused operations: IDA's predictor,
   // interpolation and error norms combine k vectors in one pass. IDA clones
   // y for its own vectors, which inherit the kernels.
-  use_compiled_serial_ops(y.get());
-  use_compiled_serial_ops(yp.get());
+  use_compiled_serial_ops(y_.get());
+  use_compiled_serial_ops(yp_.get());
   std::vector<double> y0, yp0;
-  system.reset_modes();
-  system.start_values(y0, yp0);
-  user.nominal = system.nominal();
-  user.y_phys.assign(n, 0.0);
-  user.yp_phys.assign(n, 0.0);
-  for (int i = 0; i < n; ++i) {
-    N_VGetArrayPointer(y.get())[i] = y0[i] / user.nominal[i];
-    N_VGetArrayPointer(yp.get())[i] = yp0[i] / user.nominal[i];
-    N_VGetArrayPointer(atol.get())[i] = opt.atol;
-    N_VGetArrayPointer(id.get())[i] = system.differential()[i];
+  system_.reset_modes();
+  system_.start_values(y0, yp0);
+  user_.nominal = system_.nominal();
+  user_.y_phys.assign(n_, 0.0);
+  user_.yp_phys.assign(n_, 0.0);
+  for (int i = 0; i < n_; ++i) {
+    N_VGetArrayPointer(y_.get())[i] = y0[i] / user_.nominal[i];
+    N_VGetArrayPointer(yp_.get())[i] = yp0[i] / user_.nominal[i];
+    N_VGetArrayPointer(atol_.get())[i] = opt_.atol;
+    N_VGetArrayPointer(id_.get())[i] = system_.differential()[i];
   }
+}
 
-  MatrixPtr A(SUNSparseMatrix(n, n, std::max<long>(1, system.nnz()), CSC_MAT, context.ctx));
-  SolverPtr LS(SUNLinSol_KLU(y.get(), A.get(), context.ctx));
-  IdaPtr mem(IDACreate(context.ctx));
-  user.klu = LS.get();
-  user.ida = mem.get();
-  if (!A || !LS || !mem) throw std::runtime_error("cannot create the SUNDIALS solver objects");
-  void* ida = mem.get();
-
-  auto check = [&](int flag, const char* what) {
-    if (flag < 0) throw std::runtime_error(std::string(what) + " failed: " + flag_text(flag, user));
-  };
-  check(IDASetErrHandlerFn(ida, error_cb, &user), "IDASetErrHandlerFn");
-  check(IDAInit(ida, residual_cb, opt.t_start, y.get(), yp.get()), "IDAInit");
-  check(IDASVtolerances(ida, opt.rtol, atol.get()), "IDASVtolerances");
-  check(IDASetUserData(ida, &user), "IDASetUserData");
-  check(IDASetLinearSolver(ida, LS.get(), A.get()), "IDASetLinearSolver");
-  check(IDASetJacFn(ida, jacobian_cb), "IDASetJacFn");
-  check(IDASetId(ida, id.get()), "IDASetId");
+void Integration::create_ida() {
+  A_.reset(SUNSparseMatrix(n_, n_, std::max<long>(1, system_.nnz()), CSC_MAT, context_.ctx));
+  LS_.reset(SUNLinSol_KLU(y_.get(), A_.get(), context_.ctx));
+  mem_.reset(IDACreate(context_.ctx));
+  user_.klu = LS_.get();
+  user_.ida = mem_.get();
+  if (!A_ || !LS_ || !mem_) throw std::runtime_error("cannot create the SUNDIALS solver objects");
+  ida_ = mem_.get();
+  check(IDASetErrHandlerFn(ida_, error_cb, &user_), "IDASetErrHandlerFn");
+  check(IDAInit(ida_, residual_cb, opt_.t_start, y_.get(), yp_.get()), "IDAInit");
+  check(IDASVtolerances(ida_, opt_.rtol, atol_.get()), "IDASVtolerances");
+  check(IDASetUserData(ida_, &user_), "IDASetUserData");
+  check(IDASetLinearSolver(ida_, LS_.get(), A_.get()), "IDASetLinearSolver");
+  check(IDASetJacFn(ida_, jacobian_cb), "IDASetJacFn");
+  check(IDASetId(ida_, id_.get()), "IDASetId");
   // Algebraic unknowns (if any are left after explicit elimination) stay
   // out of the error test; without any, IDA's plain norms are used.
-  const bool any_algebraic = std::any_of(system.differential().begin(), system.differential().end(),
+  const bool any_algebraic = std::any_of(system_.differential().begin(), system_.differential().end(),
                                          [](double d) { return d == 0.0; });
-  check(IDASetSuppressAlg(ida, any_algebraic ? SUNTRUE : SUNFALSE), "IDASetSuppressAlg");
+  check(IDASetSuppressAlg(ida_, any_algebraic ? SUNTRUE : SUNFALSE), "IDASetSuppressAlg");
   // An algebraic row of the Newton matrix has no cj dF/dy' part to dominate
   // it at short steps: it is dF/dy alone, and an old one slows the Newton
   // iteration on the flows and forces more than reuse saves (measured: the
   // cushion rig without alias elimination, 41 algebraic unknowns, 19 %
   // slower with reuse; 9 algebraic unknowns of the full rig, no gain).
-  user.parts.enabled = opt.reuse_jacobian && !any_algebraic;
-  check(IDASetMaxNumSteps(ida, opt.max_steps), "IDASetMaxNumSteps");
-  if (opt.max_step > 0) check(IDASetMaxStep(ida, opt.max_step), "IDASetMaxStep");
-  const int n_quad = quad ? static_cast<int>(quad->integrands.size()) : 0;
-  VectorPtr q;
-  ProbeSet integrands;
-  if (n_quad > 0) {
-    integrands = system.probe_set(quad->integrands);
-    user.integrands = &integrands;
-    q.reset(N_VNew_Serial(n_quad, context.ctx));
-    N_VConst(0.0, q.get());
-    check(IDAQuadInit(ida, quadrature_cb, q.get()), "IDAQuadInit");
-    // Error-controlled like the states: an integral is as accurate as the
-    // trajectory it integrates (absolute tolerance in the integral's unit).
-    VectorPtr atol_q(N_VNew_Serial(n_quad, context.ctx));
-    std::copy(quad->atol.begin(), quad->atol.end(), N_VGetArrayPointer(atol_q.get()));
-    check(IDAQuadSVtolerances(ida, opt.rtol, atol_q.get()), "IDAQuadSVtolerances");
-    check(IDASetQuadErrCon(ida, SUNFALSE), "IDASetQuadErrCon");
-    quad->values->assign(n_quad, 0.0);
-  }
+  user_.parts.enabled = opt_.jacobian_reuse && !any_algebraic;
+  check(IDASetMaxNumSteps(ida_, opt_.max_steps), "IDASetMaxNumSteps");
+  if (opt_.max_step > 0) check(IDASetMaxStep(ida_, opt_.max_step), "IDASetMaxStep");
+}
 
-  double t = opt.t_start;
-  const double span = opt.t_end - opt.t_start;
-  const double eps_t = 1e-12 * std::max(1.0, std::abs(opt.t_end));
-  auto fail = [&](const std::string& msg) {
-    if (user.error) std::rethrow_exception(user.error);
-    result.ok = false;
-    result.message = msg;
-    result.t_reached = t;
-  };
-  auto consistent_ic = [&]() -> bool {
-    // IDACalcIC corrects the states' y' with the iteration matrix
-    // dF/dy + cj dF/dy', cj = 1 / (1e-3 (t_next - t)): the dF/dy part is an
-    // error of that Newton which shrinks with cj. With the algebraic unknowns
-    // solved explicitly (System) the states couple directly (a hose's flow
-    // and its segments' energy), so a short scale keeps it converging in a
-    // few iterations: 10 us gives cj = 1e8 1/s, far above any rate of a
-    // pneumatic drive.
-    const double t_next = t + std::min({opt.output_interval, 1e-5, std::max(opt.t_end - t, 1e-9)});
-    user.parts.in_calc_ic = true;
-    int flag = IDACalcIC(ida, IDA_YA_YDP_INIT, t_next);
-    if (flag < 0) {
-      // IDA's line search can stall on flow laws with flat (choked) pieces,
-      // e.g. a junction without volume fed by choked throttles; a full
-      // Newton without it converges from the same start (conservation_test).
-      check(IDAReInit(ida, t, y.get(), yp.get()), "IDAReInit");
-      check(IDASetLineSearchOffIC(ida, SUNTRUE), "IDASetLineSearchOffIC");
-      flag = IDACalcIC(ida, IDA_YA_YDP_INIT, t_next);
-      check(IDASetLineSearchOffIC(ida, SUNFALSE), "IDASetLineSearchOffIC");
-    }
-    user.parts.in_calc_ic = false;
-    user.parts.valid = false;
-    if (flag < 0) {
-      fail("cannot find consistent initial values at t = " + std::to_string(t) + " s: " + flag_text(flag, user));
+void Integration::init_quadratures() {
+  integrands_ = system_.probe_set(quad_->integrands);
+  user_.integrands = &integrands_;
+  q_.reset(N_VNew_Serial(n_quad_, context_.ctx));
+  N_VConst(0.0, q_.get());
+  check(IDAQuadInit(ida_, quadrature_cb, q_.get()), "IDAQuadInit");
+  // Error-controlled like the states: an integral is as accurate as the
+  // trajectory it integrates (absolute tolerance in the integral's unit).
+  VectorPtr atol_q(N_VNew_Serial(n_quad_, context_.ctx));
+  std::copy(quad_->atol.begin(), quad_->atol.end(), N_VGetArrayPointer(atol_q.get()));
+  check(IDAQuadSVtolerances(ida_, opt_.rtol, atol_q.get()), "IDAQuadSVtolerances");
+  // Integrated on the trajectory's own steps, not steering them: auditing a
+  // run never changes it (nor turns it into a failure at a stop's impact).
+  check(IDASetQuadErrCon(ida_, SUNFALSE), "IDASetQuadErrCon");
+  quad_->values->assign(n_quad_, 0.0);
+}
+
+void Integration::fail(const std::string& msg) {
+  if (user_.error) std::rethrow_exception(user_.error);
+  result_.ok = false;
+  result_.message = msg;
+  result_.t_reached = t_;
+}
+
+bool Integration::consistent_ic() {
+  // IDACalcIC corrects the states' y' with the iteration matrix
+  // dF/dy + cj dF/dy', cj = 1 / (1e-3 (t_next - t)): the dF/dy part is an
+  // error of that Newton which shrinks with cj. With the algebraic unknowns
+  // solved explicitly (System) the states couple directly (a hose's flow
+  // and its segments' energy), so a short scale keeps it converging in a
+  // few iterations: 10 us gives cj = 1e8 1/s, far above any rate of a
+  // pneumatic drive.
+  const double t_next = t_ + std::min({opt_.output_interval, 1e-5, std::max(opt_.t_end - t_, 1e-9)});
+  user_.parts.in_calc_ic = true;
+  int flag = IDACalcIC(ida_, IDA_YA_YDP_INIT, t_next);
+  if (flag < 0) {
+    // IDA's line search can stall on flow laws with flat (choked) pieces,
+    // e.g. a junction without volume fed by choked throttles; a full
+    // Newton without it converges from the same start (conservation_test).
+    check(IDAReInit(ida_, t_, y_.get(), yp_.get()), "IDAReInit");
+    check(IDASetLineSearchOffIC(ida_, SUNTRUE), "IDASetLineSearchOffIC");
+    flag = IDACalcIC(ida_, IDA_YA_YDP_INIT, t_next);
+    check(IDASetLineSearchOffIC(ida_, SUNFALSE), "IDASetLineSearchOffIC");
+  }
+  user_.parts.in_calc_ic = false;
+  user_.parts.valid = false;
+  if (flag < 0) {
+    fail("cannot find consistent initial values at t = " + std::to_string(t_) + " s: " + flag_text(flag, user_));
+    return false;
+  }
+  IDAGetConsistentIC(ida_, y_.get(), yp_.get());
+  return true;
+}
+
+// Event iteration: a mode change makes signals jump at the
+// re-initialisation, where IDA cannot see a root; components that follow
+// their inputs (logic with memory, step chains, timers) re-read them until
+// none changes, each change followed by consistent values.
+bool Integration::settle() {
+  constexpr int kMaxPasses = 100;
+  for (int pass = 0;; ++pass) {
+    user_.parts.valid = false;
+    std::vector<std::string> changed;
+    if (!system_.handle_input_changes(t_, user_.physical_y(y_.get()), user_.physical_yp(yp_.get()), result_.events,
+                                      &changed))
+      return true;
+    if (pass == kMaxPasses) {
+      std::string names;
+      for (const auto& n : changed) names += (names.empty() ? "" : ", ") + n;
+      fail("event iteration at t = " + std::to_string(t_) + " s does not settle: after " + std::to_string(kMaxPasses) +
+           " passes the modes of " + names + " still change (a loop of signals that switch each other at one instant)");
       return false;
     }
-    IDAGetConsistentIC(ida, y.get(), yp.get());
-    return true;
-  };
-  // IDAReInit resets IDA's counters: add them up before every re-initialisation.
-  auto accumulate_stats = [&]() {
-    long v = 0;
-    auto& s = result.stats;
-    IDAGetNumSteps(ida, &v), s.steps += v;
-    IDAGetNumResEvals(ida, &v), s.residual_evals += v;
-    IDAGetNumJacEvals(ida, &v), s.jacobian_evals += v;
-    IDAGetNumNonlinSolvIters(ida, &v), s.nonlinear_iterations += v;
-    IDAGetNumNonlinSolvConvFails(ida, &v), s.nonlinear_failures += v;
-    IDAGetNumErrTestFails(ida, &v), s.error_test_failures += v;
-  };
-  auto emit = [&]() {
-    if (n_quad > 0) {
-      double tq = t;
-      if (t > opt.t_start && IDAGetQuad(ida, &tq, q.get()) >= 0)
-        std::copy_n(N_VGetArrayPointer(q.get()), n_quad, quad->values->begin());
-    }
-    output(t, user.physical_y(y.get()), user.physical_yp(yp.get()));
-  };
-
-  std::vector<double> events = system.time_events();
-  events.erase(std::remove_if(events.begin(), events.end(), [&](double te) { return te > opt.t_end; }),
-               events.end());
-  std::size_t next_event = 0;
-  // Events at (or before) t_start set the initial modes.
-  while (next_event < events.size() && events[next_event] <= opt.t_start + eps_t) {
-    system.handle_time_event(events[next_event], user.physical_y(y.get()), user.physical_yp(yp.get()),
-                             result.events);
-    ++next_event;
-  }
-  // Event iteration: a mode change makes signals jump at the re-initialisation,
-  // where IDA cannot see a root; components that follow their inputs
-  // (logic with memory, step chains, timers) re-read them until none changes.
-  auto settle = [&]() -> bool {
-    constexpr int kMaxPasses = 100;
-    for (int pass = 0;; ++pass) {
-      user.parts.valid = false;
-      std::vector<std::string> changed;
-      if (!system.handle_input_changes(t, user.physical_y(y.get()), user.physical_yp(yp.get()), result.events,
-                                       &changed))
-        return true;
-      if (pass == kMaxPasses) {
-        std::string names;
-        for (const auto& n : changed) names += (names.empty() ? "" : ", ") + n;
-        fail("event iteration at t = " + std::to_string(t) + " s does not settle: after " +
-             std::to_string(kMaxPasses) + " passes the modes of " + names +
-             " still change (a loop of signals that switch each other at one instant)");
-        return false;
-      }
-      ++result.stats.reinitialisations;
-      accumulate_stats();
-      check(IDAReInit(ida, t, y.get(), yp.get()), "IDAReInit");
-      if (n_quad > 0) check(IDAQuadReInit(ida, q.get()), "IDAQuadReInit");
-      if (!consistent_ic()) return false;
-    }
-  };
-  if (!consistent_ic() || !settle()) return result;
-  emit();
-
-  // Output times: the grid t_start + k * output_interval, then t_end.
-  long k = 1;
-  const long n_out = static_cast<long>(std::ceil(span / opt.output_interval - 1e-9));
-  auto grid_time = [&](long j) { return j >= n_out ? opt.t_end : opt.t_start + j * opt.output_interval; };
-  // IDA takes one step per call (IDA_ONE_STEP) and the output times the step
-  // passed are read off its interpolating polynomial: with IDA_NORMAL every
-  // output time would also cost a root-function evaluation (IDA checks the
-  // roots up to each tout), for outputs every ms about as many as the steps.
-  VectorPtr y_out(N_VClone(y.get())), yp_out(N_VClone(y.get()));
-  N_VConst(0.0, yp_out.get());  // stays 0 when the outputs read no y
-  // y (and y') at tr in the last step, from IDA's interpolant.
-  auto interpolate = [&](double tr, N_Vector yy, N_Vector yyp, bool with_yp) {
-    check(IDAGetDky(ida, tr, 0, yy), "IDAGetDky");
-    if (with_yp) check(IDAGetDky(ida, tr, 1, yyp), "IDAGetDky");
-  };
-  // An output row at t_out inside the last step, from the state yy, yyp there.
-  auto emit_at = [&](double t_out, N_Vector yy, N_Vector yyp) {
-    if (n_quad > 0 && IDAGetQuadDky(ida, t_out, 0, q.get()) >= 0)
-      std::copy_n(N_VGetArrayPointer(q.get()), n_quad, quad->values->begin());
-    output(t_out, user.physical_y(yy), user.physical_yp(yyp));
-  };
-  auto emit_interpolated = [&](double t_out) {
-    interpolate(t_out, y_out.get(), yp_out.get(), opt.outputs_read_yp);
-    emit_at(t_out, y_out.get(), yp_out.get());
-  };
-  // State events. The root functions are checked once per step at its end
-  // t_n, on the y(t_n) IDA returns; a sign change since the last check is
-  // located on IDA's interpolant (Illinois), and the event handled there. If
-  // the event re-initialises, IDA restarts from the event (the rest of the
-  // step is discarded); otherwise the search goes on to t_n. IDA's own
-  // root finding does the same but interpolates y(t_n) once more per step.
-  const int nr = system.n_roots();
-  std::vector<int> root_info(std::max(1, nr));
-  std::vector<double> g_lo(nr), g_hi(nr), g_c(nr), t_of(nr);
-  double t_lo = t;
-  VectorPtr y_ev(N_VClone(y.get())), yp_ev(N_VClone(y.get()));
-  auto roots_at = [&](double tr, N_Vector yy, N_Vector yyp, std::vector<double>& g) {
-    system.roots(tr, user.physical_y(yy), user.physical_yp(yyp), g.data());
-    ++result.stats.root_evals;
-  };
-  // A root function exactly 0 at the start of an interval has no side yet:
-  // its first nonzero value sets it, without an event (as IDA does).
-  auto crosses = [](double a, double b) { return (a < 0 && b >= 0) || (a > 0 && b <= 0); };
-  auto restart_roots = [&](const std::vector<int>* fired) {
-    t_lo = t;
-    if (nr == 0) return;
-    roots_at(t, y.get(), yp.get(), g_lo);
-    // A root just handled counts as crossed, whatever rounding left at t.
-    if (fired)
-      for (int i = 0; i < nr; ++i)
-        if ((*fired)[i] != 0) g_lo[i] = (*fired)[i] > 0 ? std::max(g_lo[i], 1e-300) : std::min(g_lo[i], -1e-300);
-  };
-  restart_roots(nullptr);
-  // Restart IDA from (t, y, yp) after an event that changed the modes: the
-  // integrals so far, consistent values, the root functions' sides (`fired`:
-  // the roots just handled, counted as crossed).
-  auto restart = [&](const std::vector<int>* fired) -> bool {
-    if (n_quad > 0) check(IDAGetQuadDky(ida, t, 0, q.get()), "IDAGetQuadDky");
-    ++result.stats.reinitialisations;
+    ++result_.stats.reinitialisations;
     accumulate_stats();
-    check(IDAReInit(ida, t, y.get(), yp.get()), "IDAReInit");
-    if (n_quad > 0) check(IDAQuadReInit(ida, q.get()), "IDAQuadReInit");
-    if (!consistent_ic() || !settle()) return false;
-    restart_roots(fired);
-    return true;
-  };
-  // The earliest crossing in (t_lo, t_hi]; false if none.
-  auto locate = [&](double t_hi, double& t_root) -> bool {
-    double h_last = 0.0;
-    IDAGetLastStep(ida, &h_last);
-    const double ttol = 100.0 * std::numeric_limits<double>::epsilon() * (std::abs(t_hi) + std::abs(h_last));
-    bool any = false;
-    t_root = t_hi;
-    std::fill(root_info.begin(), root_info.end(), 0);
-    std::fill(t_of.begin(), t_of.end(), std::numeric_limits<double>::infinity());
-    for (int i = 0; i < nr; ++i) {
-      if (g_lo[i] == 0.0 || !crosses(g_lo[i], g_hi[i])) continue;
-      double a = t_lo, fa = g_lo[i], b = t_hi, fb = g_hi[i];
-      int side = 0;
-      for (int it = 0; it < 60 && b - a > ttol && fb != 0.0; ++it) {
-        double c = b - fb * (b - a) / (fb - fa);
-        c = std::min(std::max(c, a + 0.5 * ttol), b - 0.5 * ttol);
-        interpolate(c, y_ev.get(), yp_ev.get(), true);
-        roots_at(c, y_ev.get(), yp_ev.get(), g_c);
-        const double fc = g_c[i];
-        if (crosses(fa, fc)) {  // the root lies in (a, c]
-          b = c, fb = fc;
-          if (side == -1) fa *= 0.5;
-          side = -1;
-        } else {
-          a = c, fa = fc;
-          if (side == 1) fb *= 0.5;
-          side = 1;
-        }
-      }
-      t_of[i] = b;  // the first point where g has crossed
-      if (b < t_root || !any) t_root = b;
-      any = true;
-    }
-    if (!any) return false;
-    for (int i = 0; i < nr; ++i)
-      if (t_of[i] <= t_root + ttol) root_info[i] = g_lo[i] < 0 ? 1 : -1;
-    return true;
-  };
-
-  long steps_without_output = 0;
-  while (t < opt.t_end - eps_t) {
-    const double t_event = next_event < events.size() ? events[next_event] : std::numeric_limits<double>::infinity();
-    const double t_stop = std::min(t_event, opt.t_end);
-    check(IDASetStopTime(ida, t_stop), "IDASetStopTime");
-    double t_ret = t;
-    // tout matters only for the first step after a (re)initialisation (its
-    // size), as it did with IDA_NORMAL.
-    const int flag = IDASolve(ida, std::min(grid_time(k), t_stop), &t_ret, y.get(), yp.get(), IDA_ONE_STEP);
-    if (flag < 0) {
-      t = t_ret;
-      emit();  // the last state IDA reached, for the partial results
-      fail("integration failed at t = " + std::to_string(t_ret) + " s: " + flag_text(flag, user));
-      break;
-    }
-    const long k_before = k;
-    // State events in this step, in time order.
-    bool restarted = false;
-    if (nr > 0) {
-      roots_at(t_ret, y.get(), yp.get(), g_hi);
-      double t_root = t_ret;
-      while (!restarted && locate(t_ret, t_root)) {
-        while (k <= n_out && grid_time(k) < t_root - eps_t) emit_interpolated(grid_time(k++));
-        interpolate(t_root, y_ev.get(), yp_ev.get(), true);
-        const std::vector<int> fired = root_info;
-        user.parts.valid = false;  // the modes may have changed
-        const bool reinit = system.handle_roots(t_root, user.physical_y(y_ev.get()), user.physical_yp(yp_ev.get()),
-                                                fired.data(), result.events);
-        if (k <= n_out && std::abs(t_root - grid_time(k)) <= eps_t) ++k;
-        if (reinit) {
-          // Restart from the event; IDA's step beyond it is discarded.
-          N_VScale(1.0, y_ev.get(), y.get());
-          N_VScale(1.0, yp_ev.get(), yp.get());
-          t = t_root;
-          if (!restart(&fired)) break;
-          emit();
-          restarted = true;
-        } else {
-          emit_at(t_root, y_ev.get(), yp_ev.get());
-          // Go on searching (t_root, t_n].
-          t_lo = t_root;
-          roots_at(t_root, y_ev.get(), yp_ev.get(), g_lo);
-          for (int i = 0; i < nr; ++i)
-            if (fired[i] != 0) g_lo[i] = g_hi[i];
-        }
-      }
-      if (!result.message.empty()) break;
-      if (restarted) {
-        steps_without_output = 0;
-        continue;
-      }
-      g_lo = g_hi;
-      t_lo = t_ret;
-    }
-    // Stopped at a time event or t_end: an output time within eps_t of it is
-    // that row (below), emitted after the event is handled.
-    const bool stopped = flag == IDA_TSTOP_RETURN;
-    while (k <= n_out && (stopped ? grid_time(k) < t_ret - eps_t : grid_time(k) <= t_ret))
-      emit_interpolated(grid_time(k++));
-    t = t_ret;
-    // IDA's own limit (IDASetMaxNumSteps) counts the steps of one IDASolve
-    // call, i.e. now one step: keep its meaning, at most max_steps steps
-    // between one output (or event) and the next.
-    steps_without_output = (stopped || k > k_before) ? 0 : steps_without_output + 1;
-    if (steps_without_output >= opt.max_steps) {
-      emit();  // the last state IDA reached, for the partial results
-      fail("integration failed at t = " + std::to_string(t) + " s: IDA_TOO_MUCH_WORK (" +
-           std::to_string(opt.max_steps) + " steps without reaching the next output time)");
-      break;
-    }
-    if (!stopped) continue;
-    bool reinit = false;
-    if (next_event < events.size() && std::abs(t - t_event) <= eps_t) {
-      user.parts.valid = false;
-      reinit = system.handle_time_event(t, user.physical_y(y.get()), user.physical_yp(yp.get()), result.events);
-      ++next_event;
-    }
-    if (reinit && !restart(nullptr)) break;
-    const bool at_output = k <= n_out && std::abs(t - grid_time(k)) <= eps_t;
-    if (at_output) ++k;
-    if (at_output || reinit) emit();
+    check(IDAReInit(ida_, t_, y_.get(), yp_.get()), "IDAReInit");
+    if (n_quad_ > 0) check(IDAQuadReInit(ida_, q_.get()), "IDAQuadReInit");
+    if (!consistent_ic()) return false;
   }
-  if (user.error) std::rethrow_exception(user.error);
-  if (result.message.empty()) {
-    result.ok = true;
-    result.t_reached = t;
-  }
+}
 
+// IDAReInit resets IDA's counters: add them up before every re-initialisation.
+void Integration::accumulate_stats() {
+  long v = 0;
+  auto& s = result_.stats;
+  IDAGetNumSteps(ida_, &v), s.steps += v;
+  IDAGetNumResEvals(ida_, &v), s.residual_evals += v;
+  IDAGetNumJacEvals(ida_, &v), s.jacobian_evals += v;
+  IDAGetNumNonlinSolvIters(ida_, &v), s.nonlinear_iterations += v;
+  IDAGetNumNonlinSolvConvFails(ida_, &v), s.nonlinear_failures += v;
+  IDAGetNumErrTestFails(ida_, &v), s.error_test_failures += v;
+}
+
+// Restart IDA from (t, y, yp) after an event that changed the modes: the
+// integrals so far, consistent values, the root functions' sides (`fired`:
+// the roots just handled, counted as crossed).
+bool Integration::restart(const std::vector<int>* fired) {
+  if (n_quad_ > 0) check(IDAGetQuadDky(ida_, t_, 0, q_.get()), "IDAGetQuadDky");
+  ++result_.stats.reinitialisations;
   accumulate_stats();
-  auto& s = result.stats;
+  check(IDAReInit(ida_, t_, y_.get(), yp_.get()), "IDAReInit");
+  if (n_quad_ > 0) check(IDAQuadReInit(ida_, q_.get()), "IDAQuadReInit");
+  if (!consistent_ic() || !settle()) return false;
+  restart_roots(fired);
+  return true;
+}
+
+void Integration::restart_roots(const std::vector<int>* fired) {
+  if (roots_.size() > 0) roots_at(t_, y_.get(), yp_.get(), roots_.low());
+  roots_.start(t_, fired);
+}
+
+void Integration::roots_at(double tr, N_Vector yy, N_Vector yyp, std::vector<double>& g) {
+  system_.roots(tr, user_.physical_y(yy), user_.physical_yp(yyp), g.data());
+  ++result_.stats.root_evals;
+}
+
+// y (and y') at tr in the last step, from IDA's interpolant.
+void Integration::interpolate(double tr, N_Vector yy, N_Vector yyp, bool with_yp) {
+  check(IDAGetDky(ida_, tr, 0, yy), "IDAGetDky");
+  if (with_yp) check(IDAGetDky(ida_, tr, 1, yyp), "IDAGetDky");
+}
+
+// An output row at t from IDA's current y, y'.
+void Integration::emit() {
+  if (n_quad_ > 0) {
+    double tq = t_;
+    if (t_ > opt_.t_start && IDAGetQuad(ida_, &tq, q_.get()) >= 0)
+      std::copy_n(N_VGetArrayPointer(q_.get()), n_quad_, quad_->values->begin());
+  }
+  output_(t_, user_.physical_y(y_.get()), user_.physical_yp(yp_.get()));
+}
+
+// An output row at t_out inside the last step, from the state yy, yyp there.
+void Integration::emit_at(double t_out, N_Vector yy, N_Vector yyp) {
+  if (n_quad_ > 0 && IDAGetQuadDky(ida_, t_out, 0, q_.get()) >= 0)
+    std::copy_n(N_VGetArrayPointer(q_.get()), n_quad_, quad_->values->begin());
+  output_(t_out, user_.physical_y(yy), user_.physical_yp(yyp));
+}
+
+SolverResult Integration::run() {
+  events_ = system_.time_events();
+  events_.erase(std::remove_if(events_.begin(), events_.end(), [&](double te) { return te > opt_.t_end; }),
+                events_.end());
+  // Events at (or before) t_start set the initial modes.
+  while (next_event_ < events_.size() && events_[next_event_] <= opt_.t_start + eps_t_) {
+    system_.handle_time_event(events_[next_event_], user_.physical_y(y_.get()), user_.physical_yp(yp_.get()),
+                              result_.events);
+    ++next_event_;
+  }
+  if (!consistent_ic() || !settle()) return result_;
+  emit();
+  // Output rows in a step are read off IDA's interpolant: with IDA_NORMAL
+  // every output time would also cost a root-function evaluation (IDA
+  // checks the roots up to each tout), for outputs every ms about as many as
+  // the steps.
+  y_out_.reset(N_VClone(y_.get()));
+  yp_out_.reset(N_VClone(y_.get()));
+  N_VConst(0.0, yp_out_.get());  // stays 0 when the outputs read no y'
+  y_ev_.reset(N_VClone(y_.get()));
+  yp_ev_.reset(N_VClone(y_.get()));
+  restart_roots(nullptr);
+  while (t_ < opt_.t_end - eps_t_)
+    if (step() == Next::stop) break;
+  finish();
+  return result_;
+}
+
+// One step of IDA, its state events, output times and a stop at an event.
+Integration::Next Integration::step() {
+  const double t_event = next_event_ < events_.size() ? events_[next_event_] : std::numeric_limits<double>::infinity();
+  const double t_stop = std::min(t_event, opt_.t_end);
+  check(IDASetStopTime(ida_, t_stop), "IDASetStopTime");
+  double t_ret = t_;
+  // tout matters only for the first step after a (re)initialisation (its
+  // size), as it did with IDA_NORMAL.
+  const int flag = IDASolve(ida_, std::min(grid_.next(), t_stop), &t_ret, y_.get(), yp_.get(), IDA_ONE_STEP);
+  if (flag < 0) {
+    t_ = t_ret;
+    emit();  // the last state IDA reached, for the partial results
+    fail("integration failed at t = " + std::to_string(t_ret) + " s: " + flag_text(flag, user_));
+    return Next::stop;
+  }
+  const long k_before = grid_.k;
+  if (roots_.size() > 0) {
+    const Next next = state_events(t_ret);
+    if (next == Next::restarted) steps_without_output_ = 0;
+    if (next != Next::step) return next;
+  }
+  // Stopped at a time event or t_end: an output time within eps_t of it is
+  // that row (below), emitted after the event is handled.
+  const bool stopped = flag == IDA_TSTOP_RETURN;
+  while (grid_.pending() && (stopped ? grid_.next() < t_ret - eps_t_ : grid_.next() <= t_ret))
+    emit_interpolated(grid_.time(grid_.k++));
+  t_ = t_ret;
+  // IDA's own limit (IDASetMaxNumSteps) counts the steps of one IDASolve
+  // call, i.e. now one step: keep its meaning, at most max_steps steps
+  // between one output (or event) and the next.
+  steps_without_output_ = (stopped || grid_.k > k_before) ? 0 : steps_without_output_ + 1;
+  if (steps_without_output_ >= opt_.max_steps) {
+    emit();  // the last state IDA reached, for the partial results
+    fail("integration failed at t = " + std::to_string(t_) + " s: IDA_TOO_MUCH_WORK (" +
+         std::to_string(opt_.max_steps) + " steps without reaching the next output time)");
+    return Next::stop;
+  }
+  return stopped ? stopped_at(t_event) : Next::step;
+}
+
+// The state events in the step that ended at t_ret, in time order.
+Integration::Next Integration::state_events(double t_ret) {
+  roots_at(t_ret, y_.get(), yp_.get(), roots_.high());
+  double h_last = 0.0;
+  IDAGetLastStep(ida_, &h_last);
+  auto g_at = [&](double c, std::vector<double>& g) {
+    interpolate(c, y_ev_.get(), yp_ev_.get(), true);
+    roots_at(c, y_ev_.get(), yp_ev_.get(), g);
+  };
+  double t_root = t_ret;
+  while (roots_.locate(t_ret, h_last, g_at, t_root)) {
+    while (grid_.pending() && grid_.next() < t_root - eps_t_) emit_interpolated(grid_.time(grid_.k++));
+    interpolate(t_root, y_ev_.get(), yp_ev_.get(), true);
+    const std::vector<int> fired = roots_.root_info();
+    user_.parts.valid = false;  // the modes may have changed
+    const bool reinit = system_.handle_roots(t_root, user_.physical_y(y_ev_.get()), user_.physical_yp(yp_ev_.get()),
+                                             fired.data(), result_.events);
+    if (grid_.pending() && std::abs(t_root - grid_.next()) <= eps_t_) ++grid_.k;
+    if (reinit) {
+      // Restart from the event; IDA's step beyond it is discarded.
+      N_VScale(1.0, y_ev_.get(), y_.get());
+      N_VScale(1.0, yp_ev_.get(), yp_.get());
+      t_ = t_root;
+      if (!restart(&fired)) return Next::stop;
+      emit();
+      return Next::restarted;
+    }
+    emit_at(t_root, y_ev_.get(), yp_ev_.get());
+    // Go on searching (t_root, t_n].
+    roots_at(t_root, y_ev_.get(), yp_ev_.get(), roots_.low());
+    roots_.passed(t_root, fired);
+  }
+  roots_.step_done(t_ret);
+  return Next::step;
+}
+
+// IDA stopped at a time event or at t_end.
+Integration::Next Integration::stopped_at(double t_event) {
+  bool reinit = false;
+  if (next_event_ < events_.size() && std::abs(t_ - t_event) <= eps_t_) {
+    user_.parts.valid = false;
+    reinit = system_.handle_time_event(t_, user_.physical_y(y_.get()), user_.physical_yp(yp_.get()), result_.events);
+    ++next_event_;
+  }
+  if (reinit && !restart(nullptr)) return Next::stop;
+  const bool at_output = grid_.pending() && std::abs(t_ - grid_.next()) <= eps_t_;
+  if (at_output) ++grid_.k;
+  if (at_output || reinit) emit();
+  return Next::step;
+}
+
+void Integration::finish() {
+  if (user_.error) std::rethrow_exception(user_.error);
+  if (result_.message.empty()) {
+    result_.ok = true;
+    result_.t_reached = t_;
+  }
+  accumulate_stats();
+  auto& s = result_.stats;
   // IDA counts its requests; those answered by recombining were no evaluation.
-  s.jacobian_recombinations = user.parts.recombined;
-  s.jacobian_evals -= user.parts.recombined;
-  s.pattern_misses = system.pattern_misses();
-  s.variables = n;
-  s.netlist_variables = system.full_size();
-  s.explicit_variables = system.explicit_size();
-  s.nonzeros = system.nnz();
-  return result;
+  s.jacobian_recombinations = user_.parts.recombined;
+  s.jacobian_evals -= user_.parts.recombined;
+  s.pattern_misses = system_.pattern_misses();
+  s.variables = n_;
+  s.netlist_variables = system_.full_size();
+  s.explicit_variables = system_.explicit_size();
+  s.nonzeros = system_.nnz();
+}
+
+}  // namespace
+
+SolverResult simulate(System& system, const SolverOptions& opt, const OutputFn& output, const Quadratures* quad) {
+  Integration integration(system, opt, output, quad);
+  return integration.run();
 }
 
 }  // namespace pneumo

@@ -12,26 +12,17 @@
 #include <vector>
 
 #include "framework/assembly/system.hpp"
+#include "framework/model/simulation_options.hpp"
 
 namespace pneumo {
 
-struct SolverOptions {
-  double t_start = 0.0;
-  double t_end = 1.0;
-  double rtol = 1e-6;
-  double atol = 1e-6;  // fraction of each variable's nominal magnitude
-  double output_interval = 1e-3;
-  double max_step = 0.0;  // 0: no limit
+// The netlist's settings (simulation_options.hpp: units, defaults, ranges)
+// and what only programs set.
+struct SolverOptions : SimulationSettings {
   long max_steps = 1000000;
   // Whether the outputs read y' (run_system sets it from its ProbeSet):
   // without, the output rows skip interpolating y'.
   bool outputs_read_yp = true;
-  // Answer IDA's requests for a new Newton matrix that only follow a change
-  // of cj (step size or order) by recombining the parts dF/dy and dF/dy' of
-  // the last evaluation (see NewtonMatrixParts in ida_solver.cpp), when IDA
-  // integrates no algebraic unknown. Off: every request is a fresh
-  // evaluation, as IDA alone does.
-  bool reuse_jacobian = true;
 };
 
 struct SolverStats {

@@ -10,12 +10,13 @@
 #include <fstream>
 #include <iostream>
 #include <mutex>
+#include <optional>
 #include <set>
 #include <sstream>
-#include <thread>
 #include <unistd.h>
 
 #include "components/builtin.hpp"
+#include "framework/core/parallel.hpp"
 
 namespace pneumo::study {
 
@@ -350,43 +351,22 @@ SweepSummary run_sweep(const std::string& netlist_path, const Design& design, co
   {
     Journal journal(journal_path, identity);
     std::mutex mutex;
-    std::atomic<long> next{0}, finished{0}, failed{0};
-    std::atomic<bool> stop{false};
-    std::exception_ptr error;
+    long finished = 0, failed = 0;
     Progress progress(static_cast<long>(mine.size()), opt.progress && comm.rank() == 0);
-    auto worker = [&]() {
-      try {
-        Netlist nl = parse_netlist(text, netlist_path);  // own copy: YAML nodes are not shared across threads
-        const Registry& registry = builtin_registry();
-        for (;;) {
-          if (stop) return;
-          const long k = next++;
-          if (k >= static_cast<long>(mine.size())) return;
-          if (opt.stop_after >= 0 && k >= opt.stop_after) {
-            stop = true;
-            return;
-          }
-          RunRecord rec = run_one(nl, registry, design.parameters, design.samples[mine[k]], metrics, opt.assembly);
-          rec.index = mine[k];
-          journal.write(journal_line(rec, metrics.size()));
-          const long f = failed += rec.ok ? 0 : 1;
-          const long d = ++finished;
-          std::lock_guard<std::mutex> lock(mutex);
-          fresh.push_back(std::move(rec));
-          progress.update(d, f);
-        }
-      } catch (...) {
-        std::lock_guard<std::mutex> lock(mutex);
-        if (!error) error = std::current_exception();
-        stop = true;
-      }
-    };
-    const int threads = std::max(1, std::min<int>(opt.threads, static_cast<int>(std::max<std::size_t>(1, mine.size()))));
-    std::vector<std::thread> pool;
-    for (int t = 1; t < threads; ++t) pool.emplace_back(worker);
-    worker();
-    for (auto& th : pool) th.join();
-    if (error) std::rethrow_exception(error);
+    const long todo = opt.stop_after >= 0 ? std::min<long>(opt.stop_after, mine.size()) : static_cast<long>(mine.size());
+    // Each worker parses its own copy: YAML nodes are not shared across threads.
+    std::vector<std::optional<Netlist>> netlists(std::max(1, opt.threads));
+    parallel_for(todo, opt.threads, [&](int w, long k) {
+      if (!netlists[w]) netlists[w] = parse_netlist(text, netlist_path);
+      RunRecord rec = run_one(*netlists[w], builtin_registry(), design.parameters, design.samples[mine[k]], metrics,
+                              opt.assembly);
+      rec.index = mine[k];
+      journal.write(journal_line(rec, metrics.size()));
+      std::lock_guard<std::mutex> lock(mutex);
+      failed += rec.ok ? 0 : 1;
+      progress.update(++finished, failed);
+      fresh.push_back(std::move(rec));
+    });
     progress.update(finished, failed, true);
   }
   summary.computed = static_cast<long>(fresh.size());

@@ -369,13 +369,13 @@ std::array<double, NX> initial_state(const RigParams& P, const Model& M) {
 // SUNDIALS callbacks
 
 // What the callbacks share: the model and, when the Newton matrix is reused
-// the way pneumo reuses it (SolverOptions::reuse_jacobian), the df/dy of its
+// the way pneumo reuses it (SolverOptions::jacobian_reuse), the df/dy of its
 // last evaluation. Here F = y' - f(y), so the matrix is cj I - df/dy and a
 // request that only follows a change of cj needs no evaluation.
 struct Session {
     Model model;
     void* ida = nullptr;
-    bool reuse_jacobian = false;
+    bool jacobian_reuse = false;
     bool jac_valid = false;
     long steps_at = 0, conv_failures_at = 0, recombined = 0;
     double J[NX][NX];
@@ -400,11 +400,11 @@ int jacobian(sunrealtype /*t*/, sunrealtype cj, N_Vector yy, N_Vector /*yp*/, N_
     double f[NX];
     auto& J = S.J;
     long steps = 0, conv_failures = 0;
-    if (S.reuse_jacobian) {  // the floor as written asks IDA nothing here
+    if (S.jacobian_reuse) {  // the floor as written asks IDA nothing here
         IDAGetNumSteps(S.ida, &steps);
         IDAGetNumNonlinSolvConvFails(S.ida, &conv_failures);
     }
-    if (S.reuse_jacobian && S.jac_valid && conv_failures == S.conv_failures_at && steps >= S.steps_at &&
+    if (S.jacobian_reuse && S.jac_valid && conv_failures == S.conv_failures_at && steps >= S.steps_at &&
         steps - S.steps_at < kMaxJacobianAgeSteps) {
         ++S.recombined;
     } else {
@@ -495,13 +495,13 @@ double initial_position(const RigParams& params) {
 }
 
 RigResult simulate(const RigParams& P, double t_end, double rtol, double output_interval,
-                   void (*prepare_vector)(_generic_N_Vector*), bool reuse_jacobian) {
+                   void (*prepare_vector)(_generic_N_Vector*), bool jacobian_reuse) {
     if (!(t_end > 0.0) || !(output_interval > 0.0) || !(rtol > 0.0))
         throw std::runtime_error("pneumo_reference::simulate: invalid t_end/rtol/output_interval");
 
     Session session;
     session.model = make_model(P);
-    session.reuse_jacobian = reuse_jacobian;
+    session.jacobian_reuse = jacobian_reuse;
     Model& model = session.model;
     model.valves_open = P.t_switch <= 0.0;
 

@@ -120,12 +120,12 @@ struct RigResult {
 // `prepare_vector`, if given, is called on each vector before IDA sees it
 // (IDA's own vectors are clones of y): the benchmark passes pneumo's
 // compiled vector kernels through it to time the floor like for like; the
-// reference itself shares no code with pneumo. `reuse_jacobian` answers
+// reference itself shares no code with pneumo. `jacobian_reuse` answers
 // IDA's requests for a Newton matrix that only follow a change of cj from
-// the last df/dy, with pneumo's rule (SolverOptions::reuse_jacobian).
+// the last df/dy, with pneumo's rule (SolverOptions::jacobian_reuse).
 RigResult simulate(const RigParams& params, double t_end = 1.2, double rtol = 1e-6,
                    double output_interval = 1e-3, void (*prepare_vector)(_generic_N_Vector*) = nullptr,
-                   bool reuse_jacobian = false);
+                   bool jacobian_reuse = false);
 
 // Cushion throttle conductance C(z_EC) in dm^3/(s bar) (piecewise-linear table).
 double cushion_throttle_C(const RigParams& params, double z_EC);

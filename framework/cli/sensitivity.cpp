@@ -1,5 +1,4 @@
-#include "framework/cli/study_commands.hpp"
-
+// pneumo sensitivity NETLIST --param NAME=LOW:HIGH ... [--method morris|sobol] [-j N] [-o indices.csv]
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -9,7 +8,9 @@
 #include <sstream>
 
 #include "components/builtin.hpp"
+#include "framework/cli/command.hpp"
 #include "framework/cli/split_list.hpp"
+#include "framework/cli/study_support.hpp"
 #include "framework/study/sensitivity.hpp"
 #include "framework/study/sweep.hpp"
 
@@ -20,81 +21,11 @@ namespace {
 namespace fs = std::filesystem;
 using namespace pneumo::study;
 
-std::string default_output(const std::string& netlist, const char* suffix) {
-  return fs::path(netlist).stem().string() + suffix;
-}
-
-// Under mpirun an error on one rank must stop the others, which would
-// otherwise wait for it in a collective call.
-int stop_ranks(int status) {
-  try {
-    if (launched_by_mpi() && process_communicator().size() > 1) process_communicator().abort(status);
-  } catch (const std::exception&) {
-  }
-  return status;
-}
-
-// Runs `body`, mapping errors to exit statuses like `pneumo simulate`.
-int guarded(const std::string& netlist, const std::function<int()>& body) {
-  try {
-    return body();
-  } catch (const InputError& e) {
-    std::cerr << e.what() << "\n";
-  } catch (const StructureError& e) {
-    std::cerr << "pneumo: " << netlist << ": " << e.what() << "\n";
-  } catch (const std::exception& e) {
-    std::cerr << "pneumo: error: " << e.what() << "\n";
-  }
-  return stop_ranks(2);
-}
-
-void report(const SweepSummary& s, const std::string& output, bool quiet) {
-  if (quiet) return;
-  const double rate = s.seconds > 0 ? s.computed / s.seconds : 0.0;
-  std::cout << "sweep: " << s.runs << " runs";
-  if (s.ranks > 1) std::cout << " on " << s.ranks << " MPI ranks";
-  if (s.done_before > 0) std::cout << " (" << s.done_before << " done before, resumed)";
-  std::cout << ", " << s.computed << " run now in " << s.seconds << " s (" << rate << " runs/s on rank 0), "
-            << s.failed << " failed\n";
-  if (s.complete) std::cout << "wrote " << output << "\n";
-}
-
-struct SweepArgs {
-  std::string netlist, output, samples, metrics;
-  std::vector<std::string> grid;
-  int threads = 1;
-  bool quiet = false, eliminate = true;  // alias elimination is the default
-};
-
-int sweep_command(const SweepArgs& a) {
-  Communicator& comm = process_communicator();
-  const Netlist nl = load_netlist(a.netlist);
-  if ((a.grid.empty()) == (a.samples.empty()))
-    throw InputError(SourceLocation{a.netlist, 1, 1}, "", "", "pneumo sweep: give either --grid NAME=FROM:TO:COUNT ... or --samples FILE");
-  const Design d = a.grid.empty() ? samples_design(nl, builtin_registry(), a.samples)
-                                  : grid_design(nl, builtin_registry(), a.grid);
-  const std::string output = a.output.empty() ? default_output(a.netlist, ".sweep.csv") : a.output;
-  SweepOptions opt;
-  opt.threads = a.threads;
-  opt.progress = !a.quiet;
-  opt.metrics = split_list(a.metrics);
-  opt.assembly.eliminate_aliases = a.eliminate;
-  const SweepSummary s = run_sweep(a.netlist, d, output, opt, comm);
-  if (comm.rank() == 0) {
-    report(s, output, a.quiet);
-    if (s.failed > 0)
-      std::cerr << "pneumo sweep: " << s.failed << " of " << s.runs << " runs failed (status 'failed' and the reason in "
-                << output << ")\n";
-  }
-  return s.complete || comm.rank() != 0 ? 0 : 1;
-}
-
-struct SensitivityArgs {
-  std::string netlist, output, method = "morris", metrics;
+struct SensitivityArgs : StudyArgs {
+  std::string method = "morris";
   std::vector<std::string> params;
-  int trajectories = 20, levels = 4, base = 256, threads = 1;
+  int trajectories = 20, levels = 4, base = 256;
   long seed = 1;
-  bool quiet = false, eliminate = true;  // alias elimination is the default
 };
 
 void write_atomic(const std::string& path, const std::string& text) {
@@ -197,39 +128,20 @@ int sensitivity_command(const SensitivityArgs& a) {
 
 }  // namespace
 
-void add_study_commands(CLI::App& app, int& status) {
-  auto sweep_args = std::make_shared<SweepArgs>();
-  auto* sw = app.add_subcommand("sweep", "run a netlist over a parameter grid or sample list; metrics per run to CSV");
-  sw->add_option("netlist", sweep_args->netlist, "netlist file (YAML)")->required();
-  sw->add_option("--grid", sweep_args->grid,
-                 "NAME=FROM:TO:COUNT (repeatable; full factorial). NAME: top-level parameter or COMPONENT.PARAMETER")
-      ->take_all();
-  sw->add_option("--samples", sweep_args->samples, "CSV of runs: header of parameter names, one row per run");
-  sw->add_option("-j,--threads", sweep_args->threads, "threads (per MPI rank)")->check(CLI::PositiveNumber);
-  sw->add_option("-o,--output", sweep_args->output, "results CSV (default: NETLIST_STEM.sweep.csv)");
-  sw->add_option("--metrics", sweep_args->metrics, "metrics, comma separated (default: all the netlist provides)");
-  sw->add_flag("-q,--quiet", sweep_args->quiet, "no progress bar or summary");
-  sw->add_flag("--eliminate-aliases,!--keep-aliases", sweep_args->eliminate,
-               "substitute alias equations before solving (the default; --keep-aliases: hand IDA every unknown)");
-  sw->callback([sweep_args, &status]() { status = guarded(sweep_args->netlist, [&] { return sweep_command(*sweep_args); }); });
-
+Command add_sensitivity_command(CLI::App& app) {
   auto sa = std::make_shared<SensitivityArgs>();
   auto* se = app.add_subcommand("sensitivity", "Morris screening or Sobol indices of the run metrics over parameter ranges");
-  se->add_option("netlist", sa->netlist, "netlist file (YAML)")->required();
+  add_study_options(se, *sa);
   se->add_option("--param", sa->params, "NAME=LOW:HIGH (repeatable)")->take_all();
   se->add_option("--method", sa->method, "morris (screening) or sobol (variance-based indices)");
   se->add_option("--trajectories", sa->trajectories, "Morris: trajectories (runs = trajectories * (k + 1))");
   se->add_option("--levels", sa->levels, "Morris: grid levels (even)");
   se->add_option("--base-samples", sa->base, "Sobol: base samples N (runs = N * (k + 2))");
   se->add_option("--seed", sa->seed, "random seed of the design");
-  se->add_option("-j,--threads", sa->threads, "threads (per MPI rank)")->check(CLI::PositiveNumber);
-  se->add_option("--metrics", sa->metrics, "metrics, comma separated (default: all the netlist provides)");
   se->add_option("-o,--output", sa->output,
                  "indices CSV (default: NETLIST_STEM.sensitivity.csv); the runs go to OUTPUT_STEM.runs.csv");
   se->add_flag("-q,--quiet", sa->quiet, "no progress bar or tables");
-  se->add_flag("--eliminate-aliases,!--keep-aliases", sa->eliminate,
-               "substitute alias equations before solving (the default; --keep-aliases: hand IDA every unknown)");
-  se->callback([sa, &status]() { status = guarded(sa->netlist, [&] { return sensitivity_command(*sa); }); });
+  return study_command(se, sa, sensitivity_command);
 }
 
 }  // namespace pneumo::cli

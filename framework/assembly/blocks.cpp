@@ -1,0 +1,157 @@
+#include "framework/assembly/blocks.hpp"
+
+#include <algorithm>
+
+#include "framework/core/smooth.hpp"
+
+namespace pneumo {
+
+namespace {
+
+class ComponentBlock final : public Block {
+ public:
+  template <class T>
+  void eval(double t, const T* y, const T* yp, T* r, const EvalContext& c) const {
+    Eval<T> e(*component, t, y, yp, c.modes + mode0, connected.get(), *c.gas, c.invalid);
+    component->residual(e, r);
+  }
+  void residual(double t, const double* y, const double* yp, double* r, const EvalContext& c) const override {
+    eval(t, y, yp, r, c);
+  }
+  void residual(double t, const Dual* y, const Dual* yp, Dual* r, const EvalContext& c) const override {
+    eval(t, y, yp, r, c);
+  }
+  void residual(double t, const Pattern* y, const Pattern* yp, Pattern* r, const EvalContext& c) const override {
+    eval(t, y, yp, r, c);
+  }
+};
+
+// Through variables of a node sum to zero (Kirchhoff).
+class FlowSumBlock final : public Block {
+ public:
+  template <class T>
+  void eval(const T* y, T* r) const {
+    T s = y[0];
+    for (std::size_t i = 1; i < vars.size(); ++i) s = s + y[i];
+    r[0] = s;
+  }
+  void residual(double, const double* y, const double*, double* r, const EvalContext&) const override { eval(y, r); }
+  void residual(double, const Dual* y, const Dual*, Dual* r, const EvalContext&) const override { eval(y, r); }
+  void residual(double, const Pattern* y, const Pattern*, Pattern* r, const EvalContext&) const override { eval(y, r); }
+};
+
+// inStream for a node of three or more pneumatic ports: the temperature of
+// the gas arriving at port i is the mix of what the other ports deliver,
+// weighted by their smoothed outflows into the node (Modelica's stream
+// connector rule, regularised so that it stays defined at zero flow).
+// vars: [T_in_i, (m_flow_j, T_out_j) for j != i]
+class StreamMixBlock final : public Block {
+ public:
+  template <class T>
+  void eval(const T* y, T* r, const EvalContext& c) const {
+    const double eps = c.gas->m_flow_small;
+    T w_sum = 0.0, wt_sum = 0.0;
+    for (std::size_t j = 1; j + 1 < vars.size(); j += 2) {
+      const T w = smooth_pos(T(-y[j]), eps);  // outflow of port j = flow into the node
+      w_sum = w_sum + w;
+      wt_sum = wt_sum + w * y[j + 1];
+    }
+    r[0] = y[0] - wt_sum / w_sum;
+  }
+  void residual(double, const double* y, const double*, double* r, const EvalContext& c) const override { eval(y, r, c); }
+  void residual(double, const Dual* y, const Dual*, Dual* r, const EvalContext& c) const override { eval(y, r, c); }
+  void residual(double, const Pattern* y, const Pattern*, Pattern* r, const EvalContext& c) const override { eval(y, r, c); }
+};
+
+// Kinematics of a translational node: ds/dt = v. vars: [s, v]
+class KinematicBlock final : public Block {
+ public:
+  template <class T>
+  void eval(const T* y, const T* yp, T* r) const { r[0] = yp[0] - y[1]; }
+  void residual(double, const double* y, const double* yp, double* r, const EvalContext&) const override { eval(y, yp, r); }
+  void residual(double, const Dual* y, const Dual* yp, Dual* r, const EvalContext&) const override { eval(y, yp, r); }
+  void residual(double, const Pattern* y, const Pattern* yp, Pattern* r, const EvalContext&) const override { eval(y, yp, r); }
+};
+
+// An unconnected optional signal input holds its default value.
+class SignalDefaultBlock final : public Block {
+ public:
+  double value = 0.0;
+  template <class T>
+  void eval(const T* y, T* r) const { r[0] = y[0] - value; }
+  void residual(double, const double* y, const double*, double* r, const EvalContext&) const override { eval(y, r); }
+  void residual(double, const Dual* y, const Dual*, Dual* r, const EvalContext&) const override { eval(y, r); }
+  void residual(double, const Pattern* y, const Pattern*, Pattern* r, const EvalContext&) const override { eval(y, r); }
+};
+
+}  // namespace
+
+std::unique_ptr<Block> make_component_block() { return std::make_unique<ComponentBlock>(); }
+std::unique_ptr<Block> make_flow_sum_block() { return std::make_unique<FlowSumBlock>(); }
+std::unique_ptr<Block> make_stream_mix_block() { return std::make_unique<StreamMixBlock>(); }
+std::unique_ptr<Block> make_kinematic_block() { return std::make_unique<KinematicBlock>(); }
+std::unique_ptr<Block> make_signal_default_block(double value) {
+  auto b = std::make_unique<SignalDefaultBlock>();
+  b->value = value;
+  return b;
+}
+bool is_stream_mix(const Block& b) { return dynamic_cast<const StreamMixBlock*>(&b) != nullptr; }
+
+void gather(const Block& b, const double* y, const double* yp, double* ly, double* lyp) {
+  for (const auto& [i, c] : b.constants) {
+    ly[i] = c;
+    lyp[i] = 0.0;
+  }
+  for (const auto& m : b.mapped) {
+    ly[m.local] = m.scale * y[m.var];
+    lyp[m.local] = m.scale * yp[m.var];
+  }
+}
+
+void evaluate_structure(const Block& b, double t, const double* y, const double* yp, const EvalContext& ctx,
+                        std::vector<Pattern>& pr, std::vector<Dual>& dr) {
+  const int nl = static_cast<int>(b.vars.size());
+  std::vector<Pattern> py(nl), pyp(nl);
+  std::vector<Dual> dy(nl), dyp(nl);
+  for (int i = 0; i < nl; ++i) {
+    const int g = b.vars[i];
+    const double v = g >= 0 ? b.scale[i] * y[g] : b.offset[i];
+    const double vp = g >= 0 ? b.scale[i] * yp[g] : 0.0;
+    py[i] = Pattern(v);
+    pyp[i] = Pattern(vp);
+    if (g >= 0) {
+      py[i].deps.set(i);
+      pyp[i].deps.set(kMaxLocal + i);
+    }
+    dy[i] = Dual::variable(v, i, g >= 0 ? b.scale[i] : 0.0, nl);
+    dyp[i] = Dual(vp);
+  }
+  pr.assign(std::max(1, b.n_rows), Pattern(0.0));
+  dr.assign(std::max(1, b.n_rows), Dual(0.0));
+  b.residual(t, py.data(), pyp.data(), pr.data(), ctx);
+  b.residual(t, dy.data(), dyp.data(), dr.data(), ctx);
+}
+
+std::string node_text(const Circuit& c, const std::vector<PortId>& ports) {
+  std::string s = "{";
+  for (std::size_t i = 0; i < ports.size(); ++i) s += (i ? ", " : "") + c.port_name(ports[i]);
+  return s + "}";
+}
+
+std::map<std::pair<int, int>, int> compress_columns(const std::vector<std::set<int>>& cols,
+                                                    std::vector<long>& col_ptr, std::vector<long>& row_idx) {
+  const int n = static_cast<int>(cols.size());
+  col_ptr.assign(n + 1, 0);
+  row_idx.clear();
+  std::map<std::pair<int, int>, int> pos;
+  for (int c = 0; c < n; ++c) {
+    col_ptr[c] = static_cast<long>(row_idx.size());
+    for (int r : cols[c]) {
+      pos[{r, c}] = static_cast<int>(row_idx.size());
+      row_idx.push_back(r);
+    }
+  }
+  col_ptr[n] = static_cast<long>(row_idx.size());
+  return pos;
+}
+}  // namespace pneumo

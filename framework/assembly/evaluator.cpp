@@ -1,0 +1,240 @@
+// The evaluator: IDA's residual and Newton matrix. The explicitly solved
+// unknowns are expanded from IDA's y first (in level order, cached for the
+// last t and y); every block that has rows for IDA is evaluated with double
+// numbers for the residual and with Dual numbers (one direction per unknown
+// the block reads) for the Jacobian, whose explicit columns are folded in
+// by the Schur complement.
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "framework/assembly/blocks.hpp"
+#include "framework/assembly/system.hpp"
+
+namespace pneumo {
+
+void System::block_inputs(double t, const double*& y, const double*& yp, bool read_explicit) const {
+  if (plan_.unknowns.empty()) return;
+  if (read_explicit) {
+    expand(t, y, yp);
+  } else {
+    for (int i = 0; i < n_; ++i) {
+      work_.y[plan_.ida_to_m[i]] = y[i];
+      work_.yp[plan_.ida_to_m[i]] = yp[i];
+    }
+    work_.cache_valid = false;  // work_.y's states no longer match the cached expansion
+  }
+  y = work_.y.data();
+  yp = work_.yp.data();
+}
+
+bool System::expand(double t, const double* y, const double* yp) const {
+  for (int i = 0; i < n_; ++i) work_.yp[plan_.ida_to_m[i]] = yp[i];
+  if (work_.cache_valid && t == work_.cache_t && std::equal(y, y + n_, work_.cache_y.begin())) return work_.cache_invalid;
+  for (int i = 0; i < n_; ++i) work_.y[plan_.ida_to_m[i]] = y[i];
+  // Each explicit unknown is solved from its start value, not from the last
+  // call's: the result is then a function of (t, y) alone, without rounding
+  // noise from the call history (which stalled IDA's initialisation Newton
+  // at rtol 1e-9); a start value also keeps blocks that read an unknown
+  // before its level from seeing zero pressures.
+  for (const auto& x : plan_.unknowns) work_.y[x.var] = plan_.m_start[x.var];
+  bool invalid = false;
+  EvalContext ctx{&circuit_.gas, modes_.data(), &invalid};
+  double ly[kMaxLocal], lyp[kMaxLocal];
+  for (const auto& stage : plan_.stages)
+    for (const auto& [bi, list] : stage) {
+      const Block& b = *blocks_[bi];
+      gather(b, work_.y.data(), work_.yp.data(), ly, lyp);
+      b.residual(t, ly, lyp, work_.F_full.data() + b.row0, ctx);
+      for (int e : list) {
+        const auto& x = plan_.unknowns[e];
+        work_.y[x.var] -= work_.F_full[x.row] / x.coef;
+      }
+    }
+  std::copy_n(y, n_, work_.cache_y.begin());
+  work_.cache_t = t;
+  work_.cache_valid = true;
+  work_.cache_invalid = invalid;
+  return invalid;
+}
+
+int System::residual(double t, const double* y, const double* yp, double* F) const {
+  bool invalid = false;
+  EvalContext ctx{&circuit_.gas, modes_.data(), &invalid};
+  double ly[kMaxLocal], lyp[kMaxLocal];
+  const bool reduced = aliases_.n_full != n_;
+  if (!plan_.unknowns.empty()) {
+    invalid = expand(t, y, yp);
+    y = work_.y.data();
+    yp = work_.yp.data();
+  }
+  // Blocks whose rows were all substituted as aliases are not evaluated:
+  // their rows are identities after substitution, checked at assembly at
+  // three points and times, and such a block has no discrete modes that
+  // could change them. The other blocks' eliminated rows are checked here.
+  double* Ff = reduced ? work_.F_full.data() : F;
+  for (int bi : plan_.final_blocks) {
+    const Block& b = *blocks_[bi];
+    gather(b, y, yp, ly, lyp);
+    b.residual(t, ly, lyp, Ff + b.row0, ctx);
+  }
+  if (reduced)
+    for (const auto& [r, q] : plan_.kept_full_rows) F[q] = Ff[r];
+  for (int e : aliases_.checked) {
+    const int r = aliases_.eliminated[e];
+    if (std::abs(Ff[r]) > 1e-10 * aliases_.eliminated_nominal[e] && std::isfinite(Ff[r])) {
+      throw std::runtime_error("equation '" + equation_name(r) + "', substituted as an alias at assembly, no longer holds at t = " +
+                               std::to_string(t) + " (residual " + std::to_string(Ff[r]) +
+                               "); a component must not change such an equation at an event");
+    }
+  }
+  if (invalid) return 1;
+  for (int i = 0; i < n_; ++i)
+    if (!std::isfinite(F[i])) return 1;
+  return 0;
+}
+
+int System::jacobian(double t, const double* y, const double* yp, double cj, double* values) const {
+  if (plan_.unknowns.empty()) return jacobian_blocks(t, y, yp, cj, values);
+  const bool invalid = expand(t, y, yp);
+  const int flag = jacobian_blocks(t, work_.y.data(), work_.yp.data(), cj, work_.j1_values.data());
+  // Adds a dF/d(column c) entry to the row being reduced (work_.scatter, over
+  // IDA's columns): directly for an unknown of IDA, through dc/dy for an
+  // explicit one.
+  auto accumulate = [&](double a, int c) {
+    if (a == 0.0) return;
+    const int j = plan_.of_m[c];
+    if (j < 0) {
+      work_.scatter[plan_.m_to_ida[c]] += a;
+      return;
+    }
+    const auto& xj = plan_.unknowns[j];
+    for (int k = 0; k < xj.dn; ++k) work_.scatter[plan_.d_cols[xj.d0 + k]] += a * work_.d_values[xj.d0 + k];
+  };
+  // d var / d y_IDA of each explicit unknown, in level order:
+  //   coef dvar + sum_c F_row,c dc = 0, dc of an explicit c known already.
+  for (const auto& x : plan_.unknowns) {
+    for (int k = 0; k < x.dn; ++k) work_.scatter[plan_.d_cols[x.d0 + k]] = 0.0;
+    for (const auto& [p, c] : x.entries) {
+      const double a = work_.j1_values[p];
+      if (c == x.var) {
+        if (std::abs(a - x.coef) > 1e-9 * std::abs(x.coef)) {
+          throw std::runtime_error("equation '" + equation_name(x.row) + "', solved explicitly at assembly (linear, dF/dy " +
+                                   std::to_string(x.coef) + "), now has dF/dy " + std::to_string(a) + " at t = " +
+                                   std::to_string(t) + "; assemble with eliminate_explicit = false");
+        }
+        continue;
+      }
+      accumulate(a, c);
+    }
+    for (int k = 0; k < x.dn; ++k) work_.d_values[x.d0 + k] = -work_.scatter[plan_.d_cols[x.d0 + k]] / x.coef;
+  }
+  // IDA's rows: F_row,y + sum over explicit c of F_row,c dc/dy.
+  std::fill(values, values + nnz(), 0.0);
+  for (const auto& kr : plan_.kept_rows) {
+    for (const auto& [c, p] : kr.out) work_.scatter[c] = 0.0;
+    for (const auto& [p, c] : kr.entries) accumulate(work_.j1_values[p], c);
+    for (const auto& [c, p] : kr.out) values[p] = work_.scatter[c];
+  }
+  return invalid || flag ? 1 : 0;
+}
+
+int System::jacobian_blocks(double t, const double* y, const double* yp, double cj, double* values) const {
+  std::fill(values, values + plan_.j1_row_idx.size(), 0.0);
+  bool invalid = false;
+  EvalContext ctx{&circuit_.gas, modes_.data(), &invalid};
+  static thread_local std::vector<Dual> ly(kMaxLocal), lyp(kMaxLocal), r(kMaxLocal * 2);
+  for (const auto& b : blocks_) {
+    if (b->all_eliminated) continue;
+    const int nl = static_cast<int>(b->vars.size());
+    for (int i = 0; i < nl; ++i) {
+      // One pass gives dF/dy + cj dF/dy': y_i seeded with 1, y'_i with cj
+      // (times the alias sign: local i is scale_i * y_g), in the direction
+      // of its unknown. Seeded in place: a Dual is 0.5 kB.
+      const int g = b->vars[i];
+      Dual& a = ly[i];
+      Dual& ap = lyp[i];
+      if (g < 0) {
+        a.v = b->offset[i];
+        ap.v = 0.0;
+        a.n = ap.n = 0;
+        continue;
+      }
+      const double s = b->scale[i];
+      a.v = s * y[g];
+      ap.v = s * yp[g];
+      // Only the directions up to its own are active (see build_slots), in
+      // whole groups (Dual::padded).
+      const int active = Dual::padded(b->slot[i] + 1);
+      a.n = ap.n = active;
+      std::fill_n(a.d.begin(), active, 0.0);
+      std::fill_n(ap.d.begin(), active, 0.0);
+      a.d[b->slot[i]] = s;
+      ap.d[b->slot[i]] = cj * s;
+    }
+    if (static_cast<int>(r.size()) < b->n_rows) r.resize(b->n_rows);
+    b->residual(t, ly.data(), lyp.data(), r.data(), ctx);
+    for (int k = 0; k < b->n_rows; ++k) {
+      if (aliases_.row_of[b->row0 + k] < 0) continue;
+      const Dual& f = r[k];
+      const int directions = std::min(f.n, static_cast<int>(b->slot_local.size()));  // without the padding
+      for (int i = 0; i < directions; ++i) {
+        const double d = f.d[i];
+        if (d == 0.0) continue;
+        const int p = b->jac_pos[static_cast<std::size_t>(k) * nl + b->slot_local[i]];
+        if (p >= 0) values[p] += d;
+        else ++work_.pattern_misses;
+      }
+    }
+  }
+  return invalid ? 1 : 0;
+}
+
+int System::newton_matrix_parts(double t, const double* y, const double* yp, double* dFdy, double* dFdyp) const {
+  // The explicit unknowns have no y': dF/dy' = J(cj = 1) - J(cj = 0).
+  int flag = jacobian(t, y, yp, 0.0, dFdy);
+  flag |= jacobian(t, y, yp, 1.0, dFdyp);
+  for (long p = 0; p < nnz(); ++p) dFdyp[p] -= dFdy[p];
+  return flag;
+}
+
+void System::jacobian_parts(double t, const double* y, const double* yp, std::vector<double>& dFdy,
+                            std::vector<double>& dFdyp) const {
+  dFdy.assign(static_cast<std::size_t>(n_) * n_, 0.0);
+  dFdyp.assign(static_cast<std::size_t>(n_) * n_, 0.0);
+  if (!plan_.unknowns.empty()) {
+    std::vector<double> j0(nnz()), j1(nnz());
+    newton_matrix_parts(t, y, yp, j0.data(), j1.data());
+    for (int c = 0; c < n_; ++c)
+      for (long p = col_ptr_[c]; p < col_ptr_[c + 1]; ++p) {
+        const std::size_t k = static_cast<std::size_t>(row_idx_[p]) * n_ + c;
+        dFdy[k] = j0[p];
+        dFdyp[k] = j1[p];
+      }
+    return;
+  }
+  bool invalid = false;
+  EvalContext ctx{&circuit_.gas, modes_.data(), &invalid};
+  std::vector<Dual> ly(kMaxLocal), lyp(kMaxLocal), r(kMaxLocal * 2);
+  for (int part = 0; part < 2; ++part)
+    for (const auto& b : blocks_) {
+      const int nl = static_cast<int>(b->vars.size());
+      for (int i = 0; i < nl; ++i) {
+        const int g = b->vars[i];
+        const double s = g >= 0 ? b->scale[i] : 0.0;
+        ly[i] = Dual::variable(g >= 0 ? s * y[g] : b->offset[i], i, part == 0 ? s : 0.0, nl);
+        lyp[i] = Dual::variable(g >= 0 ? s * yp[g] : 0.0, i, part == 1 ? s : 0.0, nl);
+      }
+      if (static_cast<int>(r.size()) < b->n_rows) r.resize(b->n_rows);
+      b->residual(t, ly.data(), lyp.data(), r.data(), ctx);
+      auto& out = part == 0 ? dFdy : dFdyp;
+      for (int k = 0; k < b->n_rows; ++k) {
+        const int row = aliases_.row_of[b->row0 + k];
+        if (row < 0) continue;
+        for (int i = 0; i < nl; ++i)
+          if (b->vars[i] >= 0) out[static_cast<std::size_t>(row) * n_ + b->vars[i]] += r[k].deriv(i);
+      }
+    }
+}
+
+}  // namespace pneumo

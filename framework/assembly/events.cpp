@@ -1,0 +1,116 @@
+// Discrete modes and events: root functions, time events, and the modes a
+// component's on_event() changes. After such a change the rows that give
+// explicit unknowns are checked again (verify_explicit).
+#include <algorithm>
+#include <cmath>
+
+#include "framework/assembly/blocks.hpp"
+#include "framework/assembly/system.hpp"
+
+namespace pneumo {
+
+void System::reset_modes() {
+  for (const auto& b : blocks_)
+    if (b->component) b->component->initial_modes(modes_.data() + b->mode0);
+  work_.y = plan_.m_start;
+  work_.yp.assign(plan_.m_start.size(), 0.0);
+  work_.cache_valid = false;
+}
+
+void System::roots(double t, const double* y, const double* yp, double* g) const {
+  block_inputs(t, y, yp, plan_.any_roots_read_explicit);
+  bool invalid = false;
+  double ly[kMaxLocal], lyp[kMaxLocal];
+  for (int bi : root_blocks_) {
+    const Block& b = *blocks_[bi];
+    gather(b, y, yp, ly, lyp);
+    Eval<double> e(*b.component, t, ly, lyp, modes_.data() + b.mode0, b.connected.get(), circuit_.gas, &invalid);
+    b.component->roots(e, g + b.root0);
+  }
+}
+
+std::vector<double> System::time_events() const {
+  std::vector<double> out;
+  for (const auto& b : blocks_)
+    if (b->component)
+      for (double t : b->component->time_events()) out.push_back(t);
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
+// One component's event at (t, y, yp): its on_event() may change its
+// modes; then the explicit unknowns may take other values at the same
+// (t, y) - a signal source's step - and the rows that give them are checked
+// again. Returns whether the modes changed.
+bool System::fire_event(int bi, double t, const double* y, const double* yp, EventKind kind, int root, int dir,
+                        std::vector<EventLogEntry>& log) {
+  const Block& b = *blocks_[bi];
+  double ly[kMaxLocal], lyp[kMaxLocal];
+  bool invalid = false;
+  gather(b, y, yp, ly, lyp);
+  double* modes = modes_.data() + b.mode0;
+  Eval<double> e(*b.component, t, ly, lyp, modes, b.connected.get(), circuit_.gas, &invalid);
+  const std::vector<double> before(modes, modes + b.component->info().modes);
+  const EventResult res = b.component->on_event(e, modes, kind, root, dir);
+  if (!plan_.unknowns.empty() && !std::equal(before.begin(), before.end(), modes)) {
+    verify_explicit(bi, t);
+    work_.cache_valid = false;
+  }
+  if (!res.message.empty() || !res.tag.empty()) log.push_back({t, b.component->name(), res.message, res.tag});
+  return res.changed;
+}
+
+bool System::handle_time_event(double t, const double* y, const double* yp, std::vector<EventLogEntry>& log) {
+  block_inputs(t, y, yp);
+  bool changed = false;
+  for (std::size_t bi = 0; bi < blocks_.size(); ++bi) {
+    const Block& b = *blocks_[bi];
+    if (!b.component) continue;
+    bool due = false;
+    for (double te : b.component->time_events()) due |= std::abs(te - t) <= 1e-12 * std::max(1.0, std::abs(t));
+    if (due) changed |= fire_event(static_cast<int>(bi), t, y, yp, EventKind::time, -1, 0, log);
+  }
+  return changed;
+}
+
+bool System::handle_roots(double t, const double* y, const double* yp, const int* root_info,
+                          std::vector<EventLogEntry>& log) {
+  block_inputs(t, y, yp);
+  bool changed = false;
+  for (std::size_t bi = 0; bi < blocks_.size(); ++bi) {
+    const Block& b = *blocks_[bi];
+    if (!b.component) continue;
+    for (int k = 0; k < b.component->info().roots; ++k) {
+      const int dir = root_info[b.root0 + k];
+      if (dir != 0) changed |= fire_event(static_cast<int>(bi), t, y, yp, EventKind::root, k, dir, log);
+    }
+  }
+  return changed;
+}
+
+bool System::handle_input_changes(double t, const double* y, const double* yp, std::vector<EventLogEntry>& log,
+                                  std::vector<std::string>* changed) {
+  block_inputs(t, y, yp);
+  bool any = false, invalid = false;
+  double ly[kMaxLocal], lyp[kMaxLocal];
+  for (std::size_t bi = 0; bi < blocks_.size(); ++bi) {
+    const Block& b = *blocks_[bi];
+    if (!b.component || !b.component->info().follows_inputs) continue;
+    gather(b, y, yp, ly, lyp);
+    double* modes = modes_.data() + b.mode0;
+    Eval<double> e(*b.component, t, ly, lyp, modes, b.connected.get(), circuit_.gas, &invalid);
+    const std::vector<double> before(modes, modes + b.component->info().modes);
+    const EventResult res = b.component->on_inputs_changed(e, modes);
+    if (!plan_.unknowns.empty() && !std::equal(before.begin(), before.end(), modes)) {
+      verify_explicit(static_cast<int>(bi), t);
+      work_.cache_valid = false;
+    }
+    if (res.changed && changed) changed->push_back(b.component->name());
+    any |= res.changed;
+    if (!res.message.empty() || !res.tag.empty()) log.push_back({t, b.component->name(), res.message, res.tag});
+  }
+  return any;
+}
+
+}  // namespace pneumo

@@ -1,0 +1,33 @@
+// The commands of `pneumo`. Each lives in its own file and is added the same
+// way, add_<name>_command(app): it declares its options on a subcommand of
+// `app` and returns what main runs when that subcommand was chosen.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include <functional>
+#include <string>
+
+namespace pneumo::cli {
+
+struct Command {
+  CLI::App* app = nullptr;  // the subcommand
+  // Exit status: 0 success, 1 the run (simulation, fit, sweep) failed. Bad
+  // input throws InputError or StructureError (main: message, status 2).
+  std::function<int()> run{};
+  // The file a StructureError is about (the command's netlist), if any.
+  std::function<std::string()> input{};
+  // Called after bad input was reported, before exiting with status 2.
+  std::function<void()> on_error{};
+};
+
+Command add_simulate_command(CLI::App& app);
+Command add_plot_command(CLI::App& app);
+Command add_sweep_command(CLI::App& app);
+Command add_sensitivity_command(CLI::App& app);
+Command add_components_command(CLI::App& app);
+Command add_fit_command(CLI::App& app);
+Command add_diagnose_command(CLI::App& app);
+Command add_optimize_command(CLI::App& app);
+
+}  // namespace pneumo::cli

@@ -1,0 +1,38 @@
+// pneumo plot results.csv [-o PREFIX] [--columns a,b]
+#include <filesystem>
+#include <iostream>
+#include <memory>
+
+#include "framework/cli/command.hpp"
+#include "framework/cli/split_list.hpp"
+#include "framework/io/plot.hpp"
+
+namespace pneumo::cli {
+
+namespace {
+
+struct PlotArgs {
+  std::string csv, out, columns;
+};
+
+int plot_command(const PlotArgs& a) {
+  std::string out = a.out;
+  if (out.empty())
+    out = (std::filesystem::path(a.csv).parent_path() / std::filesystem::path(a.csv).stem()).string();
+  plot_results(a.csv, out, split_list(a.columns), a.csv);
+  std::cout << "plotted " << out << ".png and " << out << ".svg\n";
+  return 0;
+}
+
+}  // namespace
+
+Command add_plot_command(CLI::App& app) {
+  auto a = std::make_shared<PlotArgs>();
+  auto* plot = app.add_subcommand("plot", "plot a results CSV to PNG and SVG through gnuplot");
+  plot->add_option("results", a->csv, "results CSV")->required();
+  plot->add_option("-o,--output", a->out, "output prefix (default: the CSV path without .csv)");
+  plot->add_option("--columns", a->columns, "columns to plot, comma separated (default: all)");
+  return {.app = plot, .run = [a] { return plot_command(*a); }};
+}
+
+}  // namespace pneumo::cli

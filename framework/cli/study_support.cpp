@@ -1,0 +1,43 @@
+#include "framework/cli/study_support.hpp"
+
+#include <filesystem>
+#include <iostream>
+
+#include "framework/study/communicator.hpp"
+
+namespace pneumo::cli {
+
+namespace fs = std::filesystem;
+using namespace pneumo::study;
+
+void add_study_options(CLI::App* cmd, StudyArgs& a) {
+  cmd->add_option("netlist", a.netlist, "netlist file (YAML)")->required();
+  cmd->add_option("-j,--threads", a.threads, "threads (per MPI rank)")->check(CLI::PositiveNumber);
+  cmd->add_option("--metrics", a.metrics, "metrics, comma separated (default: all the netlist provides)");
+  cmd->add_flag("--eliminate-aliases,!--keep-aliases", a.eliminate,
+                "substitute alias equations before solving (the default; --keep-aliases: hand IDA every unknown)");
+}
+
+std::string default_output(const std::string& netlist, const char* suffix) {
+  return fs::path(netlist).stem().string() + suffix;
+}
+
+void stop_ranks() {
+  try {
+    if (launched_by_mpi() && process_communicator().size() > 1) process_communicator().abort(2);
+  } catch (const std::exception&) {
+  }
+}
+
+void report(const SweepSummary& s, const std::string& output, bool quiet) {
+  if (quiet) return;
+  const double rate = s.seconds > 0 ? s.computed / s.seconds : 0.0;
+  std::cout << "sweep: " << s.runs << " runs";
+  if (s.ranks > 1) std::cout << " on " << s.ranks << " MPI ranks";
+  if (s.done_before > 0) std::cout << " (" << s.done_before << " done before, resumed)";
+  std::cout << ", " << s.computed << " run now in " << s.seconds << " s (" << rate << " runs/s on rank 0), "
+            << s.failed << " failed\n";
+  if (s.complete) std::cout << "wrote " << output << "\n";
+}
+
+}  // namespace pneumo::cli

@@ -1,0 +1,39 @@
+// What the study commands (sweep, sensitivity) share: their error
+// handling under MPI, their summary line and default output names.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "framework/cli/command.hpp"
+#include "framework/study/sweep.hpp"
+
+namespace pneumo::cli {
+
+// What every study command takes.
+struct StudyArgs {
+  std::string netlist, output, metrics;
+  int threads = 1;
+  bool quiet = false, eliminate = true;  // alias elimination is the default
+};
+
+// The netlist, -j, --metrics and --keep-aliases of a study command.
+void add_study_options(CLI::App* cmd, StudyArgs& a);
+
+// NETLIST_STEM + suffix, in the working directory.
+std::string default_output(const std::string& netlist, const char* suffix);
+
+// After bad input: under mpirun an error on one rank must stop the others,
+// which would otherwise wait for it in a collective call.
+void stop_ranks();
+
+// A study command's Command: bad input stops the other MPI ranks.
+template <class Args>
+Command study_command(CLI::App* cmd, std::shared_ptr<Args> a, int (*run)(const Args&)) {
+  return {.app = cmd, .run = [a, run] { return run(*a); }, .input = [a] { return a->netlist; }, .on_error = stop_ranks};
+}
+
+// The sweep's summary line on stdout (nothing when quiet).
+void report(const study::SweepSummary& s, const std::string& output, bool quiet);
+
+}  // namespace pneumo::cli
