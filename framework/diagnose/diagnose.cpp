@@ -12,6 +12,8 @@
 
 #include "framework/analysis/run_metrics.hpp"
 #include "framework/core/parallel.hpp"
+#include "framework/diagnose/phases.hpp"
+#include "framework/diagnose/statistics.hpp"
 #include "framework/run/run.hpp"
 
 namespace pneumo::diagnose {
@@ -20,45 +22,6 @@ namespace pneumo::diagnose {
 namespace {
 
 constexpr double kFailedResidual = 1e4;  // per sample, for a run the solver could not finish
-
-double interp(const std::vector<double>& t, const std::vector<double>& y, double tq) {
-  if (tq <= t.front()) return y.front();
-  if (tq >= t.back()) return y.back();
-  const auto it = std::upper_bound(t.begin(), t.end(), tq);
-  const std::size_t i = static_cast<std::size_t>(it - t.begin());
-  const double w = (tq - t[i - 1]) / (t[i] - t[i - 1]);
-  return y[i - 1] + w * (y[i] - y[i - 1]);
-}
-
-// Regularised upper incomplete gamma Q(a, x) (Numerical Recipes series / continued fraction).
-double gamma_q(double a, double x) {
-  if (x <= 0) return 1.0;
-  const double gln = std::lgamma(a);
-  if (x < a + 1) {
-    double ap = a, sum = 1.0 / a, del = sum;
-    for (int n = 0; n < 500; ++n) {
-      ap += 1;
-      del *= x / ap;
-      sum += del;
-      if (std::abs(del) < std::abs(sum) * 1e-14) break;
-    }
-    return std::max(0.0, 1.0 - sum * std::exp(-x + a * std::log(x) - gln));
-  }
-  double b = x + 1 - a, c = 1e300, d = 1 / b, h = d;
-  for (int i = 1; i < 500; ++i) {
-    const double an = -i * (i - a);
-    b += 2;
-    d = an * d + b;
-    if (std::abs(d) < 1e-300) d = 1e-300;
-    c = b + an / c;
-    if (std::abs(c) < 1e-300) c = 1e-300;
-    d = 1 / d;
-    const double del = d * c;
-    h *= del;
-    if (std::abs(del - 1) < 1e-14) break;
-  }
-  return std::exp(-x + a * std::log(x) - gln) * h;
-}
 
 // One measured signal of one run inside a concatenated residual vector.
 struct Segment {
@@ -71,27 +34,6 @@ struct Layout {
   std::vector<Segment> segments;
   std::size_t size = 0;
 };
-
-// Effective number of independent samples of a residual series, from its
-// lag-1 autocorrelation (AR(1) approximation): n (1 - rho) / (1 + rho).
-double effective_n(const double* r, std::size_t n) {
-  if (n < 3) return static_cast<double>(n);
-  double mean = 0;
-  for (std::size_t i = 0; i < n; ++i) mean += r[i];
-  mean /= n;
-  double c0 = 0, c1 = 0;
-  for (std::size_t i = 0; i < n; ++i) c0 += (r[i] - mean) * (r[i] - mean);
-  for (std::size_t i = 1; i < n; ++i) c1 += (r[i] - mean) * (r[i - 1] - mean);
-  if (c0 <= 0) return static_cast<double>(n);
-  const double rho = std::clamp(c1 / c0, 0.0, 0.999);
-  return std::clamp(n * (1 - rho) / (1 + rho), 1.0, static_cast<double>(n));
-}
-
-double ssr_of(const double* r, std::size_t n) {
-  double s = 0;
-  for (std::size_t i = 0; i < n; ++i) s += r[i] * r[i];
-  return s;
-}
 
 struct Model {  // a patched model ready to run
   std::string text;
@@ -383,14 +325,15 @@ class Engine {
   }
   double screen_cutoff_ = -1;  // < 0: never stop at screening
 
-  // Phases from the unpatched model's own run at each operating point: the
-  // catalogue's list (each starting at an event, a metric or the start), or
-  // else one phase per tagged event of the model, from its first occurrence.
+  // What the unpatched model's run at each operating point tells the
+  // phases (framework/diagnose/phases.hpp): its events' first times and
+  // its metrics' values.
   void compute_phases(const std::vector<PhaseDecl>& declared) {
     const Model base = model({});
-    std::vector<std::map<std::string, double>> starts(runs.size());  // per run: phase -> start time
-    std::map<std::string, std::vector<double>> first_seen;            // default phases: tag -> times
+    std::vector<PhaseStarts> starts(runs.size());
+    std::vector<std::vector<double>> times;
     for (std::size_t k = 0; k < runs.size(); ++k) {
+      times.push_back(runs[k].t);
       Netlist nl = netlist_of(base, static_cast<int>(k));
       const std::vector<bool> all(nl.metrics.size(), true);
       add_metric_outputs(nl, all);
@@ -401,52 +344,17 @@ class Engine {
         continue;  // input errors surfaced when the model was loaded; a failed run gets one phase
       }
       ++simulations;
-      for (const auto& e : res.solver.events) {
-        if (e.tag.empty()) continue;
-        const std::string ref = e.component + "." + e.tag;
-        if (!starts[k].count(ref)) {
-          starts[k][ref] = e.t;
-          first_seen[ref].push_back(e.t);
-        }
-      }
-      if (!declared.empty() && !nl.metrics.empty() && res.solver.ok) {
+      for (const auto& e : res.solver.events)
+        if (!e.tag.empty()) starts[k].emplace(e.component + "." + e.tag, e.t);
+      if (!declared.empty() && res.solver.ok) {
         const auto values = evaluate_metrics(nl, all, res, {});
         for (std::size_t i = 0; i < nl.metrics.size(); ++i) starts[k][nl.metrics[i].name] = values[i];
       }
     }
-    std::vector<std::string> from;
-    phase_names.clear();
-    if (!declared.empty()) {
-      for (const auto& p : declared) phase_names.push_back(p.name), from.push_back(p.from);
-    } else {
-      phase_names = {"start"};
-      from = {"start"};
-      std::vector<std::pair<double, std::string>> order;
-      for (auto& [ref, times] : first_seen) {
-        std::sort(times.begin(), times.end());
-        order.emplace_back(times[times.size() / 2], ref);
-      }
-      std::sort(order.begin(), order.end());
-      for (const auto& [t, ref] : order) phase_names.push_back(ref), from.push_back(ref);
-    }
-    phases.assign(runs.size(), {});
-    phase_times.assign(runs.size(), {});
-    for (std::size_t k = 0; k < runs.size(); ++k) {
-      const auto& t = runs[k].t;
-      // A phase whose start never came is empty; starts never go back in time.
-      auto& pt = phase_times[k];
-      for (const auto& f : from) {
-        const auto it = starts[k].find(f);
-        double s0 = f == "start" ? t.front() : it == starts[k].end() || std::isnan(it->second) ? t.back() : it->second;
-        pt.push_back(std::clamp(std::max(s0, pt.empty() ? t.front() : pt.back()), t.front(), t.back()));
-      }
-      pt.push_back(t.back());
-      phases[k].assign(t.size(), 0);
-      for (std::size_t i = 0, p = 0; i < t.size(); ++i) {
-        while (p + 1 < from.size() && t[i] >= pt[p + 1]) ++p;
-        phases[k][i] = static_cast<int>(p);
-      }
-    }
+    Phases ph = assign_phases(declared, times, starts);
+    phase_names = std::move(ph.names);
+    phases = std::move(ph.of_sample);
+    phase_times = std::move(ph.times);
   }
 
   const DiagnoseOptions& options() const { return options_; }

@@ -1,0 +1,68 @@
+#include "framework/diagnose/statistics.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace pneumo::diagnose {
+
+double interp(const std::vector<double>& t, const std::vector<double>& y, double tq) {
+  if (tq <= t.front()) return y.front();
+  if (tq >= t.back()) return y.back();
+  const auto it = std::upper_bound(t.begin(), t.end(), tq);
+  const std::size_t i = static_cast<std::size_t>(it - t.begin());
+  const double w = (tq - t[i - 1]) / (t[i] - t[i - 1]);
+  return y[i - 1] + w * (y[i] - y[i - 1]);
+}
+
+// Regularised upper incomplete gamma Q(a, x) (Numerical Recipes series / continued fraction).
+double gamma_q(double a, double x) {
+  if (x <= 0) return 1.0;
+  const double gln = std::lgamma(a);
+  if (x < a + 1) {
+    double ap = a, sum = 1.0 / a, del = sum;
+    for (int n = 0; n < 500; ++n) {
+      ap += 1;
+      del *= x / ap;
+      sum += del;
+      if (std::abs(del) < std::abs(sum) * 1e-14) break;
+    }
+    return std::max(0.0, 1.0 - sum * std::exp(-x + a * std::log(x) - gln));
+  }
+  double b = x + 1 - a, c = 1e300, d = 1 / b, h = d;
+  for (int i = 1; i < 500; ++i) {
+    const double an = -i * (i - a);
+    b += 2;
+    d = an * d + b;
+    if (std::abs(d) < 1e-300) d = 1e-300;
+    c = b + an / c;
+    if (std::abs(c) < 1e-300) c = 1e-300;
+    d = 1 / d;
+    const double del = d * c;
+    h *= del;
+    if (std::abs(del - 1) < 1e-14) break;
+  }
+  return std::exp(-x + a * std::log(x) - gln) * h;
+}
+
+// Effective number of independent samples of a residual series, from its
+// lag-1 autocorrelation (AR(1) approximation): n (1 - rho) / (1 + rho).
+double effective_n(const double* r, std::size_t n) {
+  if (n < 3) return static_cast<double>(n);
+  double mean = 0;
+  for (std::size_t i = 0; i < n; ++i) mean += r[i];
+  mean /= n;
+  double c0 = 0, c1 = 0;
+  for (std::size_t i = 0; i < n; ++i) c0 += (r[i] - mean) * (r[i] - mean);
+  for (std::size_t i = 1; i < n; ++i) c1 += (r[i] - mean) * (r[i - 1] - mean);
+  if (c0 <= 0) return static_cast<double>(n);
+  const double rho = std::clamp(c1 / c0, 0.0, 0.999);
+  return std::clamp(n * (1 - rho) / (1 + rho), 1.0, static_cast<double>(n));
+}
+
+double ssr_of(const double* r, std::size_t n) {
+  double s = 0;
+  for (std::size_t i = 0; i < n; ++i) s += r[i] * r[i];
+  return s;
+}
+
+}  // namespace pneumo::diagnose
