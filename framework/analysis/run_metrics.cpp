@@ -172,7 +172,7 @@ void add_metric_outputs(Netlist& nl, const std::vector<bool>& marked) {
     const MetricDecl& m = nl.metrics[i];
     if (!marked[i] || m.kind != Kind::integral) continue;
     const auto dot = m.output.find('.');
-    nl.outputs.push_back({kPrefix + m.name, m.output.substr(0, dot), m.output.substr(dot + 1), m.where, true});
+    nl.outputs.push_back({kPrefix + m.name, m.output.substr(0, dot), m.output.substr(dot + 1), m.where, true, "", {}});
   }
 }
 
