@@ -6,7 +6,8 @@
 //    N independent parts (run_circuit) on one thread and on two, and - for
 //    comparison - as one System with one IDA (what every netlist paid
 //    before);
-//  * "line": N cylinders on one supply (one coupled part), N = 1, 2, ..., 64.
+//  * "line": N cylinders on one supply (one coupled part), N = 1, 2, ..., 16
+//    (a node of more ports exceeds assembly's limit of locals a block).
 //
 // Each figure: the median of `runs` runs of elaborate + assemble + integrate;
 // wall and CPU time (of the process: all threads), IDA steps (the sum over
@@ -121,7 +122,9 @@ void vary(int k, YAML::Node p) {
 int main(int argc, char** argv) {
   const int runs = argc > 1 ? std::max(1, std::atoi(argv[1])) : 3;
   const int max_copies = argc > 2 ? std::atoi(argv[2]) : 128;
-  const int max_line = argc > 3 ? std::atoi(argv[3]) : 64;
+  // N = 32 on one supply overruns assembly's limit of locals a block (the
+  // supply's node then joins 33 pneumatic ports): not run by default.
+  const int max_line = argc > 3 ? std::atoi(argv[3]) : 16;
   std::ifstream file(std::string(PNEUMO_SOURCE_DIR) + "/netlists/cushion_rig.yaml");
   std::stringstream text;
   text << file.rdbuf();
@@ -146,8 +149,9 @@ int main(int argc, char** argv) {
     split2.push_back(two.wall);
     whole.push_back(sys.wall);
   }
-  std::printf("fit wall ~ N^a: parts 1 thread a = %.3f, parts 2 threads a = %.3f, one System a = %.3f\n",
-              exponent(ns, split1), exponent(ns, split2), exponent(ns, whole));
+  if (ns.size() > 1)
+    std::printf("fit wall ~ N^a: parts 1 thread a = %.3f, parts 2 threads a = %.3f, one System a = %.3f\n",
+                exponent(ns, split1), exponent(ns, split2), exponent(ns, whole));
   const auto at = [&](int n) { return std::find(ns.begin(), ns.end(), n) - ns.begin(); };
   if (static_cast<std::size_t>(at(64)) < ns.size() && static_cast<std::size_t>(at(8)) < ns.size())
     std::printf("per copy, N = 64 over N = 8: parts 1 thread %.3f, parts 2 threads %.3f, one System %.3f\n",
@@ -164,6 +168,6 @@ int main(int argc, char** argv) {
     nl_ns.push_back(n);
     line.push_back(f.wall);
   }
-  std::printf("fit wall ~ N^a: line a = %.3f\n", exponent(nl_ns, line));
+  if (nl_ns.size() > 1) std::printf("fit wall ~ N^a: line a = %.3f\n", exponent(nl_ns, line));
   return 0;
 }
