@@ -16,12 +16,28 @@ SolverOptions solver_options(const SimulationSettings& s) {
   return o;
 }
 
+namespace {
+
+// "t" and every probe's column, no rows.
+ResultsTable table_header(const Circuit& circuit) {
+  ResultsTable t;
+  t.names.push_back("t");
+  t.units.push_back("s");
+  t.display.emplace_back();
+  for (const auto& p : circuit.probes) {
+    t.names.push_back(p.name);
+    t.units.push_back(p.unit);
+    t.display.push_back(p.display);
+  }
+  return t;
+}
+
+}  // namespace
+
 RunResult run_system(System& system, const SolverOptions& options) {
   RunResult out;
   const auto& probes = system.circuit().probes;
-  out.table.names.push_back("t");
-  out.table.units.push_back("s");
-  out.table.display.emplace_back();
+  out.table = table_header(system.circuit());
   // Integral outputs are IDAS quadratures; the others are sampled.
   Quadratures quad;
   std::vector<double> integrals;
@@ -29,9 +45,6 @@ RunResult run_system(System& system, const SolverOptions& options) {
   std::vector<int> slot(probes.size(), -1);
   for (std::size_t i = 0; i < probes.size(); ++i) {
     const auto& p = probes[i];
-    out.table.names.push_back(p.name);
-    out.table.units.push_back(p.unit);
-    out.table.display.push_back(p.display);
     if (p.integral) {
       slot[i] = static_cast<int>(quad.integrands.size());
       quad.integrands.push_back(p);
@@ -66,23 +79,6 @@ RunResult run_system(System& system, const SolverOptions& options) {
   return out;
 }
 
-namespace {
-
-// "t" and every probe's column, no rows.
-ResultsTable table_header(const Circuit& circuit) {
-  ResultsTable t;
-  t.names.push_back("t");
-  t.units.push_back("s");
-  t.display.emplace_back();
-  for (const auto& p : circuit.probes) {
-    t.names.push_back(p.name);
-    t.units.push_back(p.unit);
-    t.display.push_back(p.display);
-  }
-  return t;
-}
-
-}  // namespace
 
 RunResult run_circuit(Circuit circuit, const SolverOptions& options) {
   const std::vector<std::vector<int>> parts = independent_parts(circuit);
