@@ -121,5 +121,38 @@ TEST(IndependentParts, CopiesOnOneSupplyAreOneCoupledPart) {
   EXPECT_EQ(r.solver.stats.part_steps_max, r.solver.stats.steps);
 }
 
+// The merge on a hand-made pair of parts: x = 2 t in part 0 (an event at
+// t = 0.25 adds a row, one at t = 0.5 two rows), y = 10 - t in part 1 (its
+// grid rows only). Part 1's values at part 0's event times are the line
+// through its neighbouring rows; at part 0's second row at 0.5 it repeats.
+TEST(IndependentParts, MergeInterpolatesAPartBetweenItsOwnRows) {
+  std::vector<PartRun> parts(2);
+  parts[0].table.rows = {{0.0, 0.0}, {0.25, 0.5}, {0.5, 1.0}, {0.5, 1.5}, {1.0, 2.5}};
+  parts[0].column_of = {0, 2};
+  parts[0].solver.ok = true;
+  parts[0].solver.t_reached = 1.0;
+  parts[0].solver.stats.steps = 7;
+  parts[1].table.rows = {{0.0, 10.0}, {0.5, 9.5}, {1.0, 9.0}};
+  parts[1].column_of = {0, 1};
+  parts[1].solver.ok = true;
+  parts[1].solver.t_reached = 1.0;
+  parts[1].solver.stats.steps = 3;
+  ResultsTable header;
+  header.names = {"t", "y", "x"};
+  header.units = {"s", "m", "m"};
+  header.display.resize(3);
+  SolverResult solver;
+  ResultsTable table;
+  merge_parts(parts, header, solver, table);
+  const std::vector<std::vector<double>> expected = {
+      {0.0, 10.0, 0.0}, {0.25, 9.75, 0.5}, {0.5, 9.5, 1.0}, {0.5, 9.5, 1.5}, {1.0, 9.0, 2.5}};
+  EXPECT_EQ(table.rows, expected);
+  EXPECT_EQ(table.names, header.names);
+  EXPECT_TRUE(solver.ok);
+  EXPECT_EQ(solver.stats.steps, 10);
+  EXPECT_EQ(solver.stats.part_steps_max, 7);
+  EXPECT_EQ(solver.stats.parts, 2);
+}
+
 }  // namespace
 }  // namespace pneumo
