@@ -7,7 +7,7 @@
 //    comparison - as one System with one IDA (what every netlist paid
 //    before);
 //  * "line": N cylinders on one supply (one coupled part), N = 1, 2, ..., 16
-//    (a node of more ports exceeds assembly's limit of locals a block).
+//    (a node of 33 pneumatic ports exceeds assembly's limit of locals a block).
 //
 // Each figure: the median of `runs` runs of elaborate + assemble + integrate;
 // wall and CPU time (of the process: all threads), IDA steps (the sum over
@@ -122,8 +122,8 @@ void vary(int k, YAML::Node p) {
 int main(int argc, char** argv) {
   const int runs = argc > 1 ? std::max(1, std::atoi(argv[1])) : 3;
   const int max_copies = argc > 2 ? std::atoi(argv[2]) : 128;
-  // N = 32 on one supply overruns assembly's limit of locals a block (the
-  // supply's node then joins 33 pneumatic ports): not run by default.
+  // N = 32 on one supply joins 33 pneumatic ports at the supply's node,
+  // past assembly's limit of locals a block (an input error): not run.
   const int max_line = argc > 3 ? std::atoi(argv[3]) : 16;
   std::ifstream file(std::string(PNEUMO_SOURCE_DIR) + "/netlists/cushion_rig.yaml");
   std::stringstream text;

@@ -121,6 +121,26 @@ TEST(IndependentParts, CopiesOnOneSupplyAreOneCoupledPart) {
   EXPECT_EQ(r.solver.stats.part_steps_max, r.solver.stats.steps);
 }
 
+// 32 copies on one supply join 33 pneumatic ports at the supply's node:
+// its stream mixing would read 65 variables, past the 64 locals a block
+// holds. An input error naming the connection's line, not an overrun.
+TEST(IndependentParts, ANodeOfMoreThan32PneumaticPortsIsAnInputErrorAtItsConnection) {
+  const std::string text = pneumo_scale::copies_netlist(rig_text(), 32, {}, "supply");
+  const Netlist nl = parse_netlist(text, "line.yaml");
+  EXPECT_EQ(independent_parts(elaborate(nl, builtin_registry())).size(), 1u);
+  try {
+    (void)run_simulation(nl, builtin_registry());
+    FAIL() << "a node of 33 pneumatic ports was assembled";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where().file, "line.yaml");
+    EXPECT_GT(e.where().line, 0);
+    EXPECT_NE(std::string(e.what()).find("joins 33 ports"), std::string::npos) << e.what();
+  }
+  // 16 copies (17 ports) assemble.
+  EXPECT_NO_THROW(System(elaborate(parse_netlist(pneumo_scale::copies_netlist(rig_text(), 16, {}, "supply"), "l.yaml"),
+                                   builtin_registry())));
+}
+
 // The merge on a hand-made pair of parts: x = 2 t in part 0 (an event at
 // t = 0.25 adds a row, one at t = 0.5 two rows), y = 10 - t in part 1 (its
 // grid rows only). Part 1's values at part 0's event times are the line
