@@ -183,13 +183,17 @@ TEST(CustomFriction, FitPresetReproducesTheNamedPresetsAlongACushionedStroke) {
 // differences of the state show up amplified there: compared while sliding
 // (|v| > 1 cm/s) at 1e-7 (measured 1.0e-8 - the two copies leave the
 // rod-end stop a rounding apart and IDA is no longer re-initialised there),
-// everywhere at 1e-6 of the peak force.
+// everywhere at 1e-6 of the peak force. The two copies share no
+// connection: run as one System, so that one IDA takes the same steps for
+// both (run_simulation would integrate them apart, each with steps of its
+// own, and they would agree only to the solver's tolerance).
 TEST(CustomFriction, FitPresetFollowsTheSameFreeStroke) {
   const auto& presets = components::friction_presets();
   const std::string custom =
       fit_yaml(presets.at("annexC_pAB+"), false) + fit_yaml(presets.at("annexC_pEC"), true);
-  const RunResult r = run_simulation(
-      parse_netlist(netlist({{"preset", kPresets}, {"custom", custom}}, Motion::free), "free.yaml"), builtin_registry());
+  const Netlist nl = parse_netlist(netlist({{"preset", kPresets}, {"custom", custom}}, Motion::free), "free.yaml");
+  System system(elaborate(nl, builtin_registry()));
+  const RunResult r = run_system(system, solver_options(nl.simulation));
   ASSERT_TRUE(r.solver.ok) << r.solver.message;
   const auto F_p = column(r.table, "F_preset"), F_c = column(r.table, "F_custom");
   const auto x_p = column(r.table, "x_preset"), x_c = column(r.table, "x_custom"), v_p = column(r.table, "v_preset");

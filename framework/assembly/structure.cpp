@@ -266,6 +266,14 @@ void System::add_internal_variables(const Component& comp, Block& b) {
 // A framework block of one row at a node.
 void System::add_node_block(std::unique_ptr<Block> b, std::string label, std::string row_name, NodeLayout& l,
                             int node) {
+  // The evaluator's scratch and the Pattern scalar hold kMaxLocal locals a
+  // block: a stream mix at a node of n pneumatic ports reads 2 n - 1.
+  if (b->vars.size() > static_cast<std::size_t>(kMaxLocal))
+    throw InputError(l.where[node], "", "",
+                     "this connection joins " + std::to_string(l.nodes[node].size()) + " ports; its " + label +
+                         " reads " + std::to_string(b->vars.size()) + " variables, more than the limit of " +
+                         std::to_string(kMaxLocal) +
+                         " (at most 32 pneumatic ports a node): split it into several nodes joined by volumes");
   b->label = std::move(label);
   b->where = l.where[node];
   b->row0 = l.row++;

@@ -41,8 +41,11 @@ void print_stats(const SolverResult& r, double seconds, std::ostream& out) {
       << "  nonlinear iterations " << s.nonlinear_iterations << ", convergence failures " << s.nonlinear_failures
       << ", error test failures " << s.error_test_failures << "\n"
       << "  root function evaluations " << s.root_evals << ", re-initialisations " << s.reinitialisations
-      << ", events " << r.events.size() << "\n"
-      << "  wall time " << seconds * 1e3 << " ms\n";
+      << ", events " << r.events.size() << "\n";
+  if (s.parts > 1)
+    out << "  " << s.parts << " independent parts, each its own IDA (steps of the largest " << s.part_steps_max
+        << ")\n";
+  out << "  wall time " << seconds * 1e3 << " ms\n";
   if (s.pattern_misses > 0)
     out << "  WARNING: " << s.pattern_misses << " Jacobian entries fell outside the structural pattern\n";
 }
@@ -131,12 +134,12 @@ int simulate_command(const SimulateArgs& a) {
   if (!audit_path.empty() && audit_plans.empty())
     throw InputError(SourceLocation{nl.file, 1, 1}, "", "",
                      "--energy-audit: no component of this netlist declares an energy audit");
-  System system(elaborate(nl, registry));  // all input errors surface here
+  Circuit circuit = elaborate(nl, registry);  // the parameters' errors surface here, assembly's in run_circuit
   if (!user_outputs)
     throw InputError(SourceLocation{nl.file, 1, 1}, "", "",
                      "the netlist has no 'outputs:' (name: component.variable); nothing would be written");
-  const std::vector<std::string> metric_unit = metric_units(nl, system.circuit());
-  RunResult run = run_system(system, solver_options(nl.simulation));
+  const std::vector<std::string> metric_unit = metric_units(nl, circuit);
+  RunResult run = run_circuit(std::move(circuit), solver_options(nl.simulation));
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::vector<EnergyAudit> audits;
   std::vector<double> metric_values;

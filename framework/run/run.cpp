@@ -1,5 +1,13 @@
 #include "framework/run/run.hpp"
 
+#include <algorithm>
+#include <exception>
+#include <memory>
+#include <thread>
+
+#include "framework/core/parallel.hpp"
+#include "framework/run/parts.hpp"
+
 namespace pneumo {
 
 SolverOptions solver_options(const SimulationSettings& s) {
@@ -8,12 +16,28 @@ SolverOptions solver_options(const SimulationSettings& s) {
   return o;
 }
 
+namespace {
+
+// "t" and every probe's column, no rows.
+ResultsTable table_header(const Circuit& circuit) {
+  ResultsTable t;
+  t.names.push_back("t");
+  t.units.push_back("s");
+  t.display.emplace_back();
+  for (const auto& p : circuit.probes) {
+    t.names.push_back(p.name);
+    t.units.push_back(p.unit);
+    t.display.push_back(p.display);
+  }
+  return t;
+}
+
+}  // namespace
+
 RunResult run_system(System& system, const SolverOptions& options) {
   RunResult out;
   const auto& probes = system.circuit().probes;
-  out.table.names.push_back("t");
-  out.table.units.push_back("s");
-  out.table.display.emplace_back();
+  out.table = table_header(system.circuit());
   // Integral outputs are IDAS quadratures; the others are sampled.
   Quadratures quad;
   std::vector<double> integrals;
@@ -21,9 +45,6 @@ RunResult run_system(System& system, const SolverOptions& options) {
   std::vector<int> slot(probes.size(), -1);
   for (std::size_t i = 0; i < probes.size(); ++i) {
     const auto& p = probes[i];
-    out.table.names.push_back(p.name);
-    out.table.units.push_back(p.unit);
-    out.table.display.push_back(p.display);
     if (p.integral) {
       slot[i] = static_cast<int>(quad.integrands.size());
       quad.integrands.push_back(p);
@@ -58,9 +79,44 @@ RunResult run_system(System& system, const SolverOptions& options) {
   return out;
 }
 
+
+RunResult run_circuit(Circuit circuit, const SolverOptions& options) {
+  const std::vector<std::vector<int>> parts = independent_parts(circuit);
+  if (parts.size() <= 1) {
+    System system(std::move(circuit));
+    return run_system(system, options);
+  }
+  const ResultsTable header = table_header(circuit);
+  std::vector<std::vector<int>> column_of;
+  std::vector<Circuit> circuits = split_circuit(std::move(circuit), parts, column_of);
+  std::vector<PartRun> runs(parts.size());
+  // Each part's assembly error is kept, so that the one thrown does not
+  // depend on the threads' timing.
+  std::vector<std::exception_ptr> errors(parts.size());
+  const int threads = options.threads > 0 ? options.threads
+                                          : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  parallel_for(static_cast<long>(parts.size()), threads, [&](int, long p) {
+    std::unique_ptr<System> system;
+    try {
+      system = std::make_unique<System>(std::move(circuits[p]));
+    } catch (...) {
+      errors[p] = std::current_exception();
+      return;
+    }
+    RunResult r = run_system(*system, options);
+    runs[p].solver = std::move(r.solver);
+    runs[p].table = std::move(r.table);
+    runs[p].column_of = std::move(column_of[p]);
+  });
+  for (const auto& e : errors)
+    if (e) std::rethrow_exception(e);
+  RunResult out;
+  merge_parts(runs, header, out.solver, out.table);
+  return out;
+}
+
 RunResult run_simulation(const Netlist& netlist, const Registry& registry) {
-  System system(elaborate(netlist, registry));
-  return run_system(system, solver_options(netlist.simulation));
+  return run_circuit(elaborate(netlist, registry), solver_options(netlist.simulation));
 }
 
 }  // namespace pneumo

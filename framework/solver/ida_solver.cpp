@@ -432,6 +432,7 @@ void Integration::finish() {
   s.netlist_variables = system_.full_size();
   s.explicit_variables = system_.explicit_size();
   s.nonzeros = system_.nnz();
+  s.part_steps_max = s.steps;
 }
 
 }  // namespace

@@ -23,6 +23,9 @@ struct SolverOptions : SimulationSettings {
   // Whether the outputs read y' (run_system sets it from its ProbeSet):
   // without, the output rows skip interpolating y'.
   bool outputs_read_yp = true;
+  // Threads for the independent parts of a circuit (run_circuit): 0 = the
+  // hardware's, 1 = one part after another.
+  int threads = 0;
 };
 
 struct SolverStats {
@@ -40,6 +43,10 @@ struct SolverStats {
   int netlist_variables = 0;   // unknowns of the netlist's equations
   int explicit_variables = 0;  // of those, solved inside the residual
   long nonzeros = 0;
+  // A circuit integrated as independent parts (run_circuit): how many, and
+  // the steps of the part that took most (steps is their sum).
+  int parts = 1;
+  long part_steps_max = 0;
 };
 
 struct SolverResult {
