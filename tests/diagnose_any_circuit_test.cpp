@@ -134,34 +134,3 @@ TEST(DiagnoseAnyCircuit, WithheldLeakOfATankIsNamed) {
 
 }  // namespace
 }  // namespace pneumo
-
-namespace pneumo::diagnose {
-namespace {
-
-// Issue #19: the likelihood ratio on an effective sample size rewards a
-// candidate that barely changes a strongly autocorrelated residual; ranked
-// by it, an effect removing 1 % of the gap could stand above one removing
-// 85 %. The rank now follows the share of the gap removed; significance
-// only gates.
-TEST(DiagnoseRanking, ATinyGainNeverOutranksALargeOne) {
-  auto effect = [](const std::string& name, double after, double dbic, bool significant) {
-    EffectResult e;
-    e.name = name;
-    e.gap_before = 10.0;
-    e.gap_after = after;
-    e.delta_bic = dbic;
-    e.significant = significant;
-    return e;
-  };
-  std::vector<EffectResult> r = {effect("tiny", 9.9, 5000, true), effect("large", 2.35, 40, true),
-                                 effect("insignificant", 1.0, 2, false)};
-  const auto order = rank_effects(r);
-  ASSERT_EQ(order.size(), 3u);
-  EXPECT_EQ(r[order[0]].name, "large");
-  EXPECT_EQ(r[order[1]].name, "tiny");
-  EXPECT_EQ(r[order[2]].name, "insignificant");  // the gate: not significant, ranked after
-  EXPECT_EQ(r[1].rank, 1);
-}
-
-}  // namespace
-}  // namespace pneumo::diagnose

@@ -401,21 +401,6 @@ std::string fmt(const char* f, double a, double b = 0, double c = 0) {
 
 }  // namespace
 
-std::vector<int> rank_effects(std::vector<EffectResult>& results) {
-  std::vector<int> order;
-  for (std::size_t k = 0; k < results.size(); ++k)
-    if (results[k].unavailable.empty()) order.push_back(static_cast<int>(k));
-  std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
-    const auto &A = results[a], &B = results[b];
-    if (A.screened_out != B.screened_out) return !A.screened_out;
-    if (A.screened_out) return A.screening_improvement > B.screening_improvement;
-    if (A.significant != B.significant) return A.significant;
-    return excess_reduction(A.gap_before, A.gap_after) > excess_reduction(B.gap_before, B.gap_after);
-  });
-  for (std::size_t q = 0; q < order.size(); ++q) results[order[q]].rank = static_cast<int>(q) + 1;
-  return order;
-}
-
 DiagnosisReport diagnose(const std::string& model_file, const std::string& runs_dir,
                          const std::string& catalogue_file, const Registry& registry, const DiagnoseOptions& opt) {
   const auto t_start = std::chrono::steady_clock::now();
@@ -567,7 +552,17 @@ DiagnosisReport diagnose(const std::string& model_file, const std::string& runs_
         (er.failed_validation_runs ? " - the solver failed on a validation run at the fitted values" : ""));
     cands.push_back({&e, f, r_val});
   }
-  const std::vector<int> order = rank_effects(results);
+  // Rank by the penalised held-out improvement.
+  std::vector<int> order;
+  for (std::size_t k = 0; k < results.size(); ++k)
+    if (results[k].unavailable.empty()) order.push_back(static_cast<int>(k));
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
+    const auto &A = results[a], &B = results[b];
+    if (A.screened_out != B.screened_out) return !A.screened_out;
+    if (A.screened_out) return A.screening_improvement > B.screening_improvement;
+    return A.delta_bic > B.delta_bic;
+  });
+  for (std::size_t q = 0; q < order.size(); ++q) results[order[q]].rank = static_cast<int>(q) + 1;
 
   // Groups: near-collinear improvement patterns that the data do not separate.
   auto cand_of = [&](const std::string& n) -> const Cand* {
@@ -717,11 +712,7 @@ DiagnosisReport diagnose(const std::string& model_file, const std::string& runs_
       const bool practical = practically_significant(gap_cur, eng.gaps(s.r_val, val), opt, &why);
       log("    + " + s.e->name + fmt(": dBIC %.3g", s.s.delta_bic) +
           (practical ? ", removes enough of the excess gap of " + why : ", not practically significant"));
-      // Significance is the gate; of those that pass, the one that explains
-      // the most of the remaining validation gap is added.
-      if (s.s.delta_bic > opt.significance_bic && practical &&
-          (!bs || eng.gaps(s.r_val, val).total.rms < eng.gaps(bs->r_val, val).total.rms))
-        bs = &s;
+      if (s.s.delta_bic > opt.significance_bic && practical && (!bs || s.s.delta_bic > bs->s.delta_bic)) bs = &s;
     }
     if (!bs) break;
     chosen = bs->fit.effects;

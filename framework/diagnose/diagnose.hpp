@@ -10,8 +10,7 @@
 // parallel) after a linearised screening from the same sensitivities, and
 // scored on the validation runs by a likelihood ratio on the effective sample
 // size (lag-1 autocorrelation of the residuals) with a BIC penalty per
-// parameter - a gate - and ranked by the share of the validation gap they
-// remove. Effects whose improvements the signals cannot tell apart form a
+// parameter. Effects whose improvements the signals cannot tell apart form a
 // group; a second effect is added by forward selection (the remaining
 // candidates re-screened at the current model).
 // How far: the validation gap before and after, per signal and phase.
@@ -131,14 +130,6 @@ struct DiagnosisReport {
   double seconds = 0;
   long simulations = 0;
 };
-
-// Ranks the candidates (EffectResult::rank, 1 = best; returns the indices in
-// rank order): the fitted ones before the screened-out ones; among the
-// fitted, the significant ones (the likelihood test is a gate, not a score)
-// first, each group by the share of the validation gap in excess of the
-// noise that the effect removes - an effect that removes 1 % never ranks
-// above one that removes 85 %, however large its likelihood ratio.
-std::vector<int> rank_effects(std::vector<EffectResult>& results);
 
 DiagnosisReport diagnose(const std::string& model_file, const std::string& runs_dir,
                          const std::string& catalogue_file, const Registry& registry, const DiagnoseOptions& options);
