@@ -19,6 +19,7 @@ PACKAGES=(
   chromium               # headless check of the pneumo diagnose HTML report (tests)
   pybind11-dev python3-dev python3-numpy   # the Python module (python/)
   python3-pytest         # its tests
+  clang libclang-rt-14-dev     # libFuzzer targets (fuzz/, scripts/fuzz.sh)
 )
 missing=()
 for p in "${PACKAGES[@]}"; do

@@ -353,6 +353,11 @@ TEST(Diagnose, BadCatalogueNamesFileLineEffectAndParameter) {
   EXPECT_NE(e.find("c.yaml:2:"), std::string::npos) << e;
   EXPECT_NE(e.find("effect 'leak' does not apply"), std::string::npos) << e;
 
+  // A component to add that is not a map (found by fuzz/catalogue_fuzzer): an InputError at its line.
+  e = load("effects:\n  leak:\n    add_components:\n      h: \"just text\"\n");
+  EXPECT_NE(e.find("c.yaml:4:"), std::string::npos) << e;
+  EXPECT_NE(e.find("component 'h' in add_components must be a map"), std::string::npos) << e;
+
   // A patch needing a component type that is not registered is unavailable, not an error.
   std::ofstream(dir / "c.yaml") << "effects:\n  hose:\n    add_components: {h: {type: hose_not_yet, L: 1}}\n";
   const Catalogue cat = load_catalogue((dir / "c.yaml").string(), model, kModel, builtin_registry());

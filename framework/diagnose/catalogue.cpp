@@ -412,9 +412,17 @@ Catalogue load_catalogue(const std::string& path, const YAML::Node& model, const
         e.unavailable = "unavailable: type " + type + " not registered";
     };
     for (const char* key : {"add_components", "replace_components"})
-      if (body[key])
-        for (auto c = body[key].begin(); c != body[key].end(); ++c)
+      if (body[key]) {
+        if (!body[key].IsMap())
+          fail(path, body[key], e.name, "", std::string(key) + " must be a map: NAME: {type: TYPE, PARAMETER: VALUE}");
+        for (auto c = body[key].begin(); c != body[key].end(); ++c) {
+          // Checked here, before any node is subscripted: a scalar would throw yaml-cpp's own error.
+          if (!c->second.IsMap() || (c->second["type"] && !c->second["type"].IsScalar()))
+            fail(path, c->first, e.name, "",
+                 "component '" + c->first.Scalar() + "' in " + key + " must be a map {type: TYPE, PARAMETER: VALUE}");
           if (c->second["type"]) check_type(c->second["type"].as<std::string>());
+        }
+      }
     if (const auto& req = body["requires"]) {
       if (req["types"])
         for (const auto& t : req["types"]) check_type(t.as<std::string>());
