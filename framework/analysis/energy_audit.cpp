@@ -94,11 +94,12 @@ struct Window {
 class AuditTable {
  public:
   AuditTable(const ResultsTable& t, const std::string& component) : t_(t), component_(component) {}
-  double at(const std::string& account, std::size_t row) const {
+  int column(const std::string& account) const {
     const int i = t_.column(column_of(component_, account));
     if (i < 0) throw std::runtime_error("energy audit: no column for " + component_ + "." + account);
-    return t_.rows[row][i];
+    return i;
   }
+  double at(const std::string& account, std::size_t row) const { return t_.rows[row][column(account)]; }
   double change(const std::string& account, const Window& w) const { return at(account, w.close) - at(account, w.open); }
   double kinetic(const std::vector<std::string>& columns, std::size_t row) const {
     double e = 0.0;
@@ -145,9 +146,10 @@ EnergyAudit audit_one(const AuditPlan& plan, const RunResult& run) {
   a.close_reason = "end of the run";
   const std::string& stop = spec.closes_when_not_positive;
   if (!stop.empty()) {
-    a.speed_at_open = tab.at(stop, w.open);
+    const int c = tab.column(stop);  // looked up once: the scan reads it on every row
+    a.speed_at_open = rows.rows[w.open][c];
     for (std::size_t k = w.open + 1; k < rows.rows.size(); ++k)
-      if (tab.at(stop, k) <= 0.0) {
+      if (rows.rows[k][c] <= 0.0) {
         w.close = k;
         a.close_reason = "first standstill or reversal";
         break;

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "components/builtin.hpp"
+#include "framework/io/results.hpp"
 #include "framework/cli/command.hpp"
 #include "framework/cli/split_list.hpp"
 #include "framework/cli/study_support.hpp"
@@ -27,17 +28,6 @@ struct SensitivityArgs : StudyArgs {
   int trajectories = 20, levels = 4, base = 256;
   long seed = 1;
 };
-
-void write_atomic(const std::string& path, const std::string& text) {
-  const std::string tmp = path + ".writing";
-  {
-    std::ofstream out(tmp);
-    out << text;
-    out.flush();
-    if (!out) throw std::runtime_error("cannot write '" + path + "'");
-  }
-  fs::rename(tmp, path);
-}
 
 std::string num(double v) {
   char buf[32];
@@ -121,7 +111,7 @@ int sensitivity_command(const SensitivityArgs& a) {
       }
     }
   }
-  write_atomic(output, csv.str());
+  write_text_atomic(output, csv.str());
   if (!a.quiet) std::cout << table.str() << "wrote " << output << "\n";
   return 0;
 }

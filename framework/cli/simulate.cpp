@@ -6,6 +6,7 @@
 #include <iomanip>
 #include <iostream>
 #include <memory>
+#include <sstream>
 
 #include "components/builtin.hpp"
 #include "framework/analysis/energy_audit.hpp"
@@ -13,6 +14,7 @@
 #include "framework/cli/command.hpp"
 #include "framework/cli/split_list.hpp"
 #include "framework/io/plot.hpp"
+#include "framework/io/results.hpp"
 #include "framework/model/simulation_options.hpp"
 #include "framework/plugin/plugin.hpp"
 #include "framework/run/run.hpp"
@@ -51,15 +53,9 @@ void print_stats(const SolverResult& r, double seconds, std::ostream& out) {
 }
 
 void write_energy_audit(const std::vector<EnergyAudit>& audits, const std::string& audit_path, bool quiet) {
-  if (const auto parent = std::filesystem::path(audit_path).parent_path(); !parent.empty())
-    std::filesystem::create_directories(parent);
-  const std::string tmp = audit_path + ".writing";
-  {
-    std::ofstream f(tmp);
-    write_audit_yaml(audits, f);
-    if (!f) throw std::runtime_error("cannot write the energy audit to " + audit_path);
-  }
-  std::filesystem::rename(tmp, audit_path);
+  std::ostringstream yaml;
+  write_audit_yaml(audits, yaml);
+  write_text_atomic(audit_path, yaml.str());
   if (!quiet) {
     for (const auto& a : audits) print_audit(a, std::cout);
     std::cout << "wrote the energy audit to " << audit_path << "\n";
@@ -74,16 +70,10 @@ void print_metrics(const Netlist& nl, const std::vector<double>& values, const s
 
 void write_metrics_csv(const std::string& path, const Netlist& nl, const std::vector<double>& values,
                        const std::vector<std::string>& units) {
-  if (const auto parent = std::filesystem::path(path).parent_path(); !parent.empty())
-    std::filesystem::create_directories(parent);
-  const std::string tmp = path + ".writing";
-  {
-    std::ofstream f(tmp);
-    f << "metric,value,unit\n" << std::setprecision(17);
-    for (std::size_t i = 0; i < nl.metrics.size(); ++i) f << nl.metrics[i].name << "," << values[i] << "," << units[i] << "\n";
-    if (!f) throw std::runtime_error("cannot write the metrics to " + path);
-  }
-  std::filesystem::rename(tmp, path);
+  std::ostringstream csv;
+  csv << "metric,value,unit\n" << std::setprecision(17);
+  for (std::size_t i = 0; i < nl.metrics.size(); ++i) csv << nl.metrics[i].name << "," << values[i] << "," << units[i] << "\n";
+  write_text_atomic(path, csv.str());
 }
 
 // Bad output names are bad input, found before the run.

@@ -5,6 +5,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "framework/io/results.hpp"
 #include "framework/diagnose/diagnose.hpp"
 
 namespace pneumo::diagnose {
@@ -65,17 +66,6 @@ std::string gap_json(const GapTable& g, const std::vector<std::string>& phases) 
       << ", \"share\": " << num(g.phase_total[p].ssr / tot) << "}";
   o << "}}";
   return o.str();
-}
-
-void write_atomic(const std::string& path, const std::string& text) {
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream out(tmp);
-    if (!out) throw std::runtime_error("cannot write " + tmp);
-    out << text;
-    if (!out) throw std::runtime_error("cannot write " + tmp);
-  }
-  std::filesystem::rename(tmp, path);
 }
 
 std::string svg_plot(const TracePlot& p, const std::vector<std::string>& phases) {
@@ -204,7 +194,7 @@ void write_report_json(const DiagnosisReport& r, const std::string& path) {
     else o << ", \"where_after\": " << gap_json(e.validation_after, r.phase_names) << "}";
   }
   o << "],\n\"seconds\": " << num(r.seconds) << ",\n\"simulations\": " << r.simulations << "\n}\n";
-  write_atomic(path, o.str());
+  write_text_atomic(path, o.str());
 }
 
 void write_report_html(const DiagnosisReport& r, const std::string& path) {
@@ -291,7 +281,7 @@ void write_report_html(const DiagnosisReport& r, const std::string& path) {
        "<span style=\"color:#1f77b4\">&#9644; model with the verdict's effects</span>; shading: phases.</p>\n";
   for (const auto& p : r.plots) o << svg_plot(p, r.phase_names);
   o << "</body></html>\n";
-  write_atomic(path, o.str());
+  write_text_atomic(path, o.str());
 }
 
 }  // namespace pneumo::diagnose

@@ -57,6 +57,28 @@ void write_table(std::ostream& out, const ResultsTable& table) {
 
 }  // namespace
 
+void write_text_atomic(const std::string& path, const std::string& text) {
+  const fs::path target(path);
+  std::error_code ec;
+  if (target.has_parent_path()) fs::create_directories(target.parent_path(), ec);
+  const fs::path tmp = target.string() + ".writing";
+  {
+    std::ofstream out(tmp);
+    out << text;
+    out.flush();
+    if (!out) {
+      fs::remove(tmp, ec);
+      throw std::runtime_error("cannot write '" + path + "'");
+    }
+  }
+  fs::rename(tmp, target, ec);
+  if (ec) {
+    const std::string why = ec.message();
+    fs::remove(tmp, ec);
+    throw std::runtime_error("cannot move '" + tmp.string() + "' to '" + path + "': " + why);
+  }
+}
+
 void check_output_file(const std::string& path, const std::string& option) {
   if (path.empty()) throw std::invalid_argument(option + " \"\": give a file name");
   std::error_code ec;

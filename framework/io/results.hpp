@@ -25,6 +25,11 @@ struct ResultsTable {
   void drop_columns(const std::string& prefix);
 };
 
+// Writes `text` to PATH.writing (creating PATH's directory) and renames it
+// to PATH, so that PATH is never half-written. Throws std::runtime_error
+// naming the path and the reason.
+void write_text_atomic(const std::string& path, const std::string& text);
+
 // Before any work: throws std::invalid_argument if `path` cannot name an
 // output file (empty, or a directory); `option` names the argument ("-o").
 void check_output_file(const std::string& path, const std::string& option);

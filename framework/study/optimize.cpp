@@ -23,6 +23,7 @@
 #include "components/builtin.hpp"
 #include "framework/core/text.hpp"
 #include "framework/core/units.hpp"
+#include "framework/io/results.hpp"
 #include "framework/study/sweep.hpp"
 
 namespace pneumo::study {
@@ -705,13 +706,7 @@ void write_result_yaml(const OptimizeProblem& p, const OptimizeOptions& o, const
       y << "]\n";
     }
   }
-  const std::string tmp = path + ".writing";
-  {
-    std::ofstream out(tmp);
-    out << y.str();
-    if (!out) throw std::runtime_error("cannot write " + path);
-  }
-  std::rename(tmp.c_str(), path.c_str());
+  write_text_atomic(path, y.str());
 }
 
 }  // namespace pneumo::study
