@@ -18,7 +18,7 @@ namespace {
 using NodePtr = std::shared_ptr<const Expression::Node>;
 
 // Recursive descent: sum := product {(+|-) product}; product := unary {(*|/)
-// unary}; unary := -unary | atom; atom := number | name | ( sum ).
+// unary}; unary := (-|+) unary | atom; atom := number | name | ( sum ).
 class Parser {
  public:
   Parser(const std::string& s, std::vector<std::string>& names) : s_(s), names_(names) {}
@@ -62,11 +62,12 @@ class Parser {
   }
   NodePtr unary() {
     if (take('-')) return binary('u', unary(), nullptr);
+    if (take('+')) return unary();
     return atom();
   }
   NodePtr atom() {
     skip();
-    if (i_ >= s_.size()) throw ExpressionError("the expression ends where a value is expected", i_);
+    if (i_ >= s_.size()) throw ExpressionError("expression ends early: a value is expected here", i_);
     if (take('(')) {
       NodePtr n = sum();
       if (!take(')')) throw ExpressionError("missing ')'", i_);

@@ -1,7 +1,8 @@
 // Arithmetic expressions over named values: numbers, names (letters, digits,
 // '_' and '.', e.g. `t_done` or `cylinder.cap_impact`), + - * /, unary minus
-// and parentheses. Parsed once; evaluated with a lookup for the names. Used
-// by netlist metrics (`expr: t_done - t_start`).
+// and plus, and parentheses. Parsed once; evaluated with a lookup for the names. Used
+// by netlist metrics (`expr: t_done - t_start`) and the diagnosis catalogue's
+// ${...} parameter arithmetic.
 #pragma once
 
 #include <functional>

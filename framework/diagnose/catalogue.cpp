@@ -10,6 +10,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "framework/core/expression.hpp"
 #include "framework/netlist/netlist.hpp"
 
 namespace pneumo::diagnose {
@@ -36,82 +37,18 @@ std::string format_number(double v) {
   return buf;
 }
 
-// `${...}` holds a parameter name or a simple arithmetic expression of the
-// effect's parameters and numbers (+ - * /, parentheses, unary minus), so
-// that one free parameter can move several coefficients, e.g.
-// "${w * 0.26}" or "${(1 - w) * 2.776 + w * 9.66}". Recursive descent;
-// throws std::invalid_argument naming what is wrong.
-class Expression {
- public:
-  Expression(const std::string& text, const Effect& effect, const std::vector<double>* values)
-      : s_(text), effect_(effect), values_(values) {}
-  double evaluate() {
-    const double v = sum();
-    skip();
-    if (i_ != s_.size()) throw std::invalid_argument("unexpected '" + s_.substr(i_) + "'");
-    return v;
-  }
-
- private:
-  void skip() {
-    while (i_ < s_.size() && std::isspace(static_cast<unsigned char>(s_[i_]))) ++i_;
-  }
-  double sum() {
-    double v = product();
-    for (skip(); i_ < s_.size() && (s_[i_] == '+' || s_[i_] == '-'); skip()) {
-      const char op = s_[i_++];
-      const double w = product();
-      v = op == '+' ? v + w : v - w;
-    }
-    return v;
-  }
-  double product() {
-    double v = factor();
-    for (skip(); i_ < s_.size() && (s_[i_] == '*' || s_[i_] == '/'); skip()) {
-      const char op = s_[i_++];
-      const double w = factor();
-      v = op == '*' ? v * w : v / w;
-    }
-    return v;
-  }
-  double factor() {
-    skip();
-    if (i_ >= s_.size()) throw std::invalid_argument("expression ends early");
-    const char c = s_[i_];
-    if (c == '-' || c == '+') {
-      ++i_;
-      const double v = factor();
-      return c == '-' ? -v : v;
-    }
-    if (c == '(') {
-      ++i_;
-      const double v = sum();
-      skip();
-      if (i_ >= s_.size() || s_[i_] != ')') throw std::invalid_argument("missing ')'");
-      ++i_;
-      return v;
-    }
-    if (std::isdigit(static_cast<unsigned char>(c)) || c == '.') {
-      std::size_t used = 0;
-      const double v = std::stod(s_.substr(i_), &used);
-      i_ += used;
-      return v;
-    }
-    if (std::isalpha(static_cast<unsigned char>(c)) || c == '_') {
-      const std::size_t b = i_;
-      while (i_ < s_.size() && (std::isalnum(static_cast<unsigned char>(s_[i_])) || s_[i_] == '_')) ++i_;
-      const std::string name = s_.substr(b, i_ - b);
-      const int k = effect_.parameter_index(name);
-      if (k < 0) throw std::invalid_argument("'" + name + "' is not one of the effect's parameters");
-      return values_ ? (*values_)[k] : effect_.parameters[k].initial;
-    }
-    throw std::invalid_argument(std::string("unexpected '") + c + "'");
-  }
-  const std::string& s_;
-  const Effect& effect_;
-  const std::vector<double>* values_;
-  std::size_t i_ = 0;
-};
+// The value of an arithmetic expression over the effect's parameters and
+// numbers (framework/core/expression.hpp: + - * /, parentheses, unary
+// minus), so that one free parameter can move several coefficients, e.g.
+// "${w * 0.26}" or "${(1 - w) * 2.776 + w * 9.66}": the parameters' `values`,
+// or their initial values when there are none.
+double evaluate(const std::string& text, const Effect& effect, const std::vector<double>* values) {
+  return pneumo::Expression(text).evaluate([&](const std::string& name) {
+    const int k = effect.parameter_index(name);
+    if (k < 0) throw std::invalid_argument("'" + name + "' is not one of the effect's parameters");
+    return values ? (*values)[k] : effect.parameters[k].initial;
+  });
+}
 
 // Replace every ${...} in every scalar of `node` (a fresh clone) by its value.
 void substitute(YAML::Node node, const Effect& effect, const std::vector<double>& values) {
@@ -125,7 +62,7 @@ void substitute(YAML::Node node, const Effect& effect, const std::vector<double>
       double v = 0;
       try {
         if (end == std::string::npos) throw std::invalid_argument("missing '}'");
-        v = Expression(expr, effect, &values).evaluate();
+        v = evaluate(expr, effect, &values);
       } catch (const std::exception& ex) {
         throw InputError(location_of(effect.where.file, node), "", expr,
                          "effect '" + effect.name + "': '${" + expr + "}': " + ex.what());
@@ -173,7 +110,7 @@ void check_references(const std::string& file, const YAML::Node& node, const Eff
       const std::string expr = end == std::string::npos ? s.substr(pos + 2) : s.substr(pos + 2, end - pos - 2);
       try {
         if (end == std::string::npos) throw std::invalid_argument("missing '}'");
-        (void)Expression(expr, effect, nullptr).evaluate();
+        (void)evaluate(expr, effect, nullptr);
       } catch (const std::exception& ex) {
         fail(file, node, effect.name, expr, "'${" + expr + "}': " + ex.what());
       }
