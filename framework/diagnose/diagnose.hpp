@@ -21,6 +21,7 @@
 #include <array>
 #include <functional>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -115,6 +116,35 @@ struct TracePlot {  // decimated traces of one validation run and signal
   std::vector<double> phase_times;  // each phase's start, then the end
 };
 
+// What the verdict leaves unexplained (README "Diagnosing the sim-to-real
+// gap"): set when the validation gap after the named effects stays above the
+// noise (DiagnoseOptions::adequate_gap). The model's balances (each
+// differential equation, as the derivative of its state) and each sensor
+// reading (offset and gain) are given a smooth additive disturbance in turn,
+// fitted by regularised least squares over the runs; the one that explains
+// most of the remaining gap is named, with its shape.
+struct DisturbanceShape {  // one run's fitted disturbance, SI units of the balance's rate
+  std::string run;
+  std::vector<double> t, value;
+};
+
+struct BalanceFinding {  // one candidate balance or sensor
+  std::string balance;      // e.g. "cylinder.m_EC" (a state) or "sensor x"
+  std::string kind;         // "mass", "energy", "force", "sensor", ... (from the state's unit)
+  std::string unit;         // unit of the disturbance (rate of the state)
+  double gap_after = 0;     // all runs, normalised RMS, with this disturbance fitted
+  double explained = 0;     // share of the remaining excess gap (gap - 1) it removes
+};
+
+struct Unexplained {
+  double gap = 0;                                  // validation gap left after the verdict (noise = 1)
+  std::string signal, phase;                       // where most of it lies
+  std::vector<WindowFinding> windows;              // significant windows of the remaining residuals
+  std::vector<BalanceFinding> balances;            // best first
+  std::vector<DisturbanceShape> shape;             // of the best balance, per run
+  std::string sentence;                            // one plain sentence for the report
+};
+
 struct DiagnosisReport {
   std::string model_file, catalogue_file, runs_dir;
   std::vector<std::string> phase_names;  // the catalogue's phases, or the model's tagged events
@@ -127,6 +157,7 @@ struct DiagnosisReport {
   std::vector<TracePlot> plots;
   std::vector<std::string> calibration_runs, validation_runs;
   std::vector<std::pair<std::string, std::vector<double>>> final_values;  // effect -> fitted values in the verdict model
+  std::optional<Unexplained> unexplained;  // empty: the verdict brings the gap down to noise
   double seconds = 0;
   long simulations = 0;
 };
