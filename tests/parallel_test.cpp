@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <chrono>
 #include <map>
 #include <mutex>
 #include <stdexcept>
@@ -43,10 +44,22 @@ TEST(ParallelFor, OneThreadRunsInOrderOnTheCaller) {
 
 TEST(ParallelFor, AnExceptionStopsFurtherClaimsAndIsRethrown) {
   std::atomic<long> ran{0};
+  std::atomic<bool> thrown{false};
   EXPECT_THROW(parallel_for(100000, 2,
                             [&](int, long i) {
                               ++ran;
-                              if (i == 10) throw std::runtime_error("run 10 failed");
+                              if (i == 10) {
+                                thrown = true;
+                                throw std::runtime_error("run 10 failed");
+                              }
+                              // Later runs take 1 ms once run 10 has failed,
+                              // so that a loaded machine's scheduling cannot
+                              // let the other worker race through the rest
+                              // before the failure is seen.
+                              if (i > 10) {
+                                while (!thrown) std::this_thread::yield();
+                                std::this_thread::sleep_for(std::chrono::milliseconds(1));
+                              }
                             }),
                std::runtime_error);
   // Index 10 and what the other thread had claimed by then, not the rest.
