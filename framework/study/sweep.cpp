@@ -297,15 +297,111 @@ RunRecord run_one(Netlist& nl, const Registry& registry, const std::vector<Study
   return rec;
 }
 
+namespace {
+
+std::string read_netlist_text(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(SourceLocation{path, 0, 0}, "", "", "cannot open the netlist");
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+// The runs journalled by an earlier, interrupted sweep of the same study:
+// rank 0 reads the journals and tells the others which indices are done.
+std::set<long> runs_done(const std::string& output, const std::string& identity, std::size_t metrics, long n,
+                         Communicator& comm, std::vector<RunRecord>& previous) {
+  std::string done_list;
+  if (comm.rank() == 0) {
+    previous = read_journals(output, identity, metrics, n);
+    for (const auto& r : previous) {
+      done_list += std::to_string(r.index);
+      done_list += ' ';
+    }
+  }
+  comm.broadcast(done_list);
+  std::set<long> done;
+  std::istringstream ss(done_list);
+  long i;
+  while (ss >> i) done.insert(i);
+  return done;
+}
+
+// This rank's share of the pending runs: every size-th pending index.
+std::vector<long> my_pending_runs(long n, const std::set<long>& done, const Communicator& comm) {
+  std::vector<long> mine;
+  long pending_count = 0;
+  for (long i = 0; i < n; ++i) {
+    if (done.count(i)) continue;
+    if (pending_count++ % comm.size() == comm.rank()) mine.push_back(i);
+  }
+  return mine;
+}
+
+// Runs `mine` on threads, each journalled as it finishes.
+std::vector<RunRecord> run_pending(const std::string& text, const std::string& netlist_path, const Design& design,
+                                   const std::vector<Metric>& metrics, const std::vector<long>& mine,
+                                   const SweepOptions& opt, const fs::path& journal_path, const std::string& identity,
+                                   bool show_progress) {
+  std::vector<RunRecord> fresh;
+  Journal journal(journal_path, identity);
+  std::mutex mutex;
+  long finished = 0, failed = 0;
+  Progress progress(static_cast<long>(mine.size()), show_progress);
+  const long todo = opt.stop_after >= 0 ? std::min<long>(opt.stop_after, mine.size()) : static_cast<long>(mine.size());
+  // Each worker parses its own copy: YAML nodes are not shared across threads.
+  std::vector<std::optional<Netlist>> netlists(std::max(1, opt.threads));
+  parallel_for(todo, opt.threads, [&](int w, long k) {
+    if (!netlists[w]) netlists[w] = parse_netlist(text, netlist_path);
+    RunRecord rec = run_one(*netlists[w], builtin_registry(), design.parameters, design.samples[mine[k]], metrics,
+                            opt.assembly);
+    rec.index = mine[k];
+    journal.write(journal_line(rec, metrics.size()));
+    std::lock_guard<std::mutex> lock(mutex);
+    failed += rec.ok ? 0 : 1;
+    progress.update(++finished, failed);
+    fresh.push_back(std::move(rec));
+  });
+  progress.update(finished, failed, true);
+  return fresh;
+}
+
+// Rank 0: every rank's records as journal lines, with the earlier ones;
+// when all runs are there, the results file is written and the journals go.
+void collect_results(const std::vector<std::string>& gathered, std::vector<RunRecord> all, const std::string& output,
+                     const Design& design, const std::vector<Metric>& metrics, const SweepOptions& opt,
+                     SweepSummary& summary) {
+  const long n = static_cast<long>(design.samples.size());
+  bool complete = true;
+  for (const auto& g : gathered) {
+    std::istringstream ss(g);
+    std::string line;
+    std::getline(ss, line);
+    complete &= line == "complete";
+    while (std::getline(ss, line)) {
+      RunRecord r;
+      if (parse_journal_line(line, metrics.size(), r)) all.push_back(std::move(r));
+    }
+  }
+  std::sort(all.begin(), all.end(), [](const RunRecord& a, const RunRecord& b) { return a.index < b.index; });
+  all.erase(std::unique(all.begin(), all.end(), [](const RunRecord& a, const RunRecord& b) { return a.index == b.index; }),
+            all.end());
+  complete &= static_cast<long>(all.size()) == n;
+  summary.complete = complete;
+  for (const auto& r : all) summary.failed += r.ok ? 0 : 1;
+  if (!complete) return;
+  write_results(output, design, metrics, all);
+  if (!opt.keep_journal) {
+    std::error_code ec;
+    for (const auto& p : journal_files(output)) fs::remove(p, ec);
+  }
+  summary.records = std::move(all);
+}
+
+}  // namespace
+
 SweepSummary run_sweep(const std::string& netlist_path, const Design& design, const std::string& output,
                        const SweepOptions& opt, Communicator& comm) {
   const auto t0 = Clock::now();
-  std::string text;
-  {
-    std::ifstream in(netlist_path, std::ios::binary);
-    if (!in) throw InputError(SourceLocation{netlist_path, 0, 0}, "", "", "cannot open the netlist");
-    text.assign((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  }
+  const std::string text = read_netlist_text(netlist_path);
   const Netlist base = parse_netlist(text, netlist_path);
   try {
     check_output_file(output, "-o");
@@ -317,93 +413,24 @@ SweepSummary run_sweep(const std::string& netlist_path, const Design& design, co
   const std::string identity = sweep_identity(text, design, metrics, opt.assembly.eliminate_aliases);
   if (const auto parent = fs::path(output).parent_path(); !parent.empty()) fs::create_directories(parent);
 
-  // Which runs are done already: rank 0 reads the journals and tells the others.
   std::vector<RunRecord> previous;
-  std::string done_list;
-  if (comm.rank() == 0) {
-    previous = read_journals(output, identity, metrics.size(), n);
-    for (const auto& r : previous) {
-      done_list += std::to_string(r.index);
-      done_list += ' ';
-    }
-  }
-  comm.broadcast(done_list);
-  std::set<long> done;
-  {
-    std::istringstream ss(done_list);
-    long i;
-    while (ss >> i) done.insert(i);
-  }
-  std::vector<long> mine;  // pending runs of this rank: every size-th pending index
-  long pending_count = 0;
-  for (long i = 0; i < n; ++i) {
-    if (done.count(i)) continue;
-    if (pending_count++ % comm.size() == comm.rank()) mine.push_back(i);
-  }
-
+  const std::set<long> done = runs_done(output, identity, metrics.size(), n, comm, previous);
+  const std::vector<long> mine = my_pending_runs(n, done, comm);
   SweepSummary summary;
   summary.runs = n;
   summary.ranks = comm.size();
   summary.done_before = static_cast<long>(done.size());
   const fs::path journal_path =
       comm.size() > 1 ? fs::path(output + ".journal.rank" + std::to_string(comm.rank())) : fs::path(output + ".journal");
-  std::vector<RunRecord> fresh;
-  {
-    Journal journal(journal_path, identity);
-    std::mutex mutex;
-    long finished = 0, failed = 0;
-    Progress progress(static_cast<long>(mine.size()), opt.progress && comm.rank() == 0);
-    const long todo = opt.stop_after >= 0 ? std::min<long>(opt.stop_after, mine.size()) : static_cast<long>(mine.size());
-    // Each worker parses its own copy: YAML nodes are not shared across threads.
-    std::vector<std::optional<Netlist>> netlists(std::max(1, opt.threads));
-    parallel_for(todo, opt.threads, [&](int w, long k) {
-      if (!netlists[w]) netlists[w] = parse_netlist(text, netlist_path);
-      RunRecord rec = run_one(*netlists[w], builtin_registry(), design.parameters, design.samples[mine[k]], metrics,
-                              opt.assembly);
-      rec.index = mine[k];
-      journal.write(journal_line(rec, metrics.size()));
-      std::lock_guard<std::mutex> lock(mutex);
-      failed += rec.ok ? 0 : 1;
-      progress.update(++finished, failed);
-      fresh.push_back(std::move(rec));
-    });
-    progress.update(finished, failed, true);
-  }
+  const std::vector<RunRecord> fresh = run_pending(text, netlist_path, design, metrics, mine, opt, journal_path,
+                                                   identity, opt.progress && comm.rank() == 0);
   summary.computed = static_cast<long>(fresh.size());
   const bool my_part_complete = summary.computed == static_cast<long>(mine.size());
 
-  // Collect on rank 0: every rank's new records as journal lines.
   std::string lines = my_part_complete ? "complete\n" : "incomplete\n";
   for (const auto& r : fresh) lines += journal_line(r, metrics.size());
   const auto gathered = comm.gather(lines);
-  if (comm.rank() == 0) {
-    bool complete = true;
-    std::vector<RunRecord> all = std::move(previous);
-    for (const auto& g : gathered) {
-      std::istringstream ss(g);
-      std::string line;
-      std::getline(ss, line);
-      complete &= line == "complete";
-      while (std::getline(ss, line)) {
-        RunRecord r;
-        if (parse_journal_line(line, metrics.size(), r)) all.push_back(std::move(r));
-      }
-    }
-    std::sort(all.begin(), all.end(), [](const RunRecord& a, const RunRecord& b) { return a.index < b.index; });
-    all.erase(std::unique(all.begin(), all.end(), [](const RunRecord& a, const RunRecord& b) { return a.index == b.index; }),
-              all.end());
-    complete &= static_cast<long>(all.size()) == n;
-    summary.complete = complete;
-    for (const auto& r : all) summary.failed += r.ok ? 0 : 1;
-    if (complete) {
-      write_results(output, design, metrics, all);
-      if (!opt.keep_journal) {
-        std::error_code ec;
-        for (const auto& p : journal_files(output)) fs::remove(p, ec);
-      }
-      summary.records = std::move(all);
-    }
-  }
+  if (comm.rank() == 0) collect_results(gathered, std::move(previous), output, design, metrics, opt, summary);
   comm.barrier();
   summary.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
   return summary;
