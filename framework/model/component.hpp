@@ -22,6 +22,15 @@
 //   signal:        value (across)
 // A component provides one equation per through variable, one per stream
 // variable T_out, one per signal output and one per internal variable.
+//
+// Memoisation, the one mutable state allowed: a component may cache, for
+// T = double only, a pure function of its local variables (and parameters),
+// keyed on the exact values it reads, because the framework evaluates one
+// component several times at the same point within one residual call (the
+// explicitly solved unknowns, then IDA's rows, then outputs). The cache must
+// be invisible: bit-identical results to recomputing. It needs no lock: a
+// component instance belongs to one circuit, and a circuit (or each of its
+// independent parts) is integrated by one thread at a time.
 #pragma once
 
 #include <limits>
