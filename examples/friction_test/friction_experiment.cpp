@@ -85,7 +85,10 @@ std::vector<FrictionTestPoint> run_friction_test(const FrictionTestOptions& o) {
       const double p_s = p_amb + s.p0_bar_rel * 1e5;
       apply_override(nl, "p_cap0=" + num((p_s * A_A + p_amb * A_R) / A_B));
       for (auto& [k, node] : component(nl, "cylinder").parameters)
-        if (k == "friction") node = YAML::Node(s.preset);
+        if (k == "friction") {
+          node.shape = ValueDecl::Shape::scalar;
+          node.text = s.preset;
+        }
       const double v_est = std::min(v_per_C * C, 1.0);
       nl.simulation.t_end = 0.2 + 1.3 * x_end / v_est;
       nl.simulation.output_interval = std::clamp((x_end - o.x_begin) / v_est / 400, 2e-4, 5e-3);

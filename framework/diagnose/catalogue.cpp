@@ -12,6 +12,7 @@
 
 #include "framework/core/expression.hpp"
 #include "framework/netlist/netlist.hpp"
+#include "framework/netlist/yaml_location.hpp"
 
 namespace pneumo::diagnose {
 

@@ -10,6 +10,7 @@
 
 #include "framework/core/text.hpp"
 #include "framework/diagnose/diagnose.hpp"
+#include "framework/netlist/yaml_location.hpp"
 
 namespace pneumo::diagnose {
 

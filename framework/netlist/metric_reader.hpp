@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "framework/netlist/netlist.hpp"
+#include "framework/netlist/yaml_location.hpp"
 
 namespace pneumo {
 

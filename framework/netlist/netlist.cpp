@@ -1,6 +1,7 @@
 #include "framework/netlist/netlist.hpp"
 
 #include "framework/netlist/metric_reader.hpp"
+#include "framework/netlist/yaml_location.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -122,6 +123,52 @@ class Reader {
     return q.si_value;
   }
 
+  // The same checks on a value already read into a ValueDecl.
+  [[noreturn]] void fail(const ValueDecl& v, const std::string& component, const std::string& parameter,
+                         const std::string& message) const {
+    throw InputError(v.where, component, parameter, message);
+  }
+  std::string scalar_text(const ValueDecl& v, const std::string& component, const std::string& parameter,
+                          const std::string& what) const {
+    if (v.shape != ValueDecl::Shape::scalar) fail(v, component, parameter, what + " must be a single value, not a list or mapping");
+    return v.text;
+  }
+  double quantity(const ValueDecl& v, double ambient, const Dimension& expected, const std::string& expected_unit,
+                  const std::string& component, const std::string& parameter) const {
+    if (v.si) return *v.si;
+    const std::string text = scalar_text(v, component, parameter, "the value");
+    units::Quantity q{};
+    try {
+      q = units::parse_quantity(text, ambient);
+    } catch (const units::ParseError& e) {
+      SourceLocation w = v.where;
+      if (w.column > 0 && !v.quoted) w.column += static_cast<int>(e.column);
+      throw InputError(w, component, parameter, std::string("cannot read '") + text + "': " + e.what());
+    }
+    if (q.had_unit && !(q.dim == expected))
+      fail(v, component, parameter,
+           "'" + text + "' has dimension " + q.dim.to_string() + " but a value in " + expected_unit + " (" +
+               expected.to_string() + ") is expected");
+    return q.si_value;
+  }
+
+  // A component parameter's value as written. Tables need two levels of
+  // lists; anything nested deeper is kept as `other` (an error when read).
+  ValueDecl value(const YAML::Node& n, int depth = 0) const {
+    ValueDecl v;
+    v.where = at(n);
+    if (n.IsScalar()) {
+      v.text = n.Scalar();
+      v.quoted = n.Tag() == "!";
+    } else if (n.IsSequence() && depth < 2) {
+      v.shape = ValueDecl::Shape::list;
+      for (const auto& item : n) v.items.push_back(value(item, depth + 1));
+    } else {
+      v.shape = ValueDecl::Shape::other;
+    }
+    return v;
+  }
+
   const std::string& file() const { return file_; }
 
  private:
@@ -134,7 +181,7 @@ SourceLocation ComponentDecl::where_of(const std::string& parameter) const {
   for (std::size_t i = 0; i < parameters.size(); ++i)
     if (parameters[i].first == parameter) {
       if (i < parameter_where.size()) return parameter_where[i];
-      SourceLocation w = location_of(where.file, parameters[i].second);
+      const SourceLocation& w = parameters[i].second.where;
       return w.line > 0 ? w : where;
     }
   return where;
@@ -393,7 +440,7 @@ void read_components(Reader& r, const YAML::Node& node, Netlist& nl) {
         c.type_where = r.at(pe.value);
         has_type = true;
       } else {
-        c.parameters.emplace_back(pe.key, pe.value);
+        c.parameters.emplace_back(pe.key, r.value(pe.value));
         c.parameter_where.push_back(r.at(pe.key_node));
       }
     }
@@ -573,8 +620,9 @@ Dimension spec_dimension(const ParameterSpec& spec) { return units::dimension_of
 }  // namespace
 
 double parameter_value(const Netlist& nl, const ComponentDecl& c, const ParameterSpec& spec,
-                       const YAML::Node& node) {
+                       const ValueDecl& node) {
   Reader r(nl.file);
+  if (node.si) return *node.si;
   const std::string text = r.scalar_text(node, c.name, spec.name, "the value");
   const Dimension dim = spec_dimension(spec);
   if (is_identifier(text)) {
@@ -610,13 +658,13 @@ const Registry::Entry& entry_of(const Registry& registry, const ComponentDecl& c
 }
 
 double scalar_parameter(const Reader& r, const Netlist& nl, const ComponentDecl& c, const ParameterSpec& spec,
-                        const YAML::Node& pnode) {
+                        const ValueDecl& pnode) {
   const std::string& pname = spec.name;
   const double v = parameter_value(nl, c, spec, pnode);
   if (!spec.in_range(v)) {
     std::string from;
-    if (pnode.IsScalar() && is_identifier(pnode.Scalar()))
-      if (const TopParameter* tp = nl.parameter(pnode.Scalar()))
+    if (pnode.shape == ValueDecl::Shape::scalar && !pnode.si && is_identifier(pnode.text))
+      if (const TopParameter* tp = nl.parameter(pnode.text))
         from = " (from top-level parameter '" + tp->name + "' at " + tp->where.to_string() + ")";
     r.fail(pnode, c.name, pname, "value " + units::format_si(v, spec_dimension(spec)) + from +
                                      " is out of range; valid: " + spec.range_text() + " (" + spec.unit + ")");
@@ -626,18 +674,18 @@ double scalar_parameter(const Reader& r, const Netlist& nl, const ComponentDecl&
 
 // A table: rows of the spec's columns, each cell converted and range checked.
 Table table_parameter(const Reader& r, const Netlist& nl, const ComponentDecl& c, const ParameterSpec& spec,
-                      const YAML::Node& pnode) {
+                      const ValueDecl& pnode) {
   const std::string& pname = spec.name;
-  if (!pnode.IsSequence() || pnode.size() == 0)
+  if (pnode.shape != ValueDecl::Shape::list || pnode.items.empty())
     r.fail(pnode, c.name, pname, "a table is a list of rows, e.g. [[0, 0], [1.5, 0.12 dm3/(s*bar)]]");
   Table t;
-  for (const auto& row : pnode) {
-    if (!row.IsSequence() || row.size() != spec.columns.size())
+  for (const auto& row : pnode.items) {
+    if (row.shape != ValueDecl::Shape::list || row.items.size() != spec.columns.size())
       r.fail(row, c.name, pname,
              "each row needs " + std::to_string(spec.columns.size()) + " values (" + join(spec.columns) + ")");
     std::vector<double> vals;
     std::size_t col = 0;
-    for (const auto& cell : row) {
+    for (const auto& cell : row.items) {
       ParameterSpec cs = ParameterSpec::scalar(pname, spec.columns[col++], "");
       const double v = parameter_value(nl, c, cs, cell);
       if (!cs.in_range(v))
@@ -653,7 +701,7 @@ Table table_parameter(const Reader& r, const Netlist& nl, const ComponentDecl& c
 }
 
 std::string text_parameter(const Reader& r, const ComponentDecl& c, const ParameterSpec& spec,
-                           const YAML::Node& pnode) {
+                           const ValueDecl& pnode) {
   const std::string& pname = spec.name;
   const std::string v = r.scalar_text(pnode, c.name, pname, "the value");
   if (!spec.choices.empty() &&
@@ -718,7 +766,7 @@ std::unique_ptr<Component> make_component(const Reader& r, const Netlist& nl, co
   } catch (const ParameterError& e) {
     SourceLocation w = c.where;
     for (const auto& [pname, pnode] : c.parameters)
-      if (pname == e.parameter()) w = r.at(pnode);
+      if (pname == e.parameter()) w = pnode.where;
     throw InputError(w, c.name, e.parameter(), e.what());
   }
 }

@@ -16,8 +16,6 @@
 //   plugins:    [build/my_components.so]  # relative to the netlist's directory
 #pragma once
 
-#include <yaml-cpp/yaml.h>
-
 #include <map>
 #include <optional>
 #include <string>
@@ -39,12 +37,33 @@ struct TopParameter {
   SourceLocation where;
 };
 
+// A component parameter's value as written, read once from the file: a
+// scalar (a number, a quantity with unit, the name of a top-level parameter,
+// or a choice), or a list of values (a table's rows, each a list of cells);
+// or an SI number set by a study, which is never printed and read again.
+struct ValueDecl {
+  enum class Shape { scalar, list, other };  // other: a mapping or no value
+  Shape shape = Shape::scalar;
+  std::string text;               // scalar
+  bool quoted = false;            // written in quotes: error columns point at the quote
+  std::vector<ValueDecl> items;   // list
+  SourceLocation where;
+  std::optional<double> si;       // a study's value (SI): no text to read
+
+  static ValueDecl number(double si_value, SourceLocation where) {
+    ValueDecl v;
+    v.si = si_value;
+    v.where = std::move(where);
+    return v;
+  }
+};
+
 struct ComponentDecl {
   std::string name;
   std::string type;
   SourceLocation where;       // of the component's name
   SourceLocation type_where;  // of the value of 'type:'
-  std::vector<std::pair<std::string, YAML::Node>> parameters;  // in file order
+  std::vector<std::pair<std::string, ValueDecl>> parameters;  // in file order
   std::vector<SourceLocation> parameter_where;  // of each parameter's key, same order (may be empty)
 
   // Where parameter `name` is written (its key), or the component if absent.
@@ -148,8 +167,6 @@ Circuit elaborate(const Netlist& netlist, const Registry& registry);
 // Parse one scalar parameter value against its spec (exposed for tests and
 // for the fitting tools): number, quantity with unit, or top-level name.
 double parameter_value(const Netlist& netlist, const ComponentDecl& component,
-                       const ParameterSpec& spec, const YAML::Node& node);
-
-SourceLocation location_of(const std::string& file, const YAML::Node& node);
+                       const ParameterSpec& spec, const ValueDecl& value);
 
 }  // namespace pneumo

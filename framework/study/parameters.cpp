@@ -86,15 +86,12 @@ void assign(Netlist& nl, const StudyParameter& p, double value) {
   }
   for (auto& c : nl.components) {
     if (c.name != p.component) continue;
-    std::ostringstream text;
-    text.precision(17);
-    text << value;  // a plain number is read as SI
-    for (auto& [key, node] : c.parameters)
+    for (auto& [key, v] : c.parameters)
       if (key == p.parameter) {
-        node = YAML::Node(text.str());
+        v = ValueDecl::number(value, v.where);
         return;
       }
-    c.parameters.emplace_back(p.parameter, YAML::Node(text.str()));
+    c.parameters.emplace_back(p.parameter, ValueDecl::number(value, c.where));
     if (!c.parameter_where.empty()) c.parameter_where.push_back(c.where);
     return;
   }

@@ -271,14 +271,14 @@ void write_results(const std::string& output, const Design& d, const std::vector
 
 }  // namespace
 
-RunRecord run_one(Netlist& nl, const Registry& registry, const std::vector<StudyParameter>& parameters,
+RunRecord run_one(const Netlist& netlist, const Registry& registry, const std::vector<StudyParameter>& parameters,
                   const Sample& sample, const std::vector<Metric>& metrics,
                   const AssemblyOptions& assembly) {
   RunRecord rec;
   try {
-    for (std::size_t j = 0; j < parameters.size(); ++j) assign(nl, parameters[j], sample[j]);
+    Netlist run_nl = netlist;
+    for (std::size_t j = 0; j < parameters.size(); ++j) assign(run_nl, parameters[j], sample[j]);
     // Integral metrics and energy audits read extra (solver-integrated) outputs.
-    Netlist run_nl = nl;
     const MetricPlan plan = prepare_metrics(run_nl, registry, metrics);
     System system(elaborate(run_nl, registry), assembly);
     const RunResult run = run_system(system, solver_options(run_nl.simulation));
@@ -337,7 +337,7 @@ std::vector<long> my_pending_runs(long n, const std::set<long>& done, const Comm
 }
 
 // Runs `mine` on threads, each journalled as it finishes.
-std::vector<RunRecord> run_pending(const std::string& text, const std::string& netlist_path, const Design& design,
+std::vector<RunRecord> run_pending(const Netlist& base, const Design& design,
                                    const std::vector<Metric>& metrics, const std::vector<long>& mine,
                                    const SweepOptions& opt, const fs::path& journal_path, const std::string& identity,
                                    bool show_progress) {
@@ -347,11 +347,8 @@ std::vector<RunRecord> run_pending(const std::string& text, const std::string& n
   long finished = 0, failed = 0;
   Progress progress(static_cast<long>(mine.size()), show_progress);
   const long todo = opt.stop_after >= 0 ? std::min<long>(opt.stop_after, mine.size()) : static_cast<long>(mine.size());
-  // Each worker parses its own copy: YAML nodes are not shared across threads.
-  std::vector<std::optional<Netlist>> netlists(std::max(1, opt.threads));
-  parallel_for(todo, opt.threads, [&](int w, long k) {
-    if (!netlists[w]) netlists[w] = parse_netlist(text, netlist_path);
-    RunRecord rec = run_one(*netlists[w], builtin_registry(), design.parameters, design.samples[mine[k]], metrics,
+  parallel_for(todo, opt.threads, [&](int, long k) {
+    RunRecord rec = run_one(base, builtin_registry(), design.parameters, design.samples[mine[k]], metrics,
                             opt.assembly);
     rec.index = mine[k];
     journal.write(journal_line(rec, metrics.size()));
@@ -422,7 +419,7 @@ SweepSummary run_sweep(const std::string& netlist_path, const Design& design, co
   summary.done_before = static_cast<long>(done.size());
   const fs::path journal_path =
       comm.size() > 1 ? fs::path(output + ".journal.rank" + std::to_string(comm.rank())) : fs::path(output + ".journal");
-  const std::vector<RunRecord> fresh = run_pending(text, netlist_path, design, metrics, mine, opt, journal_path,
+  const std::vector<RunRecord> fresh = run_pending(base, design, metrics, mine, opt, journal_path,
                                                    identity, opt.progress && comm.rank() == 0);
   summary.computed = static_cast<long>(fresh.size());
   const bool my_part_complete = summary.computed == static_cast<long>(mine.size());

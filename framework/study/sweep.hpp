@@ -56,9 +56,10 @@ struct SweepSummary {
 SweepSummary run_sweep(const std::string& netlist_path, const Design& design, const std::string& output,
                        const SweepOptions& options, Communicator& comm);
 
-// One run with the given parameter values: never throws for a failing run
-// (bad parameter combination, solver failure): the record says why.
-RunRecord run_one(Netlist& netlist, const Registry& registry, const std::vector<StudyParameter>& parameters,
+// One run of `netlist` with the given parameter values set (as values, on a
+// copy): never throws for a failing run (bad parameter combination, solver
+// failure): the record says why.
+RunRecord run_one(const Netlist& netlist, const Registry& registry, const std::vector<StudyParameter>& parameters,
                   const Sample& sample, const std::vector<Metric>& metrics,
                   const AssemblyOptions& assembly = {});
 
