@@ -11,18 +11,16 @@
 #include <pybind11/stl.h>
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <ctime>
 #include <fstream>
 #include <memory>
-#include <mutex>
 #include <sstream>
-#include <thread>
 
 #include "components/builtin.hpp"
 #include "framework/analysis/energy_audit.hpp"
 #include "framework/analysis/run_metrics.hpp"
+#include "framework/core/parallel.hpp"
 #include "framework/core/version.hpp"
 #include "framework/plugin/plugin.hpp"
 #include "framework/run/run.hpp"
@@ -52,13 +50,11 @@ class LoadedNetlist {
   const std::string& text() const { return text_; }
   const Netlist& netlist() const { return netlist_; }
   const Registry& registry() const { return registry_; }
-  std::mutex& yaml_lock() const { return yaml_lock_; }
 
  private:
   std::string path_, text_;
   Netlist netlist_;
   Registry registry_;
-  mutable std::mutex yaml_lock_;
 };
 
 // What `pneumo simulate` computes: the run, and every metric the netlist
@@ -75,7 +71,6 @@ Simulation simulate(const LoadedNetlist& loaded, const std::vector<std::string>&
   std::unique_ptr<System> system;
   Netlist nl;
   {
-    std::lock_guard<std::mutex> lock(loaded.yaml_lock());
     nl = loaded.netlist();
     for (const auto& a : sets) apply_override(nl, a);
     const std::vector<bool> all(nl.metrics.size(), true);
@@ -149,7 +144,6 @@ py::list parameters_list(const Netlist& nl) {
 // The values of one --grid axis NAME=FROM:TO:COUNT (SI), as `pneumo sweep`
 // spaces them; pneumo.sweep makes the full factorial of the axes.
 std::vector<double> grid_axis(const LoadedNetlist& loaded, const std::string& name, const std::string& spec) {
-  std::lock_guard<std::mutex> lock(loaded.yaml_lock());
   const study::Design one = study::grid_design(loaded.netlist(), loaded.registry(), {name + "=" + spec});
   std::vector<double> axis;
   for (const auto& s : one.samples) axis.push_back(s.front());
@@ -169,36 +163,18 @@ study::Design samples_from(const LoadedNetlist& loaded, const std::vector<std::s
   return d;
 }
 
-// Every sample run by pneumo::study::run_one on `threads` std::threads, each
-// with its own parse of the netlist, as run_sweep does (no journal, no file).
-// TODO(lead): switch to the shared thread pool once framework/ has one.
+// Every sample run by pneumo::study::run_one on `threads` threads, as
+// run_sweep does (no journal, no file); the parsed netlist is shared.
 std::vector<study::RunRecord> run_design(const LoadedNetlist& loaded, const study::Design& d,
                                          const std::vector<study::Metric>& metrics,
                                          const std::vector<std::string>& sets, int threads) {
+  Netlist nl = loaded.netlist();
+  for (const auto& a : sets) apply_override(nl, a);
   std::vector<study::RunRecord> records(d.samples.size());
-  std::atomic<std::size_t> next{0};
-  std::mutex error_mutex;
-  std::exception_ptr error;
-  auto worker = [&]() {
-    try {
-      Netlist nl = parse_netlist(loaded.text(), loaded.path());
-      for (const auto& a : sets) apply_override(nl, a);
-      for (std::size_t k; (k = next++) < d.samples.size();) {
-        records[k] = study::run_one(nl, loaded.registry(), d.parameters, d.samples[k], metrics);
-        records[k].index = static_cast<long>(k);
-      }
-    } catch (...) {
-      std::lock_guard<std::mutex> lock(error_mutex);
-      if (!error) error = std::current_exception();
-      next = d.samples.size();
-    }
-  };
-  const int n = std::max(1, std::min<int>(threads, static_cast<int>(std::max<std::size_t>(1, d.samples.size()))));
-  std::vector<std::thread> pool;
-  for (int t = 1; t < n; ++t) pool.emplace_back(worker);
-  worker();
-  for (auto& th : pool) th.join();
-  if (error) std::rethrow_exception(error);
+  parallel_for(static_cast<long>(d.samples.size()), threads, [&](int, long k) {
+    records[k] = study::run_one(nl, loaded.registry(), d.parameters, d.samples[k], metrics);
+    records[k].index = k;
+  });
   return records;
 }
 
@@ -333,11 +309,8 @@ PYBIND11_MODULE(_core, m) {
         std::vector<study::RunRecord> records;
         {
           py::gil_scoped_release release;
-          {
-            std::lock_guard<std::mutex> lock(l.yaml_lock());  // both read the netlist's YAML nodes
-            d = samples_from(l, names, samples);
-            metrics = study::select_metrics(l.netlist(), l.registry(), metric_names);
-          }
+          d = samples_from(l, names, samples);
+          metrics = study::select_metrics(l.netlist(), l.registry(), metric_names);
           records = run_design(l, d, metrics, sets, threads);
         }
         return sweep_dict(d, metrics, records);
