@@ -107,20 +107,7 @@ class Reader {
   // A number or a quantity with unit; `expected` is checked if the text has a unit.
   double quantity(const YAML::Node& n, double ambient, const Dimension& expected, const std::string& expected_unit,
                   const std::string& component, const std::string& parameter) const {
-    const std::string text = scalar_text(n, component, parameter, "the value");
-    units::Quantity q{};
-    try {
-      q = units::parse_quantity(text, ambient);
-    } catch (const units::ParseError& e) {
-      SourceLocation w = at(n);
-      if (w.column > 0 && n.Tag() != "!") w.column += static_cast<int>(e.column);
-      throw InputError(w, component, parameter, std::string("cannot read '") + text + "': " + e.what());
-    }
-    if (q.had_unit && !(q.dim == expected))
-      fail(n, component, parameter,
-           "'" + text + "' has dimension " + q.dim.to_string() + " but a value in " + expected_unit + " (" +
-               expected.to_string() + ") is expected");
-    return q.si_value;
+    return quantity(value(n), ambient, expected, expected_unit, component, parameter);
   }
 
   // The same checks on a value already read into a ValueDecl.
