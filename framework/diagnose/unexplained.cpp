@@ -1,0 +1,422 @@
+#include "framework/diagnose/unexplained.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+#include "framework/assembly/system.hpp"
+#include "framework/core/parallel.hpp"
+
+namespace pneumo::diagnose {
+
+namespace {
+
+constexpr int kConfirm = 3;  // candidates confirmed by simulation, best predicted first
+
+struct State {
+  std::string name, unit;
+  double nominal = 1;
+};
+
+// The unit of a System unknown: a component's internal variable
+// ("component.variable") from its ComponentInfo, a node's from the
+// quantity the assembly names it by.
+std::string unit_of(const System& sys, const std::string& name) {
+  static const std::pair<const char*, const char*> node[] = {
+      {"p at ", "Pa"}, {"T at ", "K"}, {"s at ", "m"}, {"v at ", "m/s"}};
+  for (const auto& [prefix, unit] : node)
+    if (name.rfind(prefix, 0) == 0) return unit;
+  const auto dot = name.rfind('.');
+  if (dot == std::string::npos) return "";
+  const int c = sys.circuit().find(name.substr(0, dot));
+  if (c < 0) return "";
+  for (const auto& v : sys.circuit().components[c]->info().variables)
+    if (v.name == name.substr(dot + 1)) return v.unit;
+  return "";
+}
+
+std::vector<State> model_states(const Netlist& model, const Registry& registry) {
+  const System sys(elaborate(model, registry));
+  std::vector<State> out;
+  for (int i = 0; i < sys.size(); ++i)
+    if (sys.differential()[i] != 0.0)
+      out.push_back({sys.variable_names()[i], unit_of(sys, sys.variable_names()[i]), sys.nominal()[i]});
+  return out;
+}
+
+// Hat functions on `knots` uniform knots over [t0, t1]: phi_j(t).
+std::vector<double> knots_of(const std::vector<double>& t) {
+  std::vector<double> k(kDisturbanceKnots);
+  for (int j = 0; j < kDisturbanceKnots; ++j)
+    k[j] = t.front() + (t.back() - t.front()) * j / (kDisturbanceKnots - 1);
+  return k;
+}
+double hat(const std::vector<double>& knots, int j, double t) {
+  const double h = knots[1] - knots[0];
+  return std::max(0.0, 1.0 - std::abs(t - knots[j]) / h);
+}
+
+// Second differences of the knot values: the roughness a disturbance pays.
+Eigen::MatrixXd roughness(int hats, int extra) {
+  Eigen::MatrixXd D = Eigen::MatrixXd::Zero(hats - 2, hats + extra);
+  for (int j = 0; j + 2 < hats; ++j) D(j, j) = 1, D(j, j + 1) = -2, D(j, j + 2) = 1;
+  return D.transpose() * D;
+}
+
+// A balance or sensor: the linearised residual of each run r0 + J c.
+struct Candidate {
+  BalanceFinding finding;
+  std::string variable;  // a state; empty for a sensor
+  std::vector<double> scale;  // per run: the state's rate per unit coefficient
+  std::vector<Eigen::MatrixXd> J;
+  Eigen::MatrixXd P;
+  std::vector<Eigen::VectorXd> c;  // fitted, per run
+  double ssr = 0;
+};
+
+// min sum_k |r0_k + J_k c_k|^2 + lambda c_k' P c_k, lambda by generalised
+// cross-validation over all runs together.
+void regularised_fit(Candidate& cand, const std::vector<Eigen::VectorXd>& r0) {
+  const std::size_t nr = r0.size();
+  const int p = static_cast<int>(cand.P.rows());
+  std::vector<Eigen::MatrixXd> A(nr);
+  std::vector<Eigen::VectorXd> g(nr);
+  double n = 0, s0 = 0, trace = 0;
+  for (std::size_t k = 0; k < nr; ++k) {
+    A[k] = cand.J[k].transpose() * cand.J[k];
+    g[k] = cand.J[k].transpose() * r0[k];
+    n += static_cast<double>(r0[k].size());
+    s0 += r0[k].squaredNorm();
+    trace += A[k].trace() / p / nr;
+  }
+  const Eigen::MatrixXd ridge = 1e-10 * std::max(trace, 1e-300) * Eigen::MatrixXd::Identity(p, p);
+  double best = INFINITY;
+  cand.ssr = s0;
+  cand.c.assign(nr, Eigen::VectorXd::Zero(p));
+  for (double e = -8; e <= 4; e += 0.25) {
+    const double lambda = std::max(trace, 1e-300) * std::pow(10.0, e);
+    double ssr = 0, edf = 0;
+    std::vector<Eigen::VectorXd> c(nr);
+    for (std::size_t k = 0; k < nr; ++k) {
+      const auto M = (A[k] + lambda * cand.P + ridge).ldlt();
+      c[k] = -M.solve(g[k]);
+      ssr += r0[k].squaredNorm() + 2 * g[k].dot(c[k]) + c[k].dot(A[k] * c[k]);
+      edf += M.solve(A[k]).trace();
+    }
+    const double gcv = n * ssr / ((n - edf) * (n - edf));
+    if (ssr >= 0 && edf < n && gcv < best) best = gcv, cand.ssr = ssr, cand.c = std::move(c);
+  }
+}
+
+double excess_share(double gap_before, double gap_after) {
+  const double e0 = std::max(gap_before - 1.0, 1e-12), e1 = std::max(gap_after - 1.0, 0.0);
+  return (e0 - e1) / e0;
+}
+
+// What a disturbance of a state with this unit is, in words, by its sign.
+std::string what_is_missed(const std::string& unit, bool positive, const std::string& name) {
+  if (unit == "kg") return std::string("mass flow ") + (positive ? "into " : "out of ") + name;
+  if (unit == "J" || unit == "K") return std::string("heat ") + (positive ? "into " : "out of ") + name;
+  if (unit == "m/s") return std::string("a force in the ") + (positive ? "positive" : "negative") + " direction on " + name;
+  if (unit == "rad/s") return std::string("a torque in the ") + (positive ? "positive" : "negative") + " direction on " + name;
+  if (unit == "m" || unit == "rad") return std::string("a drift ") + (positive ? "forward" : "backward") + " of " + name;
+  if (unit == "Pa") return std::string("a pressure ") + (positive ? "rise" : "fall") + " of " + name;
+  return std::string("a ") + (positive ? "rise" : "fall") + " of " + name + " that its equations do not have";
+}
+
+std::string number(double v) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.2g", v);
+  return buf;
+}
+
+// The phase where the fitted disturbance is largest (RMS over its samples,
+// all runs), and the disturbance's mean there.
+std::pair<int, double> largest_phase(const std::vector<DisturbanceShape>& shape, const std::vector<int>& runs,
+                                     const UnexplainedInput& in) {
+  const std::size_t np = in.phase_names->size();
+  std::vector<double> sq(np, 0), sum(np, 0), count(np, 0);
+  for (std::size_t q = 0; q < shape.size(); ++q) {
+    const auto& run = (*in.runs)[runs[q]];
+    const Disturbance d{"", shape[q].t, shape[q].value};
+    for (std::size_t i = 0; i < run.t.size(); ++i) {
+      const double v = d.at(run.t[i]);
+      const int ph = (*in.phases)[runs[q]][i];
+      sq[ph] += v * v, sum[ph] += v, count[ph] += 1;
+    }
+  }
+  int best = 0;
+  for (std::size_t p = 0; p < np; ++p)
+    if (count[p] > 0 && (count[best] == 0 || sq[p] / count[p] > sq[best] / count[best])) best = static_cast<int>(p);
+  return {best, count[best] > 0 ? sum[best] / count[best] : 0.0};
+}
+
+}  // namespace
+
+void explain_by_balances(const UnexplainedInput& in, const DiagnoseOptions& opt, Unexplained& u) {
+  const auto t_start = std::chrono::steady_clock::now();
+  std::atomic<long> sims{0};
+  auto log = [&](const std::string& s) {
+    if (in.log) in.log(s);
+  };
+  const auto& runs = *in.runs;
+  // The verdict model's residuals, runs it finishes only.
+  std::vector<int> used;
+  std::vector<std::vector<std::vector<double>>> sim0(runs.size());
+  parallel_for(static_cast<long>(runs.size()), opt.threads, [&](int, long k) {
+    sim0[k] = in.simulate(static_cast<int>(k), {});
+    ++sims;
+  });
+  for (int k = 0; k < static_cast<int>(runs.size()); ++k)
+    if (!sim0[k].empty()) used.push_back(k);
+  const std::size_t nr = used.size();
+  auto residual = [&](int k, const std::vector<std::vector<double>>& sim) {
+    const auto& run = runs[k];
+    Eigen::VectorXd r(run.signals.size() * run.t.size());
+    for (std::size_t s = 0; s < run.signals.size(); ++s)
+      for (std::size_t i = 0; i < run.t.size(); ++i)
+        r[s * run.t.size() + i] = (run.y[s][i] - sim[s][i]) / run.sigma[s];
+    return r;
+  };
+  std::vector<Eigen::VectorXd> r0(nr);
+  std::vector<std::vector<double>> knots(nr);
+  double n = 0, s0 = 0;
+  for (std::size_t q = 0; q < nr; ++q) {
+    r0[q] = residual(used[q], sim0[used[q]]);
+    knots[q] = knots_of(runs[used[q]].t);
+    n += static_cast<double>(r0[q].size());
+    s0 += r0[q].squaredNorm();
+  }
+  if (nr == 0) return;
+  u.gap_all_runs = std::sqrt(s0 / n);
+  const int B = kDisturbanceKnots;
+  std::vector<Candidate> cands;
+
+  // The states: one simulation per hat and run, each hat's amplitude moving
+  // the state by about 1 % of its nominal magnitude over the hat's width.
+  const std::vector<State> states = model_states(*in.model, *in.registry);
+  for (const auto& st : states) {
+    Candidate c;
+    c.variable = st.name;
+    c.finding.balance = st.name;
+    c.finding.unit = st.unit.empty() ? "1/s" : st.unit + "/s";
+    c.finding.kind = st.unit == "kg" ? "mass" : st.unit == "J" || st.unit == "K" ? "energy"
+                   : st.unit == "m/s" || st.unit == "rad/s" ? "force" : st.unit == "m" || st.unit == "rad" ? "motion"
+                   : "state";
+    c.P = roughness(B, 0);
+    for (std::size_t q = 0; q < nr; ++q) {
+      c.scale.push_back(0.01 * st.nominal / (knots[q][1] - knots[q][0]));
+      c.J.push_back(Eigen::MatrixXd::Zero(r0[q].size(), B));
+    }
+    cands.push_back(std::move(c));
+  }
+  log("unexplained: " + std::to_string(states.size()) + " balances x " + std::to_string(nr) + " runs x " +
+      std::to_string(B) + " hats: " + std::to_string(states.size() * nr * B) + " simulations");
+  const long jobs = static_cast<long>(states.size() * nr * B);
+  parallel_for(jobs, opt.threads, [&](int, long job) {
+    const long i = job / static_cast<long>(nr * B), q = (job / B) % static_cast<long>(nr), j = job % B;
+    Candidate& c = cands[i];
+    std::vector<double> rate(B, 0.0);
+    rate[j] = c.scale[q];
+    const auto sim = in.simulate(used[q], {Disturbance{c.variable, knots[q], rate}});
+    ++sims;
+    if (!sim.empty()) c.J[q].col(j) = residual(used[q], sim) - r0[q];  // a failed run leaves the hat unused
+  });
+  // The sensors: a smooth offset (in noise units) and a gain per run, exactly linear.
+  for (const auto& name : runs[used[0]].signals) {
+    Candidate c;
+    c.finding.balance = "sensor " + name;
+    c.finding.kind = "sensor";
+    c.P = roughness(B, 1);
+    for (std::size_t q = 0; q < nr; ++q) {
+      const auto& run = runs[used[q]];
+      Eigen::MatrixXd J = Eigen::MatrixXd::Zero(r0[q].size(), B + 1);
+      const std::size_t m = run.t.size(), s = std::find(run.signals.begin(), run.signals.end(), name) - run.signals.begin();
+      for (std::size_t i = 0; i < m && s < run.signals.size(); ++i) {
+        for (int j = 0; j < B; ++j) J(s * m + i, j) = -hat(knots[q], j, run.t[i]);
+        J(s * m + i, B) = -sim0[used[q]][s][i] / run.sigma[s];
+      }
+      c.scale.push_back(s < run.signals.size() ? run.sigma[s] : 0.0);
+      c.J.push_back(std::move(J));
+    }
+    cands.push_back(std::move(c));
+  }
+  for (auto& c : cands) {
+    regularised_fit(c, r0);
+    c.finding.gap_after = std::sqrt(std::max(c.ssr, 0.0) / n);
+    c.finding.confirmed = c.variable.empty();  // a sensor's residual is exactly linear
+  }
+  std::sort(cands.begin(), cands.end(), [](const Candidate& a, const Candidate& b) { return a.ssr < b.ssr; });
+
+  // Confirm the best predicted balances by simulating their fitted disturbances.
+  auto disturbances_of = [&](const Candidate& c, std::size_t q) {
+    Disturbance d{c.variable, knots[q], std::vector<double>(B)};
+    for (int j = 0; j < B; ++j) d.rate[j] = c.c[q][j] * c.scale[q];
+    return d;
+  };
+  std::vector<int> to_confirm;
+  for (int i = 0; i < static_cast<int>(cands.size()) && static_cast<int>(to_confirm.size()) < kConfirm; ++i)
+    if (!cands[i].variable.empty()) to_confirm.push_back(i);
+  std::vector<double> confirmed_ssr(to_confirm.size() * nr, -1);
+  parallel_for(static_cast<long>(confirmed_ssr.size()), opt.threads, [&](int, long job) {
+    const Candidate& c = cands[to_confirm[job / nr]];
+    const std::size_t q = job % nr;
+    const auto sim = in.simulate(used[q], {disturbances_of(c, q)});
+    ++sims;
+    if (!sim.empty()) confirmed_ssr[job] = residual(used[q], sim).squaredNorm();
+  });
+  for (std::size_t a = 0; a < to_confirm.size(); ++a) {
+    double ssr = 0;
+    bool ok = true;
+    for (std::size_t q = 0; q < nr; ++q) ok = ok && confirmed_ssr[a * nr + q] >= 0, ssr += confirmed_ssr[a * nr + q];
+    Candidate& c = cands[to_confirm[a]];
+    log("  " + c.finding.balance + ": predicted gap " + number(c.finding.gap_after) + ", simulated " +
+        (ok ? number(std::sqrt(ssr / n)) : std::string("failed")));
+    if (ok) c.ssr = ssr, c.finding.gap_after = std::sqrt(ssr / n), c.finding.confirmed = true;
+  }
+  // Best first: confirmed before predicted-only, then by the gap left.
+  std::stable_sort(cands.begin(), cands.end(), [](const Candidate& a, const Candidate& b) {
+    if (a.finding.confirmed != b.finding.confirmed) return a.finding.confirmed;
+    return a.ssr < b.ssr;
+  });
+  for (auto& c : cands) {
+    c.finding.explained = excess_share(u.gap_all_runs, c.finding.gap_after);
+    u.balances.push_back(c.finding);
+  }
+  const Candidate& best = cands.front();
+  for (std::size_t q = 0; q < nr; ++q) {
+    DisturbanceShape sh;
+    sh.run = runs[used[q]].name;
+    sh.t = knots[q];
+    if (best.variable.empty()) {
+      for (int j = 0; j < B; ++j) sh.value.push_back(best.c[q][j] * best.scale[q]);
+      sh.gain = best.c[q][B];
+    } else {
+      sh.value = disturbances_of(best, q).rate;
+    }
+    u.shape.push_back(std::move(sh));
+  }
+  const auto [phase, mean] = largest_phase(u.shape, used, in);
+  const std::string where = in.phase_names->empty() ? "" : " during " + (*in.phase_names)[phase];
+  std::string what = best.variable.empty()
+                         ? "the reading of " + best.finding.balance.substr(7) + " is off (a drifting offset and gain)"
+                         : "the model misses " + what_is_missed(best.finding.unit.substr(0, best.finding.unit.size() - 2),
+                                                                mean > 0, best.finding.balance);
+  std::string sentence = "No candidate explains the remaining gap (" + number(u.gap) + " x noise, most of it in " +
+                         u.signal + (u.phase.empty() ? "" : " during " + u.phase) + "); ";
+  if (best.finding.explained >= opt.min_excess_reduction) {
+    sentence += what + ", largest" + where + " (about " + number(std::abs(mean)) + " " +
+                (best.variable.empty() ? "in the signal's unit" : best.finding.unit) + "), which removes " +
+                std::to_string(static_cast<int>(std::lround(100 * best.finding.explained))) + " % of the excess gap.";
+  } else {
+    sentence += "nor does a smooth disturbance of any single balance (the best, on " + best.finding.balance +
+                ", removes " + std::to_string(static_cast<int>(std::lround(100 * best.finding.explained))) +
+                " % of the excess gap).";
+  }
+  u.sentence = sentence;
+  u.simulations = sims;
+  u.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+  log("unexplained: " + u.sentence + " [" + std::to_string(u.simulations) + " simulations, " + number(u.seconds) +
+      " s]");
+}
+
+std::string unexplained_json(const std::optional<Unexplained>& u, const std::function<std::string(double)>& num,
+                             const std::function<std::string(const std::string&)>& str) {
+  if (!u) return "null";
+  std::ostringstream o;
+  o << "{\"gap\": " << num(u->gap) << ", \"gap_all_runs\": " << num(u->gap_all_runs) << ", \"signal\": "
+    << str(u->signal) << ", \"phase\": " << str(u->phase) << ", \"sentence\": " << str(u->sentence)
+    << ",\n  \"windows\": [";
+  for (std::size_t i = 0; i < u->windows.size(); ++i) {
+    const auto& w = u->windows[i];
+    o << (i ? ", " : "") << "{\"run\": " << str(w.run) << ", \"signal\": " << str(w.signal)
+      << ", \"t_start\": " << num(w.t0) << ", \"t_end\": " << num(w.t1) << ", \"gap\": " << num(w.rms) << "}";
+  }
+  o << "],\n  \"balances\": [";
+  for (std::size_t i = 0; i < u->balances.size(); ++i) {
+    const auto& b = u->balances[i];
+    o << (i ? ",\n    " : "\n    ") << "{\"balance\": " << str(b.balance) << ", \"kind\": " << str(b.kind)
+      << ", \"unit\": " << str(b.unit) << ", \"gap_after\": " << num(b.gap_after)
+      << ", \"explained\": " << num(b.explained) << ", \"confirmed\": " << (b.confirmed ? "true" : "false") << "}";
+  }
+  o << "],\n  \"shape\": [";
+  for (std::size_t i = 0; i < u->shape.size(); ++i) {
+    const auto& sh = u->shape[i];
+    o << (i ? ",\n    " : "\n    ") << "{\"run\": " << str(sh.run) << ", \"gain\": " << num(sh.gain) << ", \"t\": [";
+    for (std::size_t j = 0; j < sh.t.size(); ++j) o << (j ? ", " : "") << num(sh.t[j]);
+    o << "], \"value\": [";
+    for (std::size_t j = 0; j < sh.value.size(); ++j) o << (j ? ", " : "") << num(sh.value[j]);
+    o << "]}";
+  }
+  o << "],\n  \"simulations\": " << u->simulations << ", \"seconds\": " << num(u->seconds) << "}";
+  return o.str();
+}
+
+namespace {
+
+// The best balance's disturbance over time, one line per run, with axes.
+std::string svg_shape(const Unexplained& u, const std::function<std::string(const std::string&)>& html) {
+  const double W = 560, H = 220, l = 70, r = 10, t = 10, b = 36;
+  double t0 = INFINITY, t1 = -INFINITY, lo = 0, hi = 0;
+  for (const auto& sh : u.shape) {
+    t0 = std::min(t0, sh.t.front()), t1 = std::max(t1, sh.t.back());
+    for (double v : sh.value) lo = std::min(lo, v), hi = std::max(hi, v);
+  }
+  if (!(hi > lo)) hi = lo + 1;
+  if (!(t1 > t0)) t1 = t0 + 1;
+  const double pad = 0.05 * (hi - lo);
+  lo -= pad, hi += pad;
+  auto X = [&](double x) { return l + (x - t0) / (t1 - t0) * (W - l - r); };
+  auto Y = [&](double y) { return t + (hi - y) / (hi - lo) * (H - t - b); };
+  std::ostringstream o;
+  o << "<svg id=\"unexplained-shape\" xmlns=\"http://www.w3.org/2000/svg\" width=\"" << W << "\" height=\"" << H
+    << "\" viewBox=\"0 0 " << W << " " << H << "\" font-size=\"11\">\n";
+  o << "<line x1=\"" << l << "\" x2=\"" << W - r << "\" y1=\"" << Y(0) << "\" y2=\"" << Y(0)
+    << "\" stroke=\"#999\" stroke-dasharray=\"3 3\"/>\n";
+  o << "<rect x=\"" << l << "\" y=\"" << t << "\" width=\"" << W - l - r << "\" height=\"" << H - t - b
+    << "\" fill=\"none\" stroke=\"#444\"/>\n";
+  for (int k = 0; k <= 4; ++k) {
+    const double tv = t0 + (t1 - t0) * k / 4, yv = lo + (hi - lo) * k / 4;
+    o << "<text x=\"" << X(tv) << "\" y=\"" << H - b + 14 << "\" text-anchor=\"middle\">" << number(tv) << "</text>"
+      << "<text x=\"" << l - 4 << "\" y=\"" << Y(yv) + 4 << "\" text-anchor=\"end\">" << number(yv) << "</text>\n";
+  }
+  o << "<text x=\"" << (l + W - r) / 2 << "\" y=\"" << H - 4 << "\" text-anchor=\"middle\">t [s]</text>\n";
+  const char* const colours[] = {"#4c8fd6", "#d64c4c", "#4cb04c", "#f0a030", "#9b6bd6", "#666"};
+  for (std::size_t i = 0; i < u.shape.size(); ++i) {
+    const auto& sh = u.shape[i];
+    o << "<polyline fill=\"none\" stroke-width=\"1.5\" stroke=\"" << colours[i % 6] << "\" points=\"";
+    for (std::size_t j = 0; j < sh.t.size(); ++j) o << X(sh.t[j]) << "," << Y(sh.value[j]) << " ";
+    o << "\"><title>" << html(sh.run) << "</title></polyline>\n";
+    o << "<text x=\"" << W - r - 4 << "\" y=\"" << t + 14 + 13 * i << "\" text-anchor=\"end\" fill=\""
+      << colours[i % 6] << "\">" << html(sh.run) << "</text>\n";
+  }
+  const auto& best = u.balances.front();
+  o << "<text x=\"" << l + 6 << "\" y=\"" << t + 14 << "\">" << html(best.balance) << " ["
+    << html(best.kind == "sensor" ? "offset" : best.unit) << "]</text>\n</svg>\n";
+  return o.str();
+}
+
+}  // namespace
+
+std::string unexplained_html(const std::optional<Unexplained>& u,
+                             const std::function<std::string(const std::string&)>& html) {
+  if (!u || u->balances.empty()) return "";
+  std::ostringstream o;
+  o << "<h2>What no candidate explains</h2>\n<p id=\"unexplained\">" << html(u->sentence) << "</p>\n"
+    << svg_shape(*u, html) << "<table id=\"balances\"><tr><th>balance</th><th>kind</th><th>gap after</th>"
+    << "<th>excess gap removed</th></tr>\n";
+  for (std::size_t i = 0; i < u->balances.size() && i < 8; ++i) {
+    const auto& b = u->balances[i];
+    o << "<tr><td class=\"l\">" << html(b.balance) << "</td><td class=\"l\">" << html(b.kind) << "</td><td>"
+      << number(b.gap_after) << (b.confirmed ? "" : " (predicted)") << "</td><td>"
+      << std::lround(100 * b.explained) << " %</td></tr>\n";
+  }
+  o << "</table>\n";
+  return o.str();
+}
+
+}  // namespace pneumo::diagnose
