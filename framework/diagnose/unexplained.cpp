@@ -120,7 +120,8 @@ double excess_share(double gap_before, double gap_after) {
 // What a disturbance of a state with this unit is, in words, by its sign.
 std::string what_is_missed(const std::string& unit, bool positive, const std::string& name) {
   if (unit == "kg") return std::string("mass flow ") + (positive ? "into " : "out of ") + name;
-  if (unit == "J" || unit == "K") return std::string("heat ") + (positive ? "into " : "out of ") + name;
+  // A gas volume's energy: heat, or the enthalpy a flow carries.
+  if (unit == "J" || unit == "K") return std::string("energy (heat or enthalpy flow) ") + (positive ? "into " : "out of ") + name;
   if (unit == "m/s") return std::string("a force in the ") + (positive ? "positive" : "negative") + " direction on " + name;
   if (unit == "rad/s") return std::string("a torque in the ") + (positive ? "positive" : "negative") + " direction on " + name;
   if (unit == "m" || unit == "rad") return std::string("a drift ") + (positive ? "forward" : "backward") + " of " + name;
@@ -361,17 +362,17 @@ namespace {
 // The best balance's disturbance over time, one line per run, with axes.
 std::string svg_shape(const Unexplained& u, const std::function<std::string(const std::string&)>& html) {
   const double W = 560, H = 220, l = 70, r = 10, t = 10, b = 36;
-  double t0 = INFINITY, t1 = -INFINITY, lo = 0, hi = 0;
+  // Symmetric about zero, so that the sign reads at a glance.
+  double t0 = INFINITY, t1 = -INFINITY, top = 0;
   for (const auto& sh : u.shape) {
     t0 = std::min(t0, sh.t.front()), t1 = std::max(t1, sh.t.back());
-    for (double v : sh.value) lo = std::min(lo, v), hi = std::max(hi, v);
+    for (double v : sh.value) top = std::max(top, 1.1 * std::abs(v));
   }
-  if (!(hi > lo)) hi = lo + 1;
+  if (!(top > 0)) top = 1;
   if (!(t1 > t0)) t1 = t0 + 1;
-  const double pad = 0.05 * (hi - lo);
-  lo -= pad, hi += pad;
-  auto X = [&](double x) { return l + (x - t0) / (t1 - t0) * (W - l - r); };
-  auto Y = [&](double y) { return t + (hi - y) / (hi - lo) * (H - t - b); };
+  const double lo = -top, hi = top;
+  const auto X = [&](double x) { return l + (W - l - r) * (x - t0) / (t1 - t0); };
+  const auto Y = [&](double y) { return H - b - (H - t - b) * (y - lo) / (hi - lo); };
   std::ostringstream o;
   o << "<svg id=\"unexplained-shape\" xmlns=\"http://www.w3.org/2000/svg\" width=\"" << W << "\" height=\"" << H
     << "\" viewBox=\"0 0 " << W << " " << H << "\" font-size=\"11\">\n";

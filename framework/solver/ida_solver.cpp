@@ -317,6 +317,13 @@ void Integration::emit_at(double t_out, N_Vector yy, N_Vector yyp) {
 
 SolverResult Integration::run() {
   events_ = system_.time_events();
+  // A disturbance's knots are stops too: no step straddles a kink of d(t)
+  // (handle_time_event finds nothing due there and the step goes on).
+  for (const auto& [i, d] : user_.disturbed) events_.insert(events_.end(), d->t.begin(), d->t.end());
+  if (!user_.disturbed.empty()) {
+    std::sort(events_.begin(), events_.end());
+    events_.erase(std::unique(events_.begin(), events_.end()), events_.end());
+  }
   events_.erase(std::remove_if(events_.begin(), events_.end(), [&](double te) { return te > opt_.t_end; }),
                 events_.end());
   // Events at (or before) t_start set the initial modes.
