@@ -22,6 +22,7 @@ namespace pneumo::diagnose {
 
 namespace {
 
+constexpr long kDisturbedMaxSteps = 20000;  // a disturbed run's step budget (the cushion rig's nominal run takes 1225)
 constexpr double kFailedResidual = 1e4;  // per sample, for a run the solver could not finish
 
 // One measured signal of one run inside a concatenated residual vector.
@@ -89,6 +90,9 @@ class Engine {
       const Netlist nl = netlist_of(m, k);
       SolverOptions so = solver_options(nl.simulation);
       so.disturbances = disturbances;
+      // A disturbance that drives a state out of its domain (a chamber's
+      // mass below zero) leaves the solver crawling: such a run fails.
+      if (!disturbances.empty()) so.max_steps = kDisturbedMaxSteps;
       res = run_circuit(elaborate(nl, registry_), so);
     } catch (const std::exception&) {
       return {};

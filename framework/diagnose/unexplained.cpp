@@ -129,6 +129,11 @@ std::string what_is_missed(const std::string& unit, bool positive, const std::st
   return std::string("a ") + (positive ? "rise" : "fall") + " of " + name + " that its equations do not have";
 }
 
+// The state's unit back from its rate's (kg/s -> kg, m/s2 -> m/s).
+std::string state_unit(const std::string& rate) {
+  return rate.ends_with("/s2") ? rate.substr(0, rate.size() - 1) : rate.substr(0, rate.size() - 2);
+}
+
 std::string number(double v) {
   char buf[40];
   std::snprintf(buf, sizeof buf, "%.2g", v);
@@ -204,7 +209,7 @@ void explain_by_balances(const UnexplainedInput& in, const DiagnoseOptions& opt,
     Candidate c;
     c.variable = st.name;
     c.finding.balance = st.name;
-    c.finding.unit = st.unit.empty() ? "1/s" : st.unit + "/s";
+    c.finding.unit = st.unit.empty() ? "1/s" : st.unit.ends_with("/s") ? st.unit + "2" : st.unit + "/s";
     c.finding.kind = st.unit == "kg" ? "mass" : st.unit == "J" || st.unit == "K" ? "energy"
                    : st.unit == "m/s" || st.unit == "rad/s" ? "force" : st.unit == "m" || st.unit == "rad" ? "motion"
                    : "state";
@@ -305,8 +310,7 @@ void explain_by_balances(const UnexplainedInput& in, const DiagnoseOptions& opt,
   const std::string where = in.phase_names->empty() ? "" : " during " + (*in.phase_names)[phase];
   std::string what = best.variable.empty()
                          ? "the reading of " + best.finding.balance.substr(7) + " is off (a drifting offset and gain)"
-                         : "the model misses " + what_is_missed(best.finding.unit.substr(0, best.finding.unit.size() - 2),
-                                                                mean > 0, best.finding.balance);
+                         : "the model misses " + what_is_missed(state_unit(best.finding.unit), mean > 0, best.finding.balance);
   std::string sentence = "No candidate explains the remaining gap (" + number(u.gap) + " x noise, most of it in " +
                          u.signal + (u.phase.empty() ? "" : " during " + u.phase) + "); ";
   if (best.finding.explained >= opt.min_excess_reduction) {
