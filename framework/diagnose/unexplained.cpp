@@ -140,24 +140,26 @@ std::string number(double v) {
   return buf;
 }
 
-// The phase where the fitted disturbance is largest (RMS over its samples,
-// all runs), and the disturbance's mean there.
+// The phase where the fitted disturbance's mean over its samples (all runs)
+// is largest in magnitude, and that mean: a net source or sink, which a
+// wiggle about zero is not.
 std::pair<int, double> largest_phase(const std::vector<DisturbanceShape>& shape, const std::vector<int>& runs,
                                      const UnexplainedInput& in) {
   const std::size_t np = in.phase_names->size();
-  std::vector<double> sq(np, 0), sum(np, 0), count(np, 0);
+  std::vector<double> sum(np, 0), count(np, 0);
   for (std::size_t q = 0; q < shape.size(); ++q) {
     const auto& run = (*in.runs)[runs[q]];
     const Disturbance d{"", shape[q].t, shape[q].value};
     for (std::size_t i = 0; i < run.t.size(); ++i) {
       const double v = d.at(run.t[i]);
       const int ph = (*in.phases)[runs[q]][i];
-      sq[ph] += v * v, sum[ph] += v, count[ph] += 1;
+      sum[ph] += v, count[ph] += 1;
     }
   }
   int best = 0;
   for (std::size_t p = 0; p < np; ++p)
-    if (count[p] > 0 && (count[best] == 0 || sq[p] / count[p] > sq[best] / count[best])) best = static_cast<int>(p);
+    if (count[p] > 0 && (count[best] == 0 || std::abs(sum[p] / count[p]) > std::abs(sum[best] / count[best])))
+      best = static_cast<int>(p);
   return {best, count[best] > 0 ? sum[best] / count[best] : 0.0};
 }
 
@@ -365,7 +367,7 @@ namespace {
 
 // The best balance's disturbance over time, one line per run, with axes.
 std::string svg_shape(const Unexplained& u, const std::function<std::string(const std::string&)>& html) {
-  const double W = 560, H = 220, l = 70, r = 10, t = 10, b = 36;
+  const double W = 620, H = 220, l = 70, r = 70, t = 10, b = 36;  // the runs' names right of the plot
   // Symmetric about zero, so that the sign reads at a glance.
   double t0 = INFINITY, t1 = -INFINITY, top = 0;
   for (const auto& sh : u.shape) {
@@ -396,7 +398,7 @@ std::string svg_shape(const Unexplained& u, const std::function<std::string(cons
     o << "<polyline fill=\"none\" stroke-width=\"1.5\" stroke=\"" << colours[i % 6] << "\" points=\"";
     for (std::size_t j = 0; j < sh.t.size(); ++j) o << X(sh.t[j]) << "," << Y(sh.value[j]) << " ";
     o << "\"><title>" << html(sh.run) << "</title></polyline>\n";
-    o << "<text x=\"" << W - r - 4 << "\" y=\"" << t + 14 + 13 * i << "\" text-anchor=\"end\" fill=\""
+    o << "<text x=\"" << W - r + 6 << "\" y=\"" << t + 10 + 13 * i << "\" fill=\""
       << colours[i % 6] << "\">" << html(sh.run) << "</text>\n";
   }
   const auto& best = u.balances.front();
@@ -412,7 +414,9 @@ std::string unexplained_html(const std::optional<Unexplained>& u,
   if (!u || u->balances.empty()) return "";
   std::ostringstream o;
   o << "<h2>What no candidate explains</h2>\n<p id=\"unexplained\">" << html(u->sentence) << "</p>\n"
-    << svg_shape(*u, html) << "<table id=\"balances\"><tr><th>balance</th><th>kind</th><th>gap after</th>"
+    << svg_shape(*u, html) << "<p>The fitted disturbance of the best balance, per run (its knots joined). Gap of all "
+    << "runs with the verdict's model: " << number(u->gap_all_runs) << " x noise; each balance's own disturbance "
+    << "fitted:</p>\n<table id=\"balances\"><tr><th>balance</th><th>kind</th><th>gap after</th>"
     << "<th>excess gap removed</th></tr>\n";
   for (std::size_t i = 0; i < u->balances.size() && i < 8; ++i) {
     const auto& b = u->balances[i];
