@@ -140,9 +140,10 @@ std::string number(double v) {
   return buf;
 }
 
-// The phase where the fitted disturbance's mean over its samples (all runs)
-// is largest in magnitude, and that mean: a net source or sink, which a
-// wiggle about zero is not.
+// The phase where the fitted disturbance adds or removes most in all (its
+// sum over the phase's samples, all runs: a net source or sink, which a
+// wiggle about zero is not, nor a short phase's edge where the hats are
+// poorly determined), and its mean there.
 std::pair<int, double> largest_phase(const std::vector<DisturbanceShape>& shape, const std::vector<int>& runs,
                                      const UnexplainedInput& in) {
   const std::size_t np = in.phase_names->size();
@@ -158,8 +159,7 @@ std::pair<int, double> largest_phase(const std::vector<DisturbanceShape>& shape,
   }
   int best = 0;
   for (std::size_t p = 0; p < np; ++p)
-    if (count[p] > 0 && (count[best] == 0 || std::abs(sum[p] / count[p]) > std::abs(sum[best] / count[best])))
-      best = static_cast<int>(p);
+    if (std::abs(sum[p]) > std::abs(sum[best])) best = static_cast<int>(p);
   return {best, count[best] > 0 ? sum[best] / count[best] : 0.0};
 }
 
@@ -316,8 +316,8 @@ void explain_by_balances(const UnexplainedInput& in, const DiagnoseOptions& opt,
   std::string sentence = "No candidate explains the remaining gap (" + number(u.gap) + " x noise, most of it in " +
                          u.signal + (u.phase.empty() ? "" : " during " + u.phase) + "); ";
   if (best.finding.explained >= opt.min_excess_reduction) {
-    sentence += what + ", largest" + where + " (about " + number(std::abs(mean)) + " " +
-                (best.variable.empty() ? "in the signal's unit" : best.finding.unit) + "), which removes " +
+    sentence += what + ", mostly" + where + " (on average " + number(std::abs(mean)) + " " +
+                (best.variable.empty() ? "in the signal's unit" : best.finding.unit) + " there), which removes " +
                 std::to_string(static_cast<int>(std::lround(100 * best.finding.explained))) + " % of the excess gap.";
   } else {
     sentence += "nor does a smooth disturbance of any single balance (the best, on " + best.finding.balance +
