@@ -194,6 +194,13 @@ TEST(Unexplained, LeakOfATankNoCandidateDescribesIsFoundInThatTank) {
     for (std::size_t j = 1; j < sh.t.size(); ++j) integral += 0.5 * (sh.value[j] + sh.value[j - 1]) * (sh.t[j] - sh.t[j - 1]);
     EXPECT_LT(integral, 0) << sh.run;
   }
+  // report.json carries it, the HTML says it with the shape.
+  diagnose::write_report_json(rep, (dir.path() / "report.json").string());
+  diagnose::write_report_html(rep, (dir.path() / "report.html").string());
+  EXPECT_NE(read_file(dir.path() / "report.json").find("\"unexplained\": {\"gap\": "), std::string::npos);
+  const std::string page = read_file(dir.path() / "report.html");
+  EXPECT_NE(page.find("<p id=\"unexplained\">No candidate explains"), std::string::npos);
+  EXPECT_NE(page.find("<svg id=\"unexplained-shape\""), std::string::npos);
 }
 
 // The first tank's leak, of the candidate's own form: the verdict explains
@@ -207,6 +214,8 @@ TEST(Unexplained, NothingIsLeftWhenTheCatalogueExplainsTheGap) {
   EXPECT_EQ(rep.verdict[0], "leak_first");
   EXPECT_GT(rep.validation_before.total.rms, 3.0);
   EXPECT_FALSE(rep.unexplained.has_value()) << rep.unexplained->sentence;
+  diagnose::write_report_json(rep, (dir.path() / "report.json").string());
+  EXPECT_NE(read_file(dir.path() / "report.json").find("\"unexplained\": null"), std::string::npos);
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <numeric>
 #include <sstream>
 
 #include "framework/assembly/system.hpp"
@@ -165,127 +166,194 @@ std::pair<int, double> largest_phase(const std::vector<DisturbanceShape>& shape,
 
 }  // namespace
 
-void explain_by_balances(const UnexplainedInput& in, const DiagnoseOptions& opt, Unexplained& u) {
-  const auto t_start = std::chrono::steady_clock::now();
-  std::atomic<long> sims{0};
-  auto log = [&](const std::string& s) {
-    if (in.log) in.log(s);
-  };
-  const auto& runs = *in.runs;
-  // The verdict model's residuals, runs it finishes only.
-  std::vector<int> used;
-  std::vector<std::vector<std::vector<double>>> sim0(runs.size());
-  parallel_for(static_cast<long>(runs.size()), opt.threads, [&](int, long k) {
-    sim0[k] = in.simulate(static_cast<int>(k), {});
-    ++sims;
-  });
-  for (int k = 0; k < static_cast<int>(runs.size()); ++k)
-    if (!sim0[k].empty()) used.push_back(k);
-  const std::size_t nr = used.size();
-  auto residual = [&](int k, const std::vector<std::vector<double>>& sim) {
-    const auto& run = runs[k];
+namespace {
+
+// The search's shared facts: the verdict model's residuals on the runs it
+// finishes, each run's knots, and the simulations spent.
+class Search {
+ public:
+  Search(const UnexplainedInput& in, const DiagnoseOptions& opt) : in_(in), opt_(opt), runs_(*in.runs) {
+    std::vector<std::vector<std::vector<double>>> sim(runs_.size());
+    parallel_for(static_cast<long>(runs_.size()), opt.threads, [&](int, long k) {
+      sim[k] = in.simulate(static_cast<int>(k), {});
+      ++simulations;
+    });
+    for (int k = 0; k < static_cast<int>(runs_.size()); ++k) {
+      if (sim[k].empty()) continue;
+      used.push_back(k);
+      r0.push_back(residual(k, sim[k]));
+      knots.push_back(knots_of(runs_[k].t));
+      sim0.push_back(std::move(sim[k]));
+      n += static_cast<double>(r0.back().size());
+      s0 += r0.back().squaredNorm();
+    }
+  }
+
+  std::vector<int> used;                               // runs the verdict model finishes
+  std::vector<std::vector<std::vector<double>>> sim0;  // per used run: its signals
+  std::vector<Eigen::VectorXd> r0;
+  std::vector<std::vector<double>> knots;
+  double n = 0, s0 = 0;
+  std::atomic<long> simulations{0};
+
+  // (measured - simulated) / sigma, signal after signal.
+  Eigen::VectorXd residual(int k, const std::vector<std::vector<double>>& sim) const {
+    const auto& run = runs_[k];
     Eigen::VectorXd r(run.signals.size() * run.t.size());
     for (std::size_t s = 0; s < run.signals.size(); ++s)
-      for (std::size_t i = 0; i < run.t.size(); ++i)
-        r[s * run.t.size() + i] = (run.y[s][i] - sim[s][i]) / run.sigma[s];
+      for (std::size_t i = 0; i < run.t.size(); ++i) r[s * run.t.size() + i] = (run.y[s][i] - sim[s][i]) / run.sigma[s];
     return r;
-  };
-  std::vector<Eigen::VectorXd> r0(nr);
-  std::vector<std::vector<double>> knots(nr);
-  double n = 0, s0 = 0;
-  for (std::size_t q = 0; q < nr; ++q) {
-    r0[q] = residual(used[q], sim0[used[q]]);
-    knots[q] = knots_of(runs[used[q]].t);
-    n += static_cast<double>(r0[q].size());
-    s0 += r0[q].squaredNorm();
   }
-  if (nr == 0) return;
-  u.gap_all_runs = std::sqrt(s0 / n);
-  const int B = kDisturbanceKnots;
-  std::vector<Candidate> cands;
 
   // The states: one simulation per hat and run, each hat's amplitude moving
   // the state by about 1 % of its nominal magnitude over the hat's width.
-  const std::vector<State> states = model_states(*in.model, *in.registry);
-  for (const auto& st : states) {
-    Candidate c;
-    c.variable = st.name;
-    c.finding.balance = st.name;
-    c.finding.unit = st.unit.empty() ? "1/s" : st.unit.ends_with("/s") ? st.unit + "2" : st.unit + "/s";
-    c.finding.kind = st.unit == "kg" ? "mass" : st.unit == "J" || st.unit == "K" ? "energy"
-                   : st.unit == "m/s" || st.unit == "rad/s" ? "force" : st.unit == "m" || st.unit == "rad" ? "motion"
-                   : "state";
-    c.P = roughness(B, 0);
-    for (std::size_t q = 0; q < nr; ++q) {
-      c.scale.push_back(0.01 * st.nominal / (knots[q][1] - knots[q][0]));
-      c.J.push_back(Eigen::MatrixXd::Zero(r0[q].size(), B));
-    }
-    cands.push_back(std::move(c));
-  }
-  log("unexplained: " + std::to_string(states.size()) + " balances x " + std::to_string(nr) + " runs x " +
-      std::to_string(B) + " hats: " + std::to_string(states.size() * nr * B) + " simulations");
-  const long jobs = static_cast<long>(states.size() * nr * B);
-  parallel_for(jobs, opt.threads, [&](int, long job) {
-    const long i = job / static_cast<long>(nr * B), q = (job / B) % static_cast<long>(nr), j = job % B;
-    Candidate& c = cands[i];
-    std::vector<double> rate(B, 0.0);
-    rate[j] = c.scale[q];
-    const auto sim = in.simulate(used[q], {Disturbance{c.variable, knots[q], rate}});
-    ++sims;
-    if (!sim.empty()) c.J[q].col(j) = residual(used[q], sim) - r0[q];  // a failed run leaves the hat unused
-  });
-  // The sensors: a smooth offset (in noise units) and a gain per run, exactly linear.
-  for (const auto& name : runs[used[0]].signals) {
-    Candidate c;
-    c.finding.balance = "sensor " + name;
-    c.finding.kind = "sensor";
-    c.P = roughness(B, 1);
-    for (std::size_t q = 0; q < nr; ++q) {
-      const auto& run = runs[used[q]];
-      Eigen::MatrixXd J = Eigen::MatrixXd::Zero(r0[q].size(), B + 1);
-      const std::size_t m = run.t.size(), s = std::find(run.signals.begin(), run.signals.end(), name) - run.signals.begin();
-      for (std::size_t i = 0; i < m && s < run.signals.size(); ++i) {
-        for (int j = 0; j < B; ++j) J(s * m + i, j) = -hat(knots[q], j, run.t[i]);
-        J(s * m + i, B) = -sim0[used[q]][s][i] / run.sigma[s];
+  std::vector<Candidate> balances() {
+    const int B = kDisturbanceKnots;
+    const std::size_t nr = used.size();
+    std::vector<Candidate> cands;
+    for (const auto& st : model_states(*in_.model, *in_.registry)) {
+      Candidate c;
+      c.variable = c.finding.balance = st.name;
+      c.finding.unit = st.unit.empty() ? "1/s" : st.unit.ends_with("/s") ? st.unit + "2" : st.unit + "/s";
+      c.finding.kind = st.unit == "kg" ? "mass" : st.unit == "J" || st.unit == "K" ? "energy"
+                     : st.unit == "m/s" || st.unit == "rad/s" ? "force" : st.unit == "m" || st.unit == "rad" ? "motion"
+                     : "state";
+      c.P = roughness(B, 0);
+      for (std::size_t q = 0; q < nr; ++q) {
+        c.scale.push_back(0.01 * st.nominal / (knots[q][1] - knots[q][0]));
+        c.J.push_back(Eigen::MatrixXd::Zero(r0[q].size(), B));
       }
-      c.scale.push_back(s < run.signals.size() ? run.sigma[s] : 0.0);
-      c.J.push_back(std::move(J));
+      cands.push_back(std::move(c));
     }
-    cands.push_back(std::move(c));
+    if (in_.log)
+      in_.log("unexplained: " + std::to_string(cands.size()) + " balances x " + std::to_string(nr) + " runs x " +
+              std::to_string(B) + " hats: " + std::to_string(cands.size() * nr * B) + " simulations");
+    parallel_for(static_cast<long>(cands.size() * nr * B), opt_.threads, [&](int, long job) {
+      const long i = job / static_cast<long>(nr * B), q = (job / B) % static_cast<long>(nr), j = job % B;
+      Candidate& c = cands[i];
+      std::vector<double> rate(B, 0.0);
+      rate[j] = c.scale[q];
+      const auto sim = in_.simulate(used[q], {Disturbance{c.variable, knots[q], rate}});
+      ++simulations;
+      if (!sim.empty()) c.J[q].col(j) = residual(used[q], sim) - r0[q];  // a failed run leaves the hat unused
+    });
+    return cands;
   }
+
+  // The sensors: a smooth offset (in noise units) and a gain per run, exactly linear.
+  std::vector<Candidate> sensors() const {
+    const int B = kDisturbanceKnots;
+    std::vector<Candidate> cands;
+    for (const auto& name : runs_[used[0]].signals) {
+      Candidate c;
+      c.finding.balance = "sensor " + name;
+      c.finding.kind = "sensor";
+      c.P = roughness(B, 1);
+      for (std::size_t q = 0; q < used.size(); ++q) {
+        const auto& run = runs_[used[q]];
+        Eigen::MatrixXd J = Eigen::MatrixXd::Zero(r0[q].size(), B + 1);
+        const std::size_t m = run.t.size(), s = std::find(run.signals.begin(), run.signals.end(), name) - run.signals.begin();
+        for (std::size_t i = 0; i < m && s < run.signals.size(); ++i) {
+          for (int j = 0; j < B; ++j) J(s * m + i, j) = -hat(knots[q], j, run.t[i]);
+          J(s * m + i, B) = -sim0[q][s][i] / run.sigma[s];
+        }
+        c.scale.push_back(s < run.signals.size() ? run.sigma[s] : 0.0);
+        c.J.push_back(std::move(J));
+      }
+      cands.push_back(std::move(c));
+    }
+    return cands;
+  }
+
+  // A state's fitted disturbance on used run q.
+  Disturbance disturbance_of(const Candidate& c, std::size_t q) const {
+    Disturbance d{c.variable, knots[q], std::vector<double>(kDisturbanceKnots)};
+    for (int j = 0; j < kDisturbanceKnots; ++j) d.rate[j] = c.c[q][j] * c.scale[q];
+    return d;
+  }
+
+  // The best `kConfirm` predicted balances (cands sorted best first)
+  // simulated with their fitted disturbances: their gap as simulated.
+  void confirm(std::vector<Candidate>& cands) {
+    const std::size_t nr = used.size();
+    std::vector<int> chosen;
+    for (int i = 0; i < static_cast<int>(cands.size()) && static_cast<int>(chosen.size()) < kConfirm; ++i)
+      if (!cands[i].variable.empty()) chosen.push_back(i);
+    std::vector<double> ssr(chosen.size() * nr, -1);
+    parallel_for(static_cast<long>(ssr.size()), opt_.threads, [&](int, long job) {
+      const std::size_t q = job % nr;
+      const auto sim = in_.simulate(used[q], {disturbance_of(cands[chosen[job / nr]], q)});
+      ++simulations;
+      if (!sim.empty()) ssr[job] = residual(used[q], sim).squaredNorm();
+    });
+    for (std::size_t a = 0; a < chosen.size(); ++a) {
+      const auto first = ssr.begin() + static_cast<long>(a * nr), last = first + static_cast<long>(nr);
+      const bool ok = std::all_of(first, last, [](double v) { return v >= 0; });
+      const double total = std::accumulate(first, last, 0.0);
+      Candidate& c = cands[chosen[a]];
+      if (in_.log)
+        in_.log("  " + c.finding.balance + ": predicted gap " + number(c.finding.gap_after) + ", simulated " +
+                (ok ? number(std::sqrt(total / n)) : std::string("failed")));
+      if (ok) c.ssr = total, c.finding.gap_after = std::sqrt(total / n), c.finding.confirmed = true;
+    }
+  }
+
+  std::vector<DisturbanceShape> shape_of(const Candidate& c) const {
+    std::vector<DisturbanceShape> out;
+    for (std::size_t q = 0; q < used.size(); ++q) {
+      DisturbanceShape sh{runs_[used[q]].name, knots[q], {}, 0.0};
+      if (c.variable.empty()) {
+        for (int j = 0; j < kDisturbanceKnots; ++j) sh.value.push_back(c.c[q][j] * c.scale[q]);
+        sh.gain = c.c[q][kDisturbanceKnots];
+      } else {
+        sh.value = disturbance_of(c, q).rate;
+      }
+      out.push_back(std::move(sh));
+    }
+    return out;
+  }
+
+ private:
+  const UnexplainedInput& in_;
+  const DiagnoseOptions& opt_;
+  const std::vector<MeasuredRun>& runs_;
+};
+
+std::string percent(double share) { return std::to_string(static_cast<int>(std::lround(100 * share))) + " %"; }
+
+// The report's sentence: where the gap lies, and what the best balance's
+// disturbance says, or that no single one explains it.
+std::string sentence_of(const Unexplained& u, const Candidate& best, const std::string& phase, double mean,
+                        const DiagnoseOptions& opt) {
+  std::string s = "No candidate explains the remaining gap (" + number(u.gap) + " x noise, most of it in " + u.signal +
+                  (u.phase.empty() ? "" : " during " + u.phase) + "); ";
+  if (best.finding.explained < opt.min_excess_reduction)
+    return s + "nor does a smooth disturbance of any single balance (the best, on " + best.finding.balance +
+           ", removes " + percent(best.finding.explained) + " of the excess gap).";
+  const bool sensor = best.variable.empty();
+  s += sensor ? "the reading of " + best.finding.balance.substr(7) + " is off (a drifting offset and gain)"
+              : "the model misses " + what_is_missed(state_unit(best.finding.unit), mean > 0, best.finding.balance);
+  return s + ", mostly" + (phase.empty() ? "" : " during " + phase) + " (on average " + number(std::abs(mean)) + " " +
+         (sensor ? "in the signal's unit" : best.finding.unit) + " there), which removes " +
+         percent(best.finding.explained) + " of the excess gap.";
+}
+
+}  // namespace
+
+void explain_by_balances(const UnexplainedInput& in, const DiagnoseOptions& opt, Unexplained& u) {
+  const auto t_start = std::chrono::steady_clock::now();
+  Search search(in, opt);
+  if (search.used.empty()) return;
+  u.gap_all_runs = std::sqrt(search.s0 / search.n);
+  std::vector<Candidate> cands = search.balances();
+  for (auto& c : search.sensors()) cands.push_back(std::move(c));
   for (auto& c : cands) {
-    regularised_fit(c, r0);
-    c.finding.gap_after = std::sqrt(std::max(c.ssr, 0.0) / n);
+    regularised_fit(c, search.r0);
+    c.finding.gap_after = std::sqrt(std::max(c.ssr, 0.0) / search.n);
     c.finding.confirmed = c.variable.empty();  // a sensor's residual is exactly linear
   }
   std::sort(cands.begin(), cands.end(), [](const Candidate& a, const Candidate& b) { return a.ssr < b.ssr; });
-
-  // Confirm the best predicted balances by simulating their fitted disturbances.
-  auto disturbances_of = [&](const Candidate& c, std::size_t q) {
-    Disturbance d{c.variable, knots[q], std::vector<double>(B)};
-    for (int j = 0; j < B; ++j) d.rate[j] = c.c[q][j] * c.scale[q];
-    return d;
-  };
-  std::vector<int> to_confirm;
-  for (int i = 0; i < static_cast<int>(cands.size()) && static_cast<int>(to_confirm.size()) < kConfirm; ++i)
-    if (!cands[i].variable.empty()) to_confirm.push_back(i);
-  std::vector<double> confirmed_ssr(to_confirm.size() * nr, -1);
-  parallel_for(static_cast<long>(confirmed_ssr.size()), opt.threads, [&](int, long job) {
-    const Candidate& c = cands[to_confirm[job / nr]];
-    const std::size_t q = job % nr;
-    const auto sim = in.simulate(used[q], {disturbances_of(c, q)});
-    ++sims;
-    if (!sim.empty()) confirmed_ssr[job] = residual(used[q], sim).squaredNorm();
-  });
-  for (std::size_t a = 0; a < to_confirm.size(); ++a) {
-    double ssr = 0;
-    bool ok = true;
-    for (std::size_t q = 0; q < nr; ++q) ok = ok && confirmed_ssr[a * nr + q] >= 0, ssr += confirmed_ssr[a * nr + q];
-    Candidate& c = cands[to_confirm[a]];
-    log("  " + c.finding.balance + ": predicted gap " + number(c.finding.gap_after) + ", simulated " +
-        (ok ? number(std::sqrt(ssr / n)) : std::string("failed")));
-    if (ok) c.ssr = ssr, c.finding.gap_after = std::sqrt(ssr / n), c.finding.confirmed = true;
-  }
+  search.confirm(cands);
   // Best first: confirmed before predicted-only, then by the gap left.
   std::stable_sort(cands.begin(), cands.end(), [](const Candidate& a, const Candidate& b) {
     if (a.finding.confirmed != b.finding.confirmed) return a.finding.confirmed;
@@ -295,40 +363,14 @@ void explain_by_balances(const UnexplainedInput& in, const DiagnoseOptions& opt,
     c.finding.explained = excess_share(u.gap_all_runs, c.finding.gap_after);
     u.balances.push_back(c.finding);
   }
-  const Candidate& best = cands.front();
-  for (std::size_t q = 0; q < nr; ++q) {
-    DisturbanceShape sh;
-    sh.run = runs[used[q]].name;
-    sh.t = knots[q];
-    if (best.variable.empty()) {
-      for (int j = 0; j < B; ++j) sh.value.push_back(best.c[q][j] * best.scale[q]);
-      sh.gain = best.c[q][B];
-    } else {
-      sh.value = disturbances_of(best, q).rate;
-    }
-    u.shape.push_back(std::move(sh));
-  }
-  const auto [phase, mean] = largest_phase(u.shape, used, in);
-  const std::string where = in.phase_names->empty() ? "" : " during " + (*in.phase_names)[phase];
-  std::string what = best.variable.empty()
-                         ? "the reading of " + best.finding.balance.substr(7) + " is off (a drifting offset and gain)"
-                         : "the model misses " + what_is_missed(state_unit(best.finding.unit), mean > 0, best.finding.balance);
-  std::string sentence = "No candidate explains the remaining gap (" + number(u.gap) + " x noise, most of it in " +
-                         u.signal + (u.phase.empty() ? "" : " during " + u.phase) + "); ";
-  if (best.finding.explained >= opt.min_excess_reduction) {
-    sentence += what + ", mostly" + where + " (on average " + number(std::abs(mean)) + " " +
-                (best.variable.empty() ? "in the signal's unit" : best.finding.unit) + " there), which removes " +
-                std::to_string(static_cast<int>(std::lround(100 * best.finding.explained))) + " % of the excess gap.";
-  } else {
-    sentence += "nor does a smooth disturbance of any single balance (the best, on " + best.finding.balance +
-                ", removes " + std::to_string(static_cast<int>(std::lround(100 * best.finding.explained))) +
-                " % of the excess gap).";
-  }
-  u.sentence = sentence;
-  u.simulations = sims;
+  u.shape = search.shape_of(cands.front());
+  const auto [phase, mean] = largest_phase(u.shape, search.used, in);
+  u.sentence = sentence_of(u, cands.front(), in.phase_names->empty() ? "" : (*in.phase_names)[phase], mean, opt);
+  u.simulations = search.simulations;
   u.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
-  log("unexplained: " + u.sentence + " [" + std::to_string(u.simulations) + " simulations, " + number(u.seconds) +
-      " s]");
+  if (in.log)
+    in.log("unexplained: " + u.sentence + " [" + std::to_string(u.simulations) + " simulations, " + number(u.seconds) +
+           " s]");
 }
 
 std::string unexplained_json(const std::optional<Unexplained>& u, const std::function<std::string(double)>& num,
