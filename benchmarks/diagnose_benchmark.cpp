@@ -168,6 +168,9 @@ int main(int argc, char** argv) {
   if (quick) cases = {cases[0], cases[1], cases[2], cases[3]};
   if (!only_case.empty()) {
     std::erase_if(cases, [&](const Case& c) { return c.name != only_case; });
+    // Any other withheld effect on its own (those in no catalogue).
+    if (cases.empty() && YAML::LoadFile(source + "/benchmarks/withheld_effects.yaml")["effects"][only_case])
+      cases.push_back({only_case, {only_case}, 21});
     if (cases.empty()) {
       std::cerr << "diagnose_benchmark: no case '" << only_case << "'\n";
       return 2;
@@ -207,6 +210,9 @@ int main(int argc, char** argv) {
     std::printf("%-36s -> %-40s gap %8.3g -> %6.3g  (%.0f s, %ld simulations)\n", c.name.c_str(),
                 v.empty() ? "(none)" : v.c_str(), rep.validation_before.total.rms, rep.validation_after.total.rms,
                 secs, rep.simulations);
+    if (rep.unexplained)
+      std::printf("    unexplained (%ld simulations, %.1f s): %s\n", rep.unexplained->simulations,
+                  rep.unexplained->seconds, rep.unexplained->sentence.c_str());
     std::fflush(stdout);
   }
 

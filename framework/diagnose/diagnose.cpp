@@ -14,6 +14,7 @@
 #include "framework/core/parallel.hpp"
 #include "framework/diagnose/phases.hpp"
 #include "framework/diagnose/statistics.hpp"
+#include "framework/diagnose/unexplained.hpp"
 #include "framework/run/run.hpp"
 
 namespace pneumo::diagnose {
@@ -21,6 +22,7 @@ namespace pneumo::diagnose {
 
 namespace {
 
+constexpr long kDisturbedMaxSteps = 20000;  // a disturbed run's step budget (the cushion rig's nominal run takes 1225)
 constexpr double kFailedResidual = 1e4;  // per sample, for a run the solver could not finish
 
 // One measured signal of one run inside a concatenated residual vector.
@@ -80,12 +82,18 @@ class Engine {
   }
 
   // Simulated signals of run `k` at its measurement times; empty if the run failed.
-  std::vector<std::vector<double>> simulate(const Model& m, int k) {
+  std::vector<std::vector<double>> simulate(const Model& m, int k, const std::vector<Disturbance>& disturbances = {}) {
     ++simulations;
     const MeasuredRun& run = runs[k];
     RunResult res;
     try {
-      res = run_simulation(netlist_of(m, k), registry_);
+      const Netlist nl = netlist_of(m, k);
+      SolverOptions so = solver_options(nl.simulation);
+      so.disturbances = disturbances;
+      // A disturbance that drives a state out of its domain (a chamber's
+      // mass below zero) leaves the solver crawling: such a run fails.
+      if (!disturbances.empty()) so.max_steps = kDisturbedMaxSteps;
+      res = run_circuit(elaborate(nl, registry_), so);
     } catch (const std::exception&) {
       return {};
     }
@@ -358,6 +366,7 @@ class Engine {
   }
 
   const DiagnoseOptions& options() const { return options_; }
+  const Registry& registry() const { return registry_; }
 
  private:
   std::string model_file_, model_text_;
@@ -391,6 +400,67 @@ bool practically_significant(const GapTable& before, const GapTable& after, cons
       return true;
     }
   return false;
+}
+
+// Significant windows: chi-square of each window (1/60 of the run) against
+// the noise level (under "model right" the normalised residuals are white
+// with unit variance).
+void significant_windows(const std::vector<MeasuredRun>& runs, const Layout& L, const std::vector<double>& r,
+                         std::vector<WindowFinding>& out) {
+  for (const auto& seg : L.segments) {
+    const auto& run = runs[seg.run];
+    const double span = run.t.back() - run.t.front();
+    const double wlen = span / 60;
+    std::size_t i = 0;
+    WindowFinding open;
+    bool is_open = false;
+    while (i < seg.n) {
+      std::size_t j = i;
+      double s = 0;
+      while (j < seg.n && run.t[j] < run.t[i] + wlen) s += r[seg.offset + j] * r[seg.offset + j], ++j;
+      const double nw = static_cast<double>(j - i);
+      const double z = (s - nw) / std::sqrt(2 * nw);
+      if (z > 4) {
+        if (is_open) {
+          open.t1 = run.t[j - 1];
+          open.z = std::max(open.z, z);
+          open.rms = std::max(open.rms, std::sqrt(s / nw));
+        } else {
+          open = {run.name, run.signals[seg.signal], run.t[i], run.t[j - 1], std::sqrt(s / nw), z};
+          is_open = true;
+        }
+      } else if (is_open) {
+        out.push_back(open);
+        is_open = false;
+      }
+      i = j;
+    }
+    if (is_open) out.push_back(open);
+  }
+}
+
+// What the verdict leaves (DiagnosisReport::unexplained): where the
+// remaining validation gap lies, and which balance's disturbance explains it.
+Unexplained leftover(Engine& eng, const Model& verdict, const DiagnosisReport& rep, const Layout& cal,
+                     const Layout& val, const std::vector<double>& r_cal, const std::vector<double>& r_val,
+                     const std::function<void(const std::string&)>& log) {
+  Unexplained u;
+  const GapTable& g = rep.validation_after;
+  u.gap = g.total.rms;
+  std::size_t s = 0, p = 0;
+  for (std::size_t k = 0; k < g.signals.size(); ++k)
+    if (g.by_signal[k].ssr > g.by_signal[s].ssr) s = k;
+  for (std::size_t k = 0; k < g.phase_total.size(); ++k)
+    if (g.by_phase[s][k].ssr > g.by_phase[s][p].ssr) p = k;
+  u.signal = g.signals.empty() ? "" : g.signals[s];
+  u.phase = rep.phase_names.empty() ? "" : rep.phase_names[p];
+  significant_windows(eng.runs, cal, r_cal, u.windows);
+  significant_windows(eng.runs, val, r_val, u.windows);
+  const Netlist model = eng.netlist_of(verdict, 0);
+  UnexplainedInput in{&eng.runs, &eng.phase_names, &eng.phases, &model, &eng.registry(),
+                      [&](int k, const std::vector<Disturbance>& d) { return eng.simulate(verdict, k, d); }, log};
+  explain_by_balances(in, eng.options(), u);
+  return u;
 }
 
 std::string fmt(const char* f, double a, double b = 0, double c = 0) {
@@ -444,39 +514,8 @@ DiagnosisReport diagnose(const std::string& model_file, const std::string& runs_
           rep.validation_before.total.rms, rep.calibration_before.total.rms, elapsed()));
   // Significant windows: chi-square of each window against the noise level
   // (under "model right" the normalised residuals are white with unit variance).
-  for (const Layout* L : {&cal, &val}) {
-    const auto& r = L == &cal ? r_cal0 : r_val0;
-    for (const auto& seg : L->segments) {
-      const auto& run = eng.runs[seg.run];
-      const double span = run.t.back() - run.t.front();
-      const double wlen = span / 60;
-      std::size_t i = 0;
-      WindowFinding open;
-      bool is_open = false;
-      while (i < seg.n) {
-        std::size_t j = i;
-        double s = 0;
-        while (j < seg.n && run.t[j] < run.t[i] + wlen) s += r[seg.offset + j] * r[seg.offset + j], ++j;
-        const double nw = static_cast<double>(j - i);
-        const double z = (s - nw) / std::sqrt(2 * nw);
-        if (z > 4) {
-          if (is_open) {
-            open.t1 = run.t[j - 1];
-            open.z = std::max(open.z, z);
-            open.rms = std::max(open.rms, std::sqrt(s / nw));
-          } else {
-            open = {run.name, run.signals[seg.signal], run.t[i], run.t[j - 1], std::sqrt(s / nw), z};
-            is_open = true;
-          }
-        } else if (is_open) {
-          rep.windows.push_back(open);
-          is_open = false;
-        }
-        i = j;
-      }
-      if (is_open) rep.windows.push_back(open);
-    }
-  }
+  significant_windows(eng.runs, cal, r_cal0, rep.windows);
+  significant_windows(eng.runs, val, r_val0, rep.windows);
 
   // Which: screening and fits of every available candidate.
   struct Cand {
@@ -757,6 +796,8 @@ DiagnosisReport diagnose(const std::string& model_file, const std::string& runs_
     if ((a.rank == 0) != (b.rank == 0)) return a.rank != 0;
     return a.rank < b.rank;
   });
+  if (rep.validation_after.total.rms > opt.adequate_gap)
+    rep.unexplained = leftover(eng, eng.model(chosen), rep, cal, val, r_cal_cur, r_val_cur, log);
   rep.seconds = elapsed();
   rep.simulations = eng.simulations;
   std::string v;

@@ -125,7 +125,8 @@ struct TracePlot {  // decimated traces of one validation run and signal
 // most of the remaining gap is named, with its shape.
 struct DisturbanceShape {  // one run's fitted disturbance, SI units of the balance's rate
   std::string run;
-  std::vector<double> t, value;
+  std::vector<double> t, value;  // knots of the piecewise-linear d(t); a sensor's offset in the signal's unit
+  double gain = 0;               // a sensor's relative gain error (reading = (1 + gain) simulated + offset)
 };
 
 struct BalanceFinding {  // one candidate balance or sensor
@@ -134,6 +135,7 @@ struct BalanceFinding {  // one candidate balance or sensor
   std::string unit;         // unit of the disturbance (rate of the state)
   double gap_after = 0;     // all runs, normalised RMS, with this disturbance fitted
   double explained = 0;     // share of the remaining excess gap (gap - 1) it removes
+  bool confirmed = false;   // gap_after simulated with the fitted disturbance, not linearly predicted
 };
 
 struct Unexplained {
@@ -143,6 +145,9 @@ struct Unexplained {
   std::vector<BalanceFinding> balances;            // best first
   std::vector<DisturbanceShape> shape;             // of the best balance, per run
   std::string sentence;                            // one plain sentence for the report
+  double gap_all_runs = 0;                         // the gap the balances work on: all runs, verdict model
+  long simulations = 0;                            // the search's cost
+  double seconds = 0;
 };
 
 struct DiagnosisReport {

@@ -7,6 +7,7 @@
 
 #include "framework/io/results.hpp"
 #include "framework/diagnose/diagnose.hpp"
+#include "framework/diagnose/unexplained.hpp"
 
 namespace pneumo::diagnose {
 
@@ -193,7 +194,8 @@ void write_report_json(const DiagnosisReport& r, const std::string& path) {
     if (!e.unavailable.empty() || e.screened_out) o << "}";
     else o << ", \"where_after\": " << gap_json(e.validation_after, r.phase_names) << "}";
   }
-  o << "],\n\"seconds\": " << num(r.seconds) << ",\n\"simulations\": " << r.simulations << "\n}\n";
+  o << "],\n\"unexplained\": " << unexplained_json(r.unexplained, num, str);
+  o << ",\n\"seconds\": " << num(r.seconds) << ",\n\"simulations\": " << r.simulations << "\n}\n";
   write_text_atomic(path, o.str());
 }
 
@@ -255,6 +257,7 @@ void write_report_html(const DiagnosisReport& r, const std::string& path) {
       << "</td><td>" << num(r.windows[i].t0) << "</td><td>" << num(r.windows[i].t1) << "</td><td>"
       << num(r.windows[i].rms) << "</td></tr>\n";
   o << "</table></details>\n";
+  o << unexplained_html(r.unexplained, html);
   o << "<h2>Ranking of candidate effects</h2>\n<table id=\"ranking\"><tr><th>rank</th><th>effect</th><th>status</th>"
        "<th>parameters</th><th>gap before</th><th>gap after</th><th>&Delta;BIC (eff.)</th><th>p</th>"
        "<th>significant</th><th>indistinguishable from</th></tr>\n";

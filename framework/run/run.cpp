@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <exception>
 #include <memory>
+#include <numeric>
+#include <stdexcept>
 #include <thread>
 
 #include "framework/core/parallel.hpp"
@@ -93,6 +95,7 @@ RunResult run_circuit(Circuit circuit, const SolverOptions& options) {
   // Each part's assembly error is kept, so that the one thrown does not
   // depend on the threads' timing.
   std::vector<std::exception_ptr> errors(parts.size());
+  std::vector<std::size_t> disturbed(parts.size(), 0);
   const int threads = options.threads > 0 ? options.threads
                                           : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
   parallel_for(static_cast<long>(parts.size()), threads, [&](int, long p) {
@@ -103,13 +106,22 @@ RunResult run_circuit(Circuit circuit, const SolverOptions& options) {
       errors[p] = std::current_exception();
       return;
     }
-    RunResult r = run_system(*system, options);
+    // Each disturbance goes to the part whose System has its variable.
+    SolverOptions part_options = options;
+    const auto& names = system->variable_names();
+    std::erase_if(part_options.disturbances, [&](const Disturbance& d) {
+      return std::find(names.begin(), names.end(), d.variable) == names.end();
+    });
+    disturbed[p] = part_options.disturbances.size();
+    RunResult r = run_system(*system, part_options);
     runs[p].solver = std::move(r.solver);
     runs[p].table = std::move(r.table);
     runs[p].column_of = std::move(column_of[p]);
   });
   for (const auto& e : errors)
     if (e) std::rethrow_exception(e);
+  if (std::accumulate(disturbed.begin(), disturbed.end(), std::size_t{0}) < options.disturbances.size())
+    throw std::invalid_argument("a disturbance names an unknown that no part of the circuit has");
   RunResult out;
   merge_parts(runs, header, out.solver, out.table);
   return out;

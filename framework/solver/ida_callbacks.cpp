@@ -44,7 +44,7 @@ int fresh_matrix(UserData& u, double t, double cj, N_Vector y, N_Vector yp, doub
                  long convergence_failures) {
   auto& parts = u.parts;
   const double* py = u.physical_y(y);
-  const double* pyp = u.physical_yp(yp);
+  const double* pyp = u.disturbed_yp(t, yp);
   parts.valid = false;
   if (!parts.enabled || parts.in_calc_ic) {
     const int flag = u.system->jacobian(t, py, pyp, cj, values);
@@ -68,7 +68,7 @@ int fresh_matrix(UserData& u, double t, double cj, N_Vector y, N_Vector yp, doub
 int residual_cb(realtype t, N_Vector y, N_Vector yp, N_Vector rr, void* user) {
   auto* u = static_cast<UserData*>(user);
   return guarded(u, [&] {
-    return u->system->residual(t, u->physical_y(y), u->physical_yp(yp), N_VGetArrayPointer(rr));
+    return u->system->residual(t, u->physical_y(y), u->disturbed_yp(t, yp), N_VGetArrayPointer(rr));
   });
 }
 

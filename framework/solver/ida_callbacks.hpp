@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "framework/assembly/system.hpp"
+#include "framework/solver/ida_solver.hpp"
 #include "framework/solver/newton_matrix.hpp"
 
 namespace pneumo {
@@ -36,6 +37,14 @@ struct UserData {
   const double* physical_yp(N_Vector yp) {
     const double* s = N_VGetArrayPointer(yp);
     for (std::size_t i = 0; i < nominal.size(); ++i) yp_phys[i] = s[i] * nominal[i];
+    return yp_phys.data();
+  }
+  // SolverOptions::disturbances by IDA unknown: the equations see
+  // y' - d(t) (applied to yp_phys after physical_yp).
+  std::vector<std::pair<int, const Disturbance*>> disturbed;
+  const double* disturbed_yp(double t, N_Vector yp) {
+    physical_yp(yp);
+    for (const auto& [i, d] : disturbed) yp_phys[i] -= d->at(t);
     return yp_phys.data();
   }
 };

@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 
 #include "framework/solver/ida_callbacks.hpp"
 #include "framework/solver/ida_handles.hpp"
@@ -35,6 +36,7 @@ class Integration {
   void create_vectors();
   void create_ida();
   void init_quadratures();
+  void find_disturbed();
   void check(int flag, const char* what) const {
     if (flag < 0) throw std::runtime_error(std::string(what) + " failed: " + flag_text(flag, user_));
   }
@@ -99,6 +101,22 @@ Integration::Integration(System& system, const SolverOptions& opt, const OutputF
   create_vectors();
   create_ida();
   if (n_quad_ > 0) init_quadratures();
+  find_disturbed();
+}
+
+void Integration::find_disturbed() {
+  const auto& names = system_.variable_names();
+  for (const auto& d : opt_.disturbances) {
+    const auto it = std::find(names.begin(), names.end(), d.variable);
+    if (it == names.end())
+      throw std::invalid_argument("disturbance on '" + d.variable + "': the system has no such unknown");
+    const int i = static_cast<int>(it - names.begin());
+    if (system_.differential()[i] == 0.0)
+      throw std::invalid_argument("disturbance on '" + d.variable + "': an algebraic unknown has no balance to disturb");
+    if (d.t.empty() || d.t.size() != d.rate.size() || !std::is_sorted(d.t.begin(), d.t.end()))
+      throw std::invalid_argument("disturbance on '" + d.variable + "': needs ascending times, one rate each");
+    user_.disturbed.emplace_back(i, &d);
+  }
 }
 
 // y and y' scaled by each unknown's nominal magnitude (see UserData).
@@ -299,6 +317,13 @@ void Integration::emit_at(double t_out, N_Vector yy, N_Vector yyp) {
 
 SolverResult Integration::run() {
   events_ = system_.time_events();
+  // A disturbance's knots are stops too: no step straddles a kink of d(t)
+  // (handle_time_event finds nothing due there and the step goes on).
+  for (const auto& [i, d] : user_.disturbed) events_.insert(events_.end(), d->t.begin(), d->t.end());
+  if (!user_.disturbed.empty()) {
+    std::sort(events_.begin(), events_.end());
+    events_.erase(std::unique(events_.begin(), events_.end()), events_.end());
+  }
   events_.erase(std::remove_if(events_.begin(), events_.end(), [&](double te) { return te > opt_.t_end; }),
                 events_.end());
   // Events at (or before) t_start set the initial modes.
@@ -436,6 +461,14 @@ void Integration::finish() {
 }
 
 }  // namespace
+
+double Disturbance::at(double time) const {
+  if (time <= t.front()) return rate.front();
+  if (time >= t.back()) return rate.back();
+  const std::size_t k = std::upper_bound(t.begin(), t.end(), time) - t.begin();
+  const double w = (time - t[k - 1]) / (t[k] - t[k - 1]);
+  return rate[k - 1] + w * (rate[k] - rate[k - 1]);
+}
 
 SolverResult simulate(System& system, const SolverOptions& opt, const OutputFn& output, const Quadratures* quad) {
   Integration integration(system, opt, output, quad);

@@ -16,6 +16,18 @@
 
 namespace pneumo {
 
+// A known additive source on one state's balance: the residual is evaluated
+// as F(t, y, y' - d(t)), so the state follows y_i' = f_i(t, y) + d(t) - a
+// mass, energy, momentum, ... that the equations do not have. d is piecewise
+// linear through (t[k], rate[k]), constant outside, in the SI unit of the
+// state per second; it does not depend on y, so the Jacobian is unchanged.
+// Set by programs (the diagnosis), not by netlists.
+struct Disturbance {
+  std::string variable;  // System::variable_names(), a differential variable
+  std::vector<double> t, rate;
+  double at(double time) const;
+};
+
 // The netlist's settings (simulation_options.hpp: units, defaults, ranges)
 // and what only programs set.
 struct SolverOptions : SimulationSettings {
@@ -26,6 +38,9 @@ struct SolverOptions : SimulationSettings {
   // Threads for the independent parts of a circuit (run_circuit): 0 = the
   // hardware's, 1 = one part after another.
   int threads = 0;
+  // Additive sources on states' balances; a name the System does not have,
+  // or an algebraic variable, throws std::invalid_argument at simulate().
+  std::vector<Disturbance> disturbances;
 };
 
 struct SolverStats {

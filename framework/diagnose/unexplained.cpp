@@ -1,0 +1,473 @@
+#include "framework/diagnose/unexplained.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <numeric>
+#include <sstream>
+
+#include "framework/assembly/system.hpp"
+#include "framework/core/parallel.hpp"
+
+namespace pneumo::diagnose {
+
+namespace {
+
+constexpr int kConfirm = 3;  // candidates confirmed by simulation, best predicted first
+
+struct State {
+  std::string name, unit;
+  double nominal = 1;
+};
+
+// The unit of a System unknown: a component's internal variable
+// ("component.variable") from its ComponentInfo, a node's from the
+// quantity the assembly names it by.
+std::string unit_of(const System& sys, const std::string& name) {
+  static const std::pair<const char*, const char*> node[] = {
+      {"p at ", "Pa"}, {"T at ", "K"}, {"s at ", "m"}, {"v at ", "m/s"}};
+  for (const auto& [prefix, unit] : node)
+    if (name.rfind(prefix, 0) == 0) return unit;
+  const auto dot = name.rfind('.');
+  if (dot == std::string::npos) return "";
+  const int c = sys.circuit().find(name.substr(0, dot));
+  if (c < 0) return "";
+  for (const auto& v : sys.circuit().components[c]->info().variables)
+    if (v.name == name.substr(dot + 1)) return v.unit;
+  return "";
+}
+
+std::vector<State> model_states(const Netlist& model, const Registry& registry) {
+  const System sys(elaborate(model, registry));
+  std::vector<State> out;
+  for (int i = 0; i < sys.size(); ++i)
+    if (sys.differential()[i] != 0.0)
+      out.push_back({sys.variable_names()[i], unit_of(sys, sys.variable_names()[i]), sys.nominal()[i]});
+  return out;
+}
+
+// Hat functions on `knots` uniform knots over [t0, t1]: phi_j(t).
+std::vector<double> knots_of(const std::vector<double>& t) {
+  std::vector<double> k(kDisturbanceKnots);
+  for (int j = 0; j < kDisturbanceKnots; ++j)
+    k[j] = t.front() + (t.back() - t.front()) * j / (kDisturbanceKnots - 1);
+  return k;
+}
+double hat(const std::vector<double>& knots, int j, double t) {
+  const double h = knots[1] - knots[0];
+  return std::max(0.0, 1.0 - std::abs(t - knots[j]) / h);
+}
+
+// Second differences of the knot values: the roughness a disturbance pays.
+Eigen::MatrixXd roughness(int hats, int extra) {
+  Eigen::MatrixXd D = Eigen::MatrixXd::Zero(hats - 2, hats + extra);
+  for (int j = 0; j + 2 < hats; ++j) D(j, j) = 1, D(j, j + 1) = -2, D(j, j + 2) = 1;
+  return D.transpose() * D;
+}
+
+// A balance or sensor: the linearised residual of each run r0 + J c.
+struct Candidate {
+  BalanceFinding finding;
+  std::string variable;  // a state; empty for a sensor
+  std::vector<double> scale;  // per run: the state's rate per unit coefficient
+  std::vector<Eigen::MatrixXd> J;
+  Eigen::MatrixXd P;
+  std::vector<Eigen::VectorXd> c;  // fitted, per run
+  double ssr = 0;
+};
+
+// min sum_k |r0_k + J_k c_k|^2 + lambda c_k' P c_k, lambda by generalised
+// cross-validation over all runs together.
+void regularised_fit(Candidate& cand, const std::vector<Eigen::VectorXd>& r0) {
+  const std::size_t nr = r0.size();
+  const int p = static_cast<int>(cand.P.rows());
+  std::vector<Eigen::MatrixXd> A(nr);
+  std::vector<Eigen::VectorXd> g(nr);
+  double n = 0, s0 = 0, trace = 0;
+  for (std::size_t k = 0; k < nr; ++k) {
+    A[k] = cand.J[k].transpose() * cand.J[k];
+    g[k] = cand.J[k].transpose() * r0[k];
+    n += static_cast<double>(r0[k].size());
+    s0 += r0[k].squaredNorm();
+    trace += A[k].trace() / p / nr;
+  }
+  const Eigen::MatrixXd ridge = 1e-10 * std::max(trace, 1e-300) * Eigen::MatrixXd::Identity(p, p);
+  double best = INFINITY;
+  cand.ssr = s0;
+  cand.c.assign(nr, Eigen::VectorXd::Zero(p));
+  for (double e = -8; e <= 4; e += 0.25) {
+    const double lambda = std::max(trace, 1e-300) * std::pow(10.0, e);
+    double ssr = 0, edf = 0;
+    std::vector<Eigen::VectorXd> c(nr);
+    for (std::size_t k = 0; k < nr; ++k) {
+      const auto M = (A[k] + lambda * cand.P + ridge).ldlt();
+      c[k] = -M.solve(g[k]);
+      ssr += r0[k].squaredNorm() + 2 * g[k].dot(c[k]) + c[k].dot(A[k] * c[k]);
+      edf += M.solve(A[k]).trace();
+    }
+    const double gcv = n * ssr / ((n - edf) * (n - edf));
+    if (ssr >= 0 && edf < n && gcv < best) best = gcv, cand.ssr = ssr, cand.c = std::move(c);
+  }
+}
+
+double excess_share(double gap_before, double gap_after) {
+  const double e0 = std::max(gap_before - 1.0, 1e-12), e1 = std::max(gap_after - 1.0, 0.0);
+  return (e0 - e1) / e0;
+}
+
+// What a disturbance of a state with this unit is, in words, by its sign.
+std::string what_is_missed(const std::string& unit, bool positive, const std::string& name) {
+  if (unit == "kg") return std::string("mass flow ") + (positive ? "into " : "out of ") + name;
+  // A gas volume's energy: heat, or the enthalpy a flow carries.
+  if (unit == "J" || unit == "K") return std::string("energy (heat or enthalpy flow) ") + (positive ? "into " : "out of ") + name;
+  if (unit == "m/s") return std::string("a force in the ") + (positive ? "positive" : "negative") + " direction on " + name;
+  if (unit == "rad/s") return std::string("a torque in the ") + (positive ? "positive" : "negative") + " direction on " + name;
+  if (unit == "m" || unit == "rad") return std::string("a drift ") + (positive ? "forward" : "backward") + " of " + name;
+  if (unit == "Pa") return std::string("a pressure ") + (positive ? "rise" : "fall") + " of " + name;
+  return std::string("a ") + (positive ? "rise" : "fall") + " of " + name + " that its equations do not have";
+}
+
+// The state's unit back from its rate's (kg/s -> kg, m/s2 -> m/s).
+std::string state_unit(const std::string& rate) {
+  return rate.ends_with("/s2") ? rate.substr(0, rate.size() - 1) : rate.substr(0, rate.size() - 2);
+}
+
+std::string number(double v) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.2g", v);
+  return buf;
+}
+
+// The phase where the fitted disturbance adds or removes most in all (its
+// sum over the phase's samples, all runs: a net source or sink, which a
+// wiggle about zero is not, nor a short phase's edge where the hats are
+// poorly determined), and its mean there.
+std::pair<int, double> largest_phase(const std::vector<DisturbanceShape>& shape, const std::vector<int>& runs,
+                                     const UnexplainedInput& in) {
+  const std::size_t np = in.phase_names->size();
+  std::vector<double> sum(np, 0), count(np, 0);
+  for (std::size_t q = 0; q < shape.size(); ++q) {
+    const auto& run = (*in.runs)[runs[q]];
+    const Disturbance d{"", shape[q].t, shape[q].value};
+    for (std::size_t i = 0; i < run.t.size(); ++i) {
+      const double v = d.at(run.t[i]);
+      const int ph = (*in.phases)[runs[q]][i];
+      sum[ph] += v, count[ph] += 1;
+    }
+  }
+  int best = 0;
+  for (std::size_t p = 0; p < np; ++p)
+    if (std::abs(sum[p]) > std::abs(sum[best])) best = static_cast<int>(p);
+  return {best, count[best] > 0 ? sum[best] / count[best] : 0.0};
+}
+
+}  // namespace
+
+namespace {
+
+// The search's shared facts: the verdict model's residuals on the runs it
+// finishes, each run's knots, and the simulations spent.
+class Search {
+ public:
+  Search(const UnexplainedInput& in, const DiagnoseOptions& opt) : in_(in), opt_(opt), runs_(*in.runs) {
+    std::vector<std::vector<std::vector<double>>> sim(runs_.size());
+    parallel_for(static_cast<long>(runs_.size()), opt.threads, [&](int, long k) {
+      sim[k] = in.simulate(static_cast<int>(k), {});
+      ++simulations;
+    });
+    for (int k = 0; k < static_cast<int>(runs_.size()); ++k) {
+      if (sim[k].empty()) continue;
+      used.push_back(k);
+      r0.push_back(residual(k, sim[k]));
+      knots.push_back(knots_of(runs_[k].t));
+      sim0.push_back(std::move(sim[k]));
+      n += static_cast<double>(r0.back().size());
+      s0 += r0.back().squaredNorm();
+    }
+  }
+
+  std::vector<int> used;                               // runs the verdict model finishes
+  std::vector<std::vector<std::vector<double>>> sim0;  // per used run: its signals
+  std::vector<Eigen::VectorXd> r0;
+  std::vector<std::vector<double>> knots;
+  double n = 0, s0 = 0;
+  std::atomic<long> simulations{0};
+
+  // (measured - simulated) / sigma, signal after signal.
+  Eigen::VectorXd residual(int k, const std::vector<std::vector<double>>& sim) const {
+    const auto& run = runs_[k];
+    Eigen::VectorXd r(run.signals.size() * run.t.size());
+    for (std::size_t s = 0; s < run.signals.size(); ++s)
+      for (std::size_t i = 0; i < run.t.size(); ++i) r[s * run.t.size() + i] = (run.y[s][i] - sim[s][i]) / run.sigma[s];
+    return r;
+  }
+
+  // The states: one simulation per hat and run, each hat's amplitude moving
+  // the state by about 1 % of its nominal magnitude over the hat's width.
+  std::vector<Candidate> balances() {
+    const int B = kDisturbanceKnots;
+    const std::size_t nr = used.size();
+    std::vector<Candidate> cands;
+    for (const auto& st : model_states(*in_.model, *in_.registry)) {
+      Candidate c;
+      c.variable = c.finding.balance = st.name;
+      c.finding.unit = st.unit.empty() ? "1/s" : st.unit.ends_with("/s") ? st.unit + "2" : st.unit + "/s";
+      c.finding.kind = st.unit == "kg" ? "mass" : st.unit == "J" || st.unit == "K" ? "energy"
+                     : st.unit == "m/s" || st.unit == "rad/s" ? "force" : st.unit == "m" || st.unit == "rad" ? "motion"
+                     : "state";
+      c.P = roughness(B, 0);
+      for (std::size_t q = 0; q < nr; ++q) {
+        c.scale.push_back(0.01 * st.nominal / (knots[q][1] - knots[q][0]));
+        c.J.push_back(Eigen::MatrixXd::Zero(r0[q].size(), B));
+      }
+      cands.push_back(std::move(c));
+    }
+    if (in_.log)
+      in_.log("unexplained: " + std::to_string(cands.size()) + " balances x " + std::to_string(nr) + " runs x " +
+              std::to_string(B) + " hats: " + std::to_string(cands.size() * nr * B) + " simulations");
+    parallel_for(static_cast<long>(cands.size() * nr * B), opt_.threads, [&](int, long job) {
+      const long i = job / static_cast<long>(nr * B), q = (job / B) % static_cast<long>(nr), j = job % B;
+      Candidate& c = cands[i];
+      std::vector<double> rate(B, 0.0);
+      rate[j] = c.scale[q];
+      const auto sim = in_.simulate(used[q], {Disturbance{c.variable, knots[q], rate}});
+      ++simulations;
+      if (!sim.empty()) c.J[q].col(j) = residual(used[q], sim) - r0[q];  // a failed run leaves the hat unused
+    });
+    return cands;
+  }
+
+  // The sensors: a smooth offset (in noise units) and a gain per run, exactly linear.
+  std::vector<Candidate> sensors() const {
+    const int B = kDisturbanceKnots;
+    std::vector<Candidate> cands;
+    for (const auto& name : runs_[used[0]].signals) {
+      Candidate c;
+      c.finding.balance = "sensor " + name;
+      c.finding.kind = "sensor";
+      c.P = roughness(B, 1);
+      for (std::size_t q = 0; q < used.size(); ++q) {
+        const auto& run = runs_[used[q]];
+        Eigen::MatrixXd J = Eigen::MatrixXd::Zero(r0[q].size(), B + 1);
+        const std::size_t m = run.t.size(), s = std::find(run.signals.begin(), run.signals.end(), name) - run.signals.begin();
+        for (std::size_t i = 0; i < m && s < run.signals.size(); ++i) {
+          for (int j = 0; j < B; ++j) J(s * m + i, j) = -hat(knots[q], j, run.t[i]);
+          J(s * m + i, B) = -sim0[q][s][i] / run.sigma[s];
+        }
+        c.scale.push_back(s < run.signals.size() ? run.sigma[s] : 0.0);
+        c.J.push_back(std::move(J));
+      }
+      cands.push_back(std::move(c));
+    }
+    return cands;
+  }
+
+  // A state's fitted disturbance on used run q.
+  Disturbance disturbance_of(const Candidate& c, std::size_t q) const {
+    Disturbance d{c.variable, knots[q], std::vector<double>(kDisturbanceKnots)};
+    for (int j = 0; j < kDisturbanceKnots; ++j) d.rate[j] = c.c[q][j] * c.scale[q];
+    return d;
+  }
+
+  // The best `kConfirm` predicted balances (cands sorted best first)
+  // simulated with their fitted disturbances: their gap as simulated.
+  void confirm(std::vector<Candidate>& cands) {
+    const std::size_t nr = used.size();
+    std::vector<int> chosen;
+    for (int i = 0; i < static_cast<int>(cands.size()) && static_cast<int>(chosen.size()) < kConfirm; ++i)
+      if (!cands[i].variable.empty()) chosen.push_back(i);
+    std::vector<double> ssr(chosen.size() * nr, -1);
+    parallel_for(static_cast<long>(ssr.size()), opt_.threads, [&](int, long job) {
+      const std::size_t q = job % nr;
+      const auto sim = in_.simulate(used[q], {disturbance_of(cands[chosen[job / nr]], q)});
+      ++simulations;
+      if (!sim.empty()) ssr[job] = residual(used[q], sim).squaredNorm();
+    });
+    for (std::size_t a = 0; a < chosen.size(); ++a) {
+      const auto first = ssr.begin() + static_cast<long>(a * nr), last = first + static_cast<long>(nr);
+      const bool ok = std::all_of(first, last, [](double v) { return v >= 0; });
+      const double total = std::accumulate(first, last, 0.0);
+      Candidate& c = cands[chosen[a]];
+      if (in_.log)
+        in_.log("  " + c.finding.balance + ": predicted gap " + number(c.finding.gap_after) + ", simulated " +
+                (ok ? number(std::sqrt(total / n)) : std::string("failed")));
+      if (ok) c.ssr = total, c.finding.gap_after = std::sqrt(total / n), c.finding.confirmed = true;
+    }
+  }
+
+  std::vector<DisturbanceShape> shape_of(const Candidate& c) const {
+    std::vector<DisturbanceShape> out;
+    for (std::size_t q = 0; q < used.size(); ++q) {
+      DisturbanceShape sh{runs_[used[q]].name, knots[q], {}, 0.0};
+      if (c.variable.empty()) {
+        for (int j = 0; j < kDisturbanceKnots; ++j) sh.value.push_back(c.c[q][j] * c.scale[q]);
+        sh.gain = c.c[q][kDisturbanceKnots];
+      } else {
+        sh.value = disturbance_of(c, q).rate;
+      }
+      out.push_back(std::move(sh));
+    }
+    return out;
+  }
+
+ private:
+  const UnexplainedInput& in_;
+  const DiagnoseOptions& opt_;
+  const std::vector<MeasuredRun>& runs_;
+};
+
+std::string percent(double share) { return std::to_string(static_cast<int>(std::lround(100 * share))) + " %"; }
+
+// The report's sentence: where the gap lies, and what the best balance's
+// disturbance says, or that no single one explains it.
+std::string sentence_of(const Unexplained& u, const Candidate& best, const std::string& phase, double mean,
+                        const DiagnoseOptions& opt) {
+  std::string s = "No candidate explains the remaining gap (" + number(u.gap) + " x noise, most of it in " + u.signal +
+                  (u.phase.empty() ? "" : " during " + u.phase) + "); ";
+  if (best.finding.explained < opt.min_excess_reduction)
+    return s + "nor does a smooth disturbance of any single balance (the best, on " + best.finding.balance +
+           ", removes " + percent(best.finding.explained) + " of the excess gap).";
+  const bool sensor = best.variable.empty();
+  s += sensor ? "the reading of " + best.finding.balance.substr(7) + " is off (a drifting offset and gain)"
+              : "the model misses " + what_is_missed(state_unit(best.finding.unit), mean > 0, best.finding.balance);
+  return s + ", mostly" + (phase.empty() ? "" : " during " + phase) + " (on average " + number(std::abs(mean)) + " " +
+         (sensor ? "in the signal's unit" : best.finding.unit) + " there), which removes " +
+         percent(best.finding.explained) + " of the excess gap.";
+}
+
+}  // namespace
+
+void explain_by_balances(const UnexplainedInput& in, const DiagnoseOptions& opt, Unexplained& u) {
+  const auto t_start = std::chrono::steady_clock::now();
+  Search search(in, opt);
+  if (search.used.empty()) return;
+  u.gap_all_runs = std::sqrt(search.s0 / search.n);
+  std::vector<Candidate> cands = search.balances();
+  for (auto& c : search.sensors()) cands.push_back(std::move(c));
+  for (auto& c : cands) {
+    regularised_fit(c, search.r0);
+    c.finding.gap_after = std::sqrt(std::max(c.ssr, 0.0) / search.n);
+    c.finding.confirmed = c.variable.empty();  // a sensor's residual is exactly linear
+  }
+  std::sort(cands.begin(), cands.end(), [](const Candidate& a, const Candidate& b) { return a.ssr < b.ssr; });
+  search.confirm(cands);
+  // Best first: confirmed before predicted-only, then by the gap left.
+  std::stable_sort(cands.begin(), cands.end(), [](const Candidate& a, const Candidate& b) {
+    if (a.finding.confirmed != b.finding.confirmed) return a.finding.confirmed;
+    return a.ssr < b.ssr;
+  });
+  for (auto& c : cands) {
+    c.finding.explained = excess_share(u.gap_all_runs, c.finding.gap_after);
+    u.balances.push_back(c.finding);
+  }
+  u.shape = search.shape_of(cands.front());
+  const auto [phase, mean] = largest_phase(u.shape, search.used, in);
+  u.sentence = sentence_of(u, cands.front(), in.phase_names->empty() ? "" : (*in.phase_names)[phase], mean, opt);
+  u.simulations = search.simulations;
+  u.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+  if (in.log)
+    in.log("unexplained: " + u.sentence + " [" + std::to_string(u.simulations) + " simulations, " + number(u.seconds) +
+           " s]");
+}
+
+std::string unexplained_json(const std::optional<Unexplained>& u, const std::function<std::string(double)>& num,
+                             const std::function<std::string(const std::string&)>& str) {
+  if (!u) return "null";
+  std::ostringstream o;
+  o << "{\"gap\": " << num(u->gap) << ", \"gap_all_runs\": " << num(u->gap_all_runs) << ", \"signal\": "
+    << str(u->signal) << ", \"phase\": " << str(u->phase) << ", \"sentence\": " << str(u->sentence)
+    << ",\n  \"windows\": [";
+  for (std::size_t i = 0; i < u->windows.size(); ++i) {
+    const auto& w = u->windows[i];
+    o << (i ? ", " : "") << "{\"run\": " << str(w.run) << ", \"signal\": " << str(w.signal)
+      << ", \"t_start\": " << num(w.t0) << ", \"t_end\": " << num(w.t1) << ", \"gap\": " << num(w.rms) << "}";
+  }
+  o << "],\n  \"balances\": [";
+  for (std::size_t i = 0; i < u->balances.size(); ++i) {
+    const auto& b = u->balances[i];
+    o << (i ? ",\n    " : "\n    ") << "{\"balance\": " << str(b.balance) << ", \"kind\": " << str(b.kind)
+      << ", \"unit\": " << str(b.unit) << ", \"gap_after\": " << num(b.gap_after)
+      << ", \"explained\": " << num(b.explained) << ", \"confirmed\": " << (b.confirmed ? "true" : "false") << "}";
+  }
+  o << "],\n  \"shape\": [";
+  for (std::size_t i = 0; i < u->shape.size(); ++i) {
+    const auto& sh = u->shape[i];
+    o << (i ? ",\n    " : "\n    ") << "{\"run\": " << str(sh.run) << ", \"gain\": " << num(sh.gain) << ", \"t\": [";
+    for (std::size_t j = 0; j < sh.t.size(); ++j) o << (j ? ", " : "") << num(sh.t[j]);
+    o << "], \"value\": [";
+    for (std::size_t j = 0; j < sh.value.size(); ++j) o << (j ? ", " : "") << num(sh.value[j]);
+    o << "]}";
+  }
+  o << "],\n  \"simulations\": " << u->simulations << ", \"seconds\": " << num(u->seconds) << "}";
+  return o.str();
+}
+
+namespace {
+
+// The best balance's disturbance over time, one line per run, with axes.
+std::string svg_shape(const Unexplained& u, const std::function<std::string(const std::string&)>& html) {
+  const double W = 620, H = 220, l = 70, r = 70, t = 10, b = 36;  // the runs' names right of the plot
+  // Symmetric about zero, so that the sign reads at a glance.
+  double t0 = INFINITY, t1 = -INFINITY, top = 0;
+  for (const auto& sh : u.shape) {
+    t0 = std::min(t0, sh.t.front()), t1 = std::max(t1, sh.t.back());
+    for (double v : sh.value) top = std::max(top, 1.1 * std::abs(v));
+  }
+  if (!(top > 0)) top = 1;
+  if (!(t1 > t0)) t1 = t0 + 1;
+  const double lo = -top, hi = top;
+  const auto X = [&](double x) { return l + (W - l - r) * (x - t0) / (t1 - t0); };
+  const auto Y = [&](double y) { return H - b - (H - t - b) * (y - lo) / (hi - lo); };
+  std::ostringstream o;
+  o << "<svg id=\"unexplained-shape\" xmlns=\"http://www.w3.org/2000/svg\" width=\"" << W << "\" height=\"" << H
+    << "\" viewBox=\"0 0 " << W << " " << H << "\" font-size=\"11\">\n";
+  o << "<line x1=\"" << l << "\" x2=\"" << W - r << "\" y1=\"" << Y(0) << "\" y2=\"" << Y(0)
+    << "\" stroke=\"#999\" stroke-dasharray=\"3 3\"/>\n";
+  o << "<rect x=\"" << l << "\" y=\"" << t << "\" width=\"" << W - l - r << "\" height=\"" << H - t - b
+    << "\" fill=\"none\" stroke=\"#444\"/>\n";
+  for (int k = 0; k <= 4; ++k) {
+    const double tv = t0 + (t1 - t0) * k / 4, yv = lo + (hi - lo) * k / 4;
+    o << "<text x=\"" << X(tv) << "\" y=\"" << H - b + 14 << "\" text-anchor=\"middle\">" << number(tv) << "</text>"
+      << "<text x=\"" << l - 4 << "\" y=\"" << Y(yv) + 4 << "\" text-anchor=\"end\">" << number(yv) << "</text>\n";
+  }
+  o << "<text x=\"" << (l + W - r) / 2 << "\" y=\"" << H - 4 << "\" text-anchor=\"middle\">t [s]</text>\n";
+  const char* const colours[] = {"#4c8fd6", "#d64c4c", "#4cb04c", "#f0a030", "#9b6bd6", "#666"};
+  for (std::size_t i = 0; i < u.shape.size(); ++i) {
+    const auto& sh = u.shape[i];
+    o << "<polyline fill=\"none\" stroke-width=\"1.5\" stroke=\"" << colours[i % 6] << "\" points=\"";
+    for (std::size_t j = 0; j < sh.t.size(); ++j) o << X(sh.t[j]) << "," << Y(sh.value[j]) << " ";
+    o << "\"><title>" << html(sh.run) << "</title></polyline>\n";
+    o << "<text x=\"" << W - r + 6 << "\" y=\"" << t + 10 + 13 * i << "\" fill=\""
+      << colours[i % 6] << "\">" << html(sh.run) << "</text>\n";
+  }
+  const auto& best = u.balances.front();
+  o << "<text x=\"" << l + 6 << "\" y=\"" << t + 14 << "\">" << html(best.balance) << " ["
+    << html(best.kind == "sensor" ? "offset" : best.unit) << "]</text>\n</svg>\n";
+  return o.str();
+}
+
+}  // namespace
+
+std::string unexplained_html(const std::optional<Unexplained>& u,
+                             const std::function<std::string(const std::string&)>& html) {
+  if (!u || u->balances.empty()) return "";
+  std::ostringstream o;
+  o << "<h2>What no candidate explains</h2>\n<p id=\"unexplained\">" << html(u->sentence) << "</p>\n"
+    << svg_shape(*u, html) << "<p>The fitted disturbance of the best balance, per run (its knots joined). Gap of all "
+    << "runs with the verdict's model: " << number(u->gap_all_runs) << " x noise; each balance's own disturbance "
+    << "fitted:</p>\n<table id=\"balances\"><tr><th>balance</th><th>kind</th><th>gap after</th>"
+    << "<th>excess gap removed</th></tr>\n";
+  for (std::size_t i = 0; i < u->balances.size() && i < 8; ++i) {
+    const auto& b = u->balances[i];
+    o << "<tr><td class=\"l\">" << html(b.balance) << "</td><td class=\"l\">" << html(b.kind) << "</td><td>"
+      << number(b.gap_after) << (b.confirmed ? "" : " (predicted)") << "</td><td>"
+      << std::lround(100 * b.explained) << " %</td></tr>\n";
+  }
+  o << "</table>\n";
+  return o.str();
+}
+
+}  // namespace pneumo::diagnose

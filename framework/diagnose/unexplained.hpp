@@ -1,0 +1,54 @@
+// Which balance of the model needs a correction (README "Diagnosing the
+// sim-to-real gap", issue #19): when no candidate effect brings the gap down
+// to the noise, every state's balance gets a smooth additive disturbance
+// d(t) on its derivative (SolverOptions::disturbances), and every measured
+// signal a smooth offset plus a gain. Each d is a sum of hat functions over
+// each run's span (Disturbance's piecewise-linear knots); its output
+// sensitivities come from one simulation per hat and run (finite
+// differences, on threads); the coefficients minimise the residual sum of
+// squares plus a second-difference penalty whose weight generalised
+// cross-validation chooses, all runs together. A balance scores by the
+// share of the excess gap (gap - 1) it removes; the best few are confirmed
+// by simulating the fitted disturbance. Components are never named: the
+// balances are the System's variable names, their kind the state's unit.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "framework/diagnose/diagnose.hpp"
+#include "framework/solver/ida_solver.hpp"
+
+namespace pneumo::diagnose {
+
+// Signals of run `run` at its measurement times, with the given
+// disturbances; empty if the solver failed.
+using DisturbedSimulation =
+    std::function<std::vector<std::vector<double>>(int run, const std::vector<Disturbance>& disturbances)>;
+
+struct UnexplainedInput {
+  const std::vector<MeasuredRun>* runs = nullptr;
+  const std::vector<std::string>* phase_names = nullptr;
+  const std::vector<std::vector<int>>* phases = nullptr;  // per run, per sample
+  const Netlist* model = nullptr;                          // the verdict's model (its states and their units)
+  const Registry* registry = nullptr;
+  DisturbedSimulation simulate;
+  std::function<void(const std::string&)> log;
+};
+
+// Fills `u`'s balances, shape and sentence (its gap, signal, phase and
+// windows are the caller's, who knows the verdict).
+void explain_by_balances(const UnexplainedInput& in, const DiagnoseOptions& opt, Unexplained& u);
+
+// The hat functions are this many knots over each run's span.
+inline constexpr int kDisturbanceKnots = 10;
+
+// report.json's "unexplained" (null when empty) and the HTML section, with
+// the report's number and text formatting.
+std::string unexplained_json(const std::optional<Unexplained>& u, const std::function<std::string(double)>& num,
+                             const std::function<std::string(const std::string&)>& str);
+std::string unexplained_html(const std::optional<Unexplained>& u,
+                             const std::function<std::string(const std::string&)>& html);
+
+}  // namespace pneumo::diagnose
