@@ -1,5 +1,6 @@
 #include "framework/diagnose/statistics.hpp"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 
@@ -62,6 +63,38 @@ double effective_n(const double* r, std::size_t n) {
 double ssr_of(const double* r, std::size_t n) {
   double s = 0;
   for (std::size_t i = 0; i < n; ++i) s += r[i] * r[i];
+  return s;
+}
+
+std::vector<double> fit_ar(const double* r, std::size_t n, int max_order) {
+  const int pmax = std::clamp<int>(max_order, 0, static_cast<int>(n / 4));
+  const std::size_t m = n - pmax;  // samples every order is fitted on
+  if (pmax == 0 || m < 8) return {};
+  const Eigen::Map<const Eigen::VectorXd> y(r + pmax, m);
+  Eigen::MatrixXd X(m, pmax);
+  for (int i = 0; i < pmax; ++i) X.col(i) = Eigen::Map<const Eigen::VectorXd>(r + pmax - 1 - i, m);
+  auto bic = [&](double ssr, int p) { return m * std::log(std::max(ssr / m, 1e-300)) + p * std::log(double(m)); };
+  std::vector<double> best;
+  double best_bic = bic(y.squaredNorm(), 0);
+  for (int p = 1; p <= pmax; ++p) {
+    const auto Xp = X.leftCols(p);
+    const Eigen::VectorXd a = (Xp.transpose() * Xp).ldlt().solve(Xp.transpose() * y);
+    if (!a.allFinite()) continue;
+    if (const double b = bic((y - Xp * a).squaredNorm(), p); b < best_bic) {
+      best_bic = b;
+      best.assign(a.data(), a.data() + p);
+    }
+  }
+  return best;
+}
+
+double whitened_ssr(const double* r, std::size_t n, const std::vector<double>& a) {
+  double s = 0;
+  for (std::size_t t = a.size(); t < n; ++t) {
+    double e = r[t];
+    for (std::size_t i = 0; i < a.size(); ++i) e -= a[i] * r[t - 1 - i];
+    s += e * e;
+  }
   return s;
 }
 
