@@ -363,6 +363,20 @@ TEST(Diagnose, BadCatalogueNamesFileLineEffectAndParameter) {
   const Catalogue cat = load_catalogue((dir / "c.yaml").string(), model, kModel, builtin_registry());
   ASSERT_EQ(cat.effects.size(), 1u);
   EXPECT_EQ(cat.effects[0].unavailable, "unavailable: type hose_not_yet not registered");
+
+  // Model parameters as candidates (recalibrate:): unknown names at their line.
+  e = load("recalibrate:\n  m_load: {}\n  cylinder.dead_volume: {}\n");
+  EXPECT_NE(e.find("c.yaml:3:"), std::string::npos) << e;
+  EXPECT_NE(e.find("has no parameter 'dead_volume'"), std::string::npos) << e;
+  e = load("recalibrate:\n  piston.mass: {}\n");
+  EXPECT_NE(e.find("c.yaml:2:"), std::string::npos) << e;
+  EXPECT_NE(e.find("no component 'piston'"), std::string::npos) << e;
+  e = load("recalibrate:\n  m_lod: {}\n");
+  EXPECT_NE(e.find("no top-level parameter 'm_lod'"), std::string::npos) << e;
+  e = load("recalibrate:\n  load.m: {}\n");  // the netlist writes m: m_load
+  EXPECT_NE(e.find("re-calibrate that parameter"), std::string::npos) << e;
+  e = load("recalibrate:\n  m_load: {lower: 2x, upper: 3x}\n");
+  EXPECT_NE(e.find("lies outside [lower, upper]"), std::string::npos) << e;
 }
 
 TEST(Diagnose, ShippedCatalogueLoadsAgainstTheRig) {

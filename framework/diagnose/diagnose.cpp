@@ -514,12 +514,12 @@ DiagnosisReport diagnose(const std::string& model_file, const std::string& runs_
     er.gap_before = er.gap_after = rep.validation_before.total.rms;
     results.push_back(er);
   }
-  // Screening: the share of the unpatched model's calibration misfit that a
-  // Gauss-Newton step from the sensitivities would leave removed, from the
-  // initial values and, for an effect with a null, from the null too (where
-  // the model is the unpatched one: initial values far from the truth make a
-  // poor linearisation, and a share of a start's own large misfit says
-  // little about the data).
+  // Screening: for an effect with a null, the share of the unpatched model's
+  // calibration misfit that a Gauss-Newton step from the sensitivities would
+  // remove, from the null (where the model is the unpatched one) and from the
+  // initial values - a share of a far start's own large misfit says little
+  // about the data. A structural switch has no point in its family that is
+  // the unpatched model: the share of its own misfit at the initial values.
   std::vector<std::pair<double, int>> screened;
   eng.screen_cutoff_ = 2.0;  // always stop after the sensitivities
   const double ssr_cal0 = ssr_of(r_cal0.data(), r_cal0.size());
@@ -538,7 +538,8 @@ DiagnosisReport diagnose(const std::string& model_file, const std::string& runs_
     for (const auto* start : {&init, &null}) {
       if (start->size() != e.parameters.size() || (start == &null && null == init)) continue;
       const auto f = eng.fit({EffectInstance{&e, *start}}, cal, {}, 1);
-      gain = std::max(gain, 1 - ssr_of(f.r_cal.data(), f.r_cal.size()) * (1 - f.screening) / ssr_cal0);
+      const double reference = null.size() == init.size() ? ssr_cal0 : ssr_of(f.r_cal.data(), f.r_cal.size());
+      gain = std::max(gain, 1 - ssr_of(f.r_cal.data(), f.r_cal.size()) * (1 - f.screening) / reference);
     }
     results[k].screening_improvement = gain;
     screened.push_back({gain, static_cast<int>(k)});
