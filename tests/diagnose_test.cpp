@@ -387,6 +387,11 @@ TEST(Diagnose, ShippedCatalogueLoadsAgainstTheRig) {
                            "leakage_piston_seal", "sensor_lag_T", "sensor_lag_p", "valve_timing", "line_volume",
                            "supply_droop", "end_stop_elasticity", "lugre"})
     EXPECT_NE(cat.find(name), nullptr) << name;
+  // Re-calibration candidates: the null is the netlist's value (0.35 dm3/(s*bar), 2 cm3).
+  ASSERT_NE(cat.find("meter_out.C"), nullptr);
+  EXPECT_NEAR(*cat.find("meter_out.C")->parameters[0].null_value, 0.35e-8, 1e-20);
+  ASSERT_NE(cat.find("cylinder.dead_volume_cushion"), nullptr);
+  EXPECT_NEAR(*cat.find("cylinder.dead_volume_cushion")->parameters[0].null_value, 2e-6, 1e-18);
   // At its null value an effect reproduces the unpatched model.
   const Effect* leak = cat.find("leakage_piston_seal");
   ASSERT_NE(leak, nullptr);

@@ -45,21 +45,6 @@ double gamma_q(double a, double x) {
   return std::exp(-x + a * std::log(x) - gln) * h;
 }
 
-// Effective number of independent samples of a residual series, from its
-// lag-1 autocorrelation (AR(1) approximation): n (1 - rho) / (1 + rho).
-double effective_n(const double* r, std::size_t n) {
-  if (n < 3) return static_cast<double>(n);
-  double mean = 0;
-  for (std::size_t i = 0; i < n; ++i) mean += r[i];
-  mean /= n;
-  double c0 = 0, c1 = 0;
-  for (std::size_t i = 0; i < n; ++i) c0 += (r[i] - mean) * (r[i] - mean);
-  for (std::size_t i = 1; i < n; ++i) c1 += (r[i] - mean) * (r[i - 1] - mean);
-  if (c0 <= 0) return static_cast<double>(n);
-  const double rho = std::clamp(c1 / c0, 0.0, 0.999);
-  return std::clamp(n * (1 - rho) / (1 + rho), 1.0, static_cast<double>(n));
-}
-
 double ssr_of(const double* r, std::size_t n) {
   double s = 0;
   for (std::size_t i = 0; i < n; ++i) s += r[i] * r[i];

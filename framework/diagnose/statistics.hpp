@@ -1,7 +1,6 @@
 // Numerical helpers of the diagnosis: interpolation of a sampled signal,
-// the regularised incomplete gamma function (chi-square p-values), the
-// effective sample size of an autocorrelated residual series, sums of squares,
-// and the AR(p) whitening that makes a likelihood ratio honest for smooth,
+// the regularised incomplete gamma function (chi-square p-values), sums of
+// squares, and the AR(p) whitening that makes a likelihood ratio honest for smooth,
 // autocorrelated residuals.
 #pragma once
 
@@ -14,8 +13,6 @@ namespace pneumo::diagnose {
 double interp(const std::vector<double>& t, const std::vector<double>& y, double tq);
 // Regularised upper incomplete gamma Q(a, x).
 double gamma_q(double a, double x);
-// Effective number of independent samples of r[0..n) (lag-1 autocorrelation).
-double effective_n(const double* r, std::size_t n);
 double ssr_of(const double* r, std::size_t n);
 
 // Coefficients a_1..a_p of the autoregression r_t = sum_i a_i r_{t-i} + e_t,
