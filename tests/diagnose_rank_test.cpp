@@ -161,6 +161,41 @@ TEST(DiagnoseStatistics, AutoregressionOrderAndCoefficientsAreRecovered) {
   EXPECT_TRUE(fit_ar(w.data(), w.size(), 5).empty());
 }
 
+TEST(DiagnoseStatistics, ASmoothChangeCountsOnlyAsMuchAsItStandsOutOfTheResidual) {
+  // A smooth residual (a model-form error: AR(2) with a double root at 0.95,
+  // RMS ~ 20 noise units) plus unit noise, 3000 samples. Changing it by a slow
+  // drift of 0.15 its RMS (2 % of the mean square) is what that residual's
+  // own course produces: the plain likelihood ratio n ln(SSR0/SSR1) passes
+  // the BIC gate (6 + ln n), the whitened one does not. The same RMS as white
+  // noise stands out of the residual's predictable course: it passes both.
+  // (Each ratio averaged over the change added and subtracted, so that a
+  // chance correlation of change and residual cancels.)
+  std::mt19937 rng(7);
+  std::normal_distribution<> e;
+  const std::size_t n = 3000;
+  std::vector<double> smooth(n, 0.0), r1(n);
+  for (std::size_t t = 2; t < n; ++t) smooth[t] = 1.9 * smooth[t - 1] - 0.9025 * smooth[t - 2] + 0.5 * e(rng);
+  for (std::size_t t = 0; t < n; ++t) r1[t] = smooth[t] + e(rng);
+  auto log_ratios = [&](auto change) {  // {plain, whitened} for r1 +- change, scaled to 0.15 of r1's RMS
+    std::vector<double> d(n), plus(n), minus(n);
+    for (std::size_t t = 0; t < n; ++t) d[t] = change(t);
+    const double scale = 0.15 * std::sqrt(ssr_of(r1.data(), n) / ssr_of(d.data(), n));
+    for (std::size_t t = 0; t < n; ++t) plus[t] = r1[t] + scale * d[t], minus[t] = r1[t] - scale * d[t];
+    double m = 0;
+    const double plain = 0.5 * n * std::log(ssr_of(plus.data(), n) * ssr_of(minus.data(), n) / std::pow(ssr_of(r1.data(), n), 2));
+    const double whitened = 0.5 * (whitened_log_ratio(plus.data(), r1.data(), n, &m) +
+                                   whitened_log_ratio(minus.data(), r1.data(), n, &m));
+    return std::pair{plain, whitened};
+  };
+  const double gate = 6 + std::log(double(n));
+  const auto drift = log_ratios([](std::size_t t) { return std::sin(2 * M_PI * t / 1500.0); });
+  EXPECT_GT(drift.first, gate);
+  EXPECT_LT(drift.second, gate);
+  const auto jitter = log_ratios([&](std::size_t) { return e(rng); });
+  EXPECT_GT(jitter.first, gate);
+  EXPECT_GT(jitter.second, gate);
+}
+
 
 // The rig's netlist with `patch` (YAML: components to add, connections to
 // add, top-level parameters or component parameters to set) as the truth.

@@ -201,11 +201,9 @@ class Engine {
                             int added_parameters) const {
     Significance s;
     for (const auto& seg : L.segments) {
-      const auto a = fit_ar(&r1[seg.offset], seg.n, 5);
-      const double s0 = whitened_ssr(&r0[seg.offset], seg.n, a), s1 = whitened_ssr(&r1[seg.offset], seg.n, a);
-      const double m = static_cast<double>(seg.n - a.size());
+      double m = 0;
+      s.lr += whitened_log_ratio(&r0[seg.offset], &r1[seg.offset], seg.n, &m);
       s.n_eff += m;
-      if (s0 > 0 && s1 > 0) s.lr += m * std::log(s0 / s1);
     }
     s.delta_bic = s.lr - added_parameters * std::log(std::max(2.0, s.n_eff));
     // A switch without free parameters (k = 0) has no chi-square reference.

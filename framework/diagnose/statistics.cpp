@@ -45,6 +45,13 @@ double gamma_q(double a, double x) {
   return std::exp(-x + a * std::log(x) - gln) * h;
 }
 
+double whitened_log_ratio(const double* r0, const double* r1, std::size_t n, double* samples) {
+  const auto a = fit_ar(r1, n, 5);
+  const double s0 = whitened_ssr(r0, n, a), s1 = whitened_ssr(r1, n, a);
+  *samples = static_cast<double>(n - a.size());
+  return s0 > 0 && s1 > 0 ? *samples * std::log(s0 / s1) : 0.0;
+}
+
 double ssr_of(const double* r, std::size_t n) {
   double s = 0;
   for (std::size_t i = 0; i < n; ++i) s += r[i] * r[i];

@@ -22,5 +22,9 @@ double ssr_of(const double* r, std::size_t n);
 std::vector<double> fit_ar(const double* r, std::size_t n, int max_order);
 // Sum of squares of the whitened series e_t = r_t - sum_i a_i r_{t-i}, t >= p.
 double whitened_ssr(const double* r, std::size_t n, const std::vector<double>& a);
+// Log-likelihood ratio of residual series r1 over r0 (both n long) after
+// whitening both with r1's AR(p), p <= 5: (n - p) ln(SSR0_w / SSR1_w);
+// `samples` gets n - p.
+double whitened_log_ratio(const double* r0, const double* r1, std::size_t n, double* samples);
 
 }  // namespace pneumo::diagnose
