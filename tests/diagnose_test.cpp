@@ -363,6 +363,20 @@ TEST(Diagnose, BadCatalogueNamesFileLineEffectAndParameter) {
   const Catalogue cat = load_catalogue((dir / "c.yaml").string(), model, kModel, builtin_registry());
   ASSERT_EQ(cat.effects.size(), 1u);
   EXPECT_EQ(cat.effects[0].unavailable, "unavailable: type hose_not_yet not registered");
+
+  // Model parameters as candidates (recalibrate:): unknown names at their line.
+  e = load("recalibrate:\n  m_load: {}\n  cylinder.dead_volume: {}\n");
+  EXPECT_NE(e.find("c.yaml:3:"), std::string::npos) << e;
+  EXPECT_NE(e.find("has no parameter 'dead_volume'"), std::string::npos) << e;
+  e = load("recalibrate:\n  piston.mass: {}\n");
+  EXPECT_NE(e.find("c.yaml:2:"), std::string::npos) << e;
+  EXPECT_NE(e.find("no component 'piston'"), std::string::npos) << e;
+  e = load("recalibrate:\n  m_lod: {}\n");
+  EXPECT_NE(e.find("no top-level parameter 'm_lod'"), std::string::npos) << e;
+  e = load("recalibrate:\n  load.m: {}\n");  // the netlist writes m: m_load
+  EXPECT_NE(e.find("re-calibrate that parameter"), std::string::npos) << e;
+  e = load("recalibrate:\n  m_load: {lower: 2x, upper: 3x}\n");
+  EXPECT_NE(e.find("lies outside [lower, upper]"), std::string::npos) << e;
 }
 
 TEST(Diagnose, ShippedCatalogueLoadsAgainstTheRig) {
@@ -373,6 +387,11 @@ TEST(Diagnose, ShippedCatalogueLoadsAgainstTheRig) {
                            "leakage_piston_seal", "sensor_lag_T", "sensor_lag_p", "valve_timing", "line_volume",
                            "supply_droop", "end_stop_elasticity", "lugre"})
     EXPECT_NE(cat.find(name), nullptr) << name;
+  // Re-calibration candidates: the null is the netlist's value (0.35 dm3/(s*bar), 2 cm3).
+  ASSERT_NE(cat.find("meter_out.C"), nullptr);
+  EXPECT_NEAR(*cat.find("meter_out.C")->parameters[0].null_value, 0.35e-8, 1e-20);
+  ASSERT_NE(cat.find("cylinder.dead_volume_cushion"), nullptr);
+  EXPECT_NEAR(*cat.find("cylinder.dead_volume_cushion")->parameters[0].null_value, 2e-6, 1e-18);
   // At its null value an effect reproduces the unpatched model.
   const Effect* leak = cat.find("leakage_piston_seal");
   ASSERT_NE(leak, nullptr);

@@ -243,6 +243,141 @@ std::vector<PhaseDecl> read_phases(const std::string& path, const YAML::Node& li
   return out;
 }
 
+// The netlist's own value of a re-calibration candidate (a top-level NAME
+// or COMPONENT.PARAMETER), its unit, the `set` key that changes it and the
+// range the component accepts.
+struct NetlistValue {
+  double value = 0, min = -INFINITY, max = INFINITY;
+  bool min_exclusive = false, max_exclusive = false;
+  std::string unit, set_key;
+};
+
+NetlistValue netlist_value(const std::string& path, const YAML::Node& key_node, const Netlist& nl,
+                           const Registry& registry) {
+  const std::string key = key_node.as<std::string>();
+  const auto dot = key.find('.');
+  NetlistValue v;
+  if (dot == std::string::npos) {
+    const TopParameter* tp = nl.parameter(key);
+    if (!tp)
+      fail(path, key_node, key, key,
+           "recalibrate: the model has no top-level parameter '" + key + "' (write NAME or COMPONENT.PARAMETER)");
+    v.value = tp->si_value;
+    v.unit = units::si_unit_name(tp->dim);
+    v.set_key = "parameters." + key;
+    return v;
+  }
+  const std::string comp = key.substr(0, dot), name = key.substr(dot + 1);
+  const auto decl = std::find_if(nl.components.begin(), nl.components.end(),
+                                 [&](const ComponentDecl& c) { return c.name == comp; });
+  if (decl == nl.components.end()) fail(path, key_node, key, name, "recalibrate: the model has no component '" + comp + "'");
+  const auto* entry = registry.find(decl->type);
+  const ParameterSpec* spec = entry ? entry->info->parameter(name) : nullptr;
+  if (!spec)
+    fail(path, key_node, key, name, "recalibrate: component '" + comp + "' (" + decl->type + ") has no parameter '" + name + "'");
+  if (spec->kind != ParameterKind::scalar)
+    fail(path, key_node, key, name, "recalibrate: '" + key + "' is not a scalar parameter (a table or a text)");
+  const auto written = std::find_if(decl->parameters.begin(), decl->parameters.end(),
+                                    [&](const auto& p) { return p.first == name; });
+  if (written != decl->parameters.end()) {
+    if (written->second.IsScalar() && nl.parameter(written->second.Scalar()))
+      fail(path, key_node, key, name,
+           "recalibrate: the netlist gives '" + key + "' as the top-level parameter '" + written->second.Scalar() +
+               "': re-calibrate that parameter");
+    v.value = parameter_value(nl, *decl, *spec, written->second);
+  } else if (spec->default_value) {
+    v.value = *spec->default_value;
+  } else {
+    fail(path, key_node, key, name, "recalibrate: the netlist gives no value for '" + key + "'");
+  }
+  v.unit = spec->unit;
+  v.min = spec->min, v.max = spec->max;
+  v.min_exclusive = spec->min_exclusive, v.max_exclusive = spec->max_exclusive;
+  v.set_key = key;
+  return v;
+}
+
+// recalibrate: {NAME | COMPONENT.PARAMETER: {lower, upper, scale, description}}
+// -> an effect with one free parameter that `set`s the netlist's parameter;
+// null and initial value are the netlist's own, so that a wrong data-sheet
+// value is found as such rather than mimicked by an effect.
+Effect recalibration(const std::string& path, const YAML::Node& key_node, const YAML::Node& body, const Netlist& nl,
+                     const Registry& registry) {
+  Effect e;
+  e.name = key_node.as<std::string>();
+  e.where = location_of(path, key_node);
+  if (body && !body.IsNull() && !body.IsMap())
+    fail(path, key_node, e.name, "", "recalibrate: each entry is a map {lower, upper, scale, description} (or {})");
+  for (auto k = body.begin(); body.IsMap() && k != body.end(); ++k) {
+    const auto key = k->first.as<std::string>();
+    if (key != "lower" && key != "upper" && key != "scale" && key != "description")
+      fail(path, k->first, e.name, "", "recalibrate: unknown key '" + key + "' (lower, upper, scale, description)");
+  }
+  const NetlistValue v = netlist_value(path, key_node, nl, registry);
+  EffectParameter ep;
+  ep.name = e.name.substr(e.name.find('.') + 1);
+  ep.where = e.where;
+  ep.unit = v.unit;
+  ep.initial = v.value;
+  ep.null_value = v.value;
+  ep.log_scale = !(body.IsMap() && body["scale"]) || body["scale"].as<std::string>() == "log";
+  if (body.IsMap() && body["scale"] && body["scale"].as<std::string>() != "log" &&
+      body["scale"].as<std::string>() != "linear")
+    fail(path, body["scale"], e.name, ep.name, "scale must be 'linear' or 'log'");
+  // A bound: an SI number, or a factor of the netlist's value ("0.5x").
+  auto bound = [&](const char* which, double factor) {
+    const YAML::Node b = body.IsMap() ? body[which] : YAML::Node();
+    std::string text = b ? b.Scalar() : "";
+    if (b && (text.empty() || text.back() != 'x')) return number(path, b, e.name, ep.name, which);
+    if (b) {
+      try {
+        std::size_t used = 0;
+        factor = std::stod(text.substr(0, text.size() - 1), &used);
+        if (used != text.size() - 1) throw std::invalid_argument(text);
+      } catch (const std::exception&) {
+        fail(path, b, e.name, ep.name, std::string("'") + which + "': '" + text + "' is neither an SI number nor a factor like 0.5x");
+      }
+    }
+    if (!(v.value > 0))
+      fail(path, b ? b : key_node, e.name, ep.name,
+           "the netlist's value is " + format_number(v.value) + ": give 'lower' and 'upper' as SI numbers");
+    return factor * v.value;
+  };
+  ep.lower = bound("lower", 0.25);
+  ep.upper = bound("upper", 4.0);
+  // Within what the component accepts (an exclusive limit is kept off by a hair).
+  if (ep.lower <= v.min) ep.lower = v.min_exclusive ? v.min + 1e-6 * (ep.upper - v.min) : v.min;
+  if (ep.upper >= v.max) ep.upper = v.max_exclusive ? v.max - 1e-6 * (v.max - ep.lower) : v.max;
+  if (!(ep.lower < ep.upper)) fail(path, key_node, e.name, ep.name, "lower must be below upper");
+  if (ep.initial < ep.lower || ep.initial > ep.upper)
+    fail(path, key_node, e.name, ep.name,
+         "the netlist's value " + format_number(ep.initial) + " lies outside [lower, upper]");
+  if (ep.log_scale && ep.lower <= 0) fail(path, key_node, e.name, ep.name, "scale: log needs lower > 0");
+  e.description = body.IsMap() && body["description"]
+                      ? body["description"].as<std::string>()
+                      : "re-calibrated model parameter " + e.name + " (netlist: " + format_number(v.value) + " " + v.unit + ")";
+  e.recalibrates = e.name;
+  e.set[v.set_key] = "${" + ep.name + "}";
+  e.parameters.push_back(ep);
+  return e;
+}
+
+// The patch applied at the initial values and elaborated, so that errors
+// surface at load time with the catalogue's file:line.
+void check_applies(const Effect& e, const YAML::Node& model, const std::string& model_file, const Registry& registry) {
+  std::vector<double> init;
+  for (const auto& p : e.parameters) init.push_back(p.initial);
+  MeasurementModel mm;
+  const YAML::Node patched = apply_effects(model, {EffectInstance{&e, init}}, &mm);
+  try {
+    Netlist nl = parse_netlist(YAML::Dump(patched), model_file + " (patched by effect '" + e.name + "')");
+    (void)elaborate(nl, registry);
+  } catch (const InputError& ex) {
+    throw InputError(e.where, ex.component(), ex.parameter(),
+                     "effect '" + e.name + "' does not apply to " + model_file + ": " + ex.message());
+  }
+}
+
 }  // namespace
 
 Catalogue load_catalogue(const std::string& path, const YAML::Node& model, const std::string& model_file,
@@ -259,16 +394,18 @@ Catalogue load_catalogue(const std::string& path, const YAML::Node& model, const
       throw InputError(SourceLocation{path, ex.mark.line + 1, ex.mark.column + 1}, "", "", ex.msg);
     }
   }
-  if (!root.IsMap() || !root["effects"] || !root["effects"].IsMap())
-    throw InputError(SourceLocation{path, 1, 1}, "", "", "a catalogue needs 'effects:', a map of effect name -> patch");
+  if (!root.IsMap() || !(root["effects"] || root["recalibrate"]) || (root["effects"] && !root["effects"].IsMap()))
+    throw InputError(SourceLocation{path, 1, 1}, "", "",
+                     "a catalogue needs 'effects:', a map of effect name -> patch, or 'recalibrate:'");
   for (auto it = root.begin(); it != root.end(); ++it)
-    if (it->first.as<std::string>() != "effects" && it->first.as<std::string>() != "phases")
-      fail(path, it->first, "", "", "unknown key '" + it->first.as<std::string>() + "' (valid: effects, phases)");
+    if (const auto k = it->first.as<std::string>(); k != "effects" && k != "phases" && k != "recalibrate")
+      fail(path, it->first, "", "", "unknown key '" + k + "' (valid: effects, recalibrate, phases)");
   if (root["phases"]) cat.phases = read_phases(path, root["phases"], load_netlist(model_file));
   static const std::set<std::string> kKeys = {"description",        "parameters", "requires", "add_components",
                                               "replace_components", "set",        "disconnect", "connect",
                                               "measure"};
-  for (auto it = root["effects"].begin(); it != root["effects"].end(); ++it) {
+  const YAML::Node effects = root["effects"] ? root["effects"] : YAML::Node(YAML::NodeType::Map);
+  for (auto it = effects.begin(); it != effects.end(); ++it) {
     Effect e;
     e.name = it->first.as<std::string>();
     e.where = location_of(path, it->first);
@@ -381,21 +518,18 @@ Catalogue load_catalogue(const std::string& path, const YAML::Node& model, const
     }
     for (const char* key : {"add_components", "replace_components", "set", "disconnect", "connect", "measure"})
       if (body[key]) check_references(path, body[key], e);
-    // Check the patch once at the initial values, so that errors surface now.
-    if (e.unavailable.empty()) {
-      std::vector<double> init;
-      for (const auto& p : e.parameters) init.push_back(p.initial);
-      MeasurementModel mm;
-      const YAML::Node patched = apply_effects(model, {EffectInstance{&e, init}}, &mm);
-      try {
-        Netlist nl = parse_netlist(YAML::Dump(patched), model_file + " (patched by effect '" + e.name + "')");
-        (void)elaborate(nl, registry);
-      } catch (const InputError& ex) {
-        throw InputError(e.where, ex.component(), ex.parameter(),
-                         "effect '" + e.name + "' does not apply to " + model_file + ": " + ex.message());
-      }
-    }
+    if (e.unavailable.empty()) check_applies(e, model, model_file, registry);
     cat.effects.push_back(std::move(e));
+  }
+  if (const YAML::Node re = root["recalibrate"]) {
+    if (!re.IsMap()) fail(path, re, "", "", "'recalibrate' must be a map {NAME | COMPONENT.PARAMETER: {lower, upper}}");
+    const Netlist nl = parse_netlist(YAML::Dump(model), model_file);
+    for (auto it = re.begin(); it != re.end(); ++it) {
+      Effect e = recalibration(path, it->first, it->second, nl, registry);
+      if (cat.find(e.name)) fail(path, it->first, e.name, "", "an effect of this name exists already");
+      check_applies(e, model, model_file, registry);
+      cat.effects.push_back(std::move(e));
+    }
   }
   return cat;
 }

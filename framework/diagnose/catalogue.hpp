@@ -21,6 +21,22 @@
 // whose reference is then the unpatched model). scale: log fits log(value)
 // (lower must then be > 0). An effect whose component type, parameter or
 // port is not in the registry is unavailable, not an error.
+//
+// Model parameters as candidates: the netlist's own values re-calibrated,
+// so that a wrong data-sheet value is found as such rather than mimicked by
+// an effect:
+//   recalibrate:
+//     cylinder.dead_volume_rod_side: {lower: 0.5x, upper: 2x}   # COMPONENT.PARAMETER
+//     m_load: {}                                                # top-level parameter
+// Each entry is a candidate named by its key, with one free parameter whose
+// null and initial value are the netlist's value (the component's default if
+// the netlist leaves it out); lower and upper are SI numbers or factors of
+// that value ("0.5x"; default 0.25x and 4x, kept within the component's
+// range), scale log by default (`scale: linear` for a range through zero),
+// `description` optional. Only scalar parameters; a component parameter the
+// netlist gives as a top-level name is re-calibrated by that name, and a
+// top-level parameter a run's operating point sets cannot be (diagnose()
+// says so at the catalogue's line).
 #pragma once
 
 #include <yaml-cpp/yaml.h>
@@ -51,6 +67,7 @@ struct Effect {
   std::vector<EffectParameter> parameters;
   YAML::Node add_components, replace_components, set, disconnect, connect, measure;
   std::string unavailable;  // non-empty: why the effect cannot be used with this registry
+  std::string recalibrates;  // a `recalibrate:` entry: the netlist parameter (NAME or COMPONENT.PARAMETER)
 
   int parameter_index(const std::string& n) const;
 };

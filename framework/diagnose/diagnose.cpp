@@ -9,10 +9,12 @@
 #include <fstream>
 #include <iostream>
 #include <numeric>
+#include <optional>
 
 #include "framework/analysis/run_metrics.hpp"
 #include "framework/core/parallel.hpp"
 #include "framework/diagnose/phases.hpp"
+#include "framework/diagnose/ranking.hpp"
 #include "framework/diagnose/statistics.hpp"
 #include "framework/diagnose/unexplained.hpp"
 #include "framework/run/run.hpp"
@@ -197,16 +199,19 @@ class Engine {
   struct Significance {
     double lr = 0, n_eff = 0, delta_bic = 0, p = 1;
   };
-  // Likelihood ratio of model 1 over model 0 on the effective sample size of
-  // model 1's residuals (each signal of each run its own AR(1) series).
+  // Likelihood ratio of model 1 over model 0 after whitening both residual
+  // series with the AR(p) model of model 1's (each signal of each run its
+  // own series): under "model 0 is as good" the whitened residuals are near
+  // white, so a change that is smooth like the residual it leaves - the
+  // kind an AR(1) effective sample size over-credits - counts only as much
+  // as it stands out of that residual's own predictable course.
   Significance significance(const std::vector<double>& r0, const std::vector<double>& r1, const Layout& L,
                             int added_parameters) const {
     Significance s;
     for (const auto& seg : L.segments) {
-      const double s0 = ssr_of(&r0[seg.offset], seg.n), s1 = ssr_of(&r1[seg.offset], seg.n);
-      const double ne = effective_n(&r1[seg.offset], seg.n);
-      s.n_eff += ne;
-      if (s0 > 0 && s1 > 0) s.lr += ne * std::log(s0 / s1);
+      double m = 0;
+      s.lr += whitened_log_ratio(&r0[seg.offset], &r1[seg.offset], seg.n, &m);
+      s.n_eff += m;
     }
     s.delta_bic = s.lr - added_parameters * std::log(std::max(2.0, s.n_eff));
     // A switch without free parameters (k = 0) has no chi-square reference.
@@ -221,7 +226,9 @@ class Engine {
     int evaluations = 0;
   };
 
-  // Bounded Levenberg-Marquardt in scaled coordinates u in [0, 1].
+  // Bounded Levenberg-Marquardt in scaled coordinates u in [0, 1]; with
+  // `grid_start`, a coarse grid over the last effect's parameters (the
+  // others held at their start values) picks the starting point.
   Fit fit(std::vector<EffectInstance> start, const Layout& cal, const std::vector<double>& r_start_hint,
           int max_iterations, bool grid_start = false) {
     struct P {
@@ -252,17 +259,25 @@ class Engine {
     Fit f;
     std::vector<double> r = r_start_hint.empty() ? residuals({model(instances(u))}, cal)[0] : r_start_hint;
     f.evaluations += 1;
-    if (grid_start && (np == 1 || np == 2)) {
+    std::vector<int> last;  // the last effect's parameters
+    for (int k = 0; k < np; ++k)
+      if (ps[k].effect == static_cast<int>(start.size()) - 1) last.push_back(k);
+    if (grid_start && (last.size() == 1 || last.size() == 2)) {
       // A coarse grid of starting points (in scaled coordinates) against
       // local minima: the best point, or the initial values, starts LM.
-      const std::vector<double> levels = np == 1 ? std::vector<double>{0.05, 0.25, 0.5, 0.75, 0.95}
-                                                 : std::vector<double>{0.15, 0.5, 0.85};
+      const std::vector<double> levels = last.size() == 1 ? std::vector<double>{0.05, 0.25, 0.5, 0.75, 0.95}
+                                                          : std::vector<double>{0.15, 0.5, 0.85};
       std::vector<Eigen::VectorXd> points;
       for (double a : levels) {
-        if (np == 1) {
-          points.push_back(Eigen::VectorXd::Constant(1, a));
+        Eigen::VectorXd p = u;
+        p[last[0]] = a;
+        if (last.size() == 1) {
+          points.push_back(p);
         } else {
-          for (double b : levels) points.push_back(Eigen::Vector2d(a, b));
+          for (double b : levels) {
+            p[last[1]] = b;
+            points.push_back(p);
+          }
         }
       }
       std::vector<Model> models;
@@ -376,30 +391,21 @@ class Engine {
   YAML::Node model_yaml_;
 };
 
-// Share of the gap in excess of the noise (gap - 1) that a model removes.
-double excess_reduction(double gap_before, double gap_after) {
-  const double e0 = std::max(gap_before - 1.0, 1e-12), e1 = std::max(gap_after - 1.0, 0.0);
-  return (e0 - e1) / e0;
-}
-
-// Practical significance: the model removes at least `min_excess_reduction`
-// of the excess gap of the whole validation set or of one signal whose own
-// gap exceeds `adequate_gap`. Per signal, because one badly fitted signal
-// (a lagging thermometer) can dominate the total and hide an effect that
-// repairs the others (x and p of a late valve).
-bool practically_significant(const GapTable& before, const GapTable& after, const DiagnoseOptions& opt,
-                             std::string* why = nullptr) {
-  if (excess_reduction(before.total.rms, after.total.rms) >= opt.min_excess_reduction) {
-    if (why) *why = "total";
-    return true;
+// An effect fitted back to its null value has vanished: no claim. (False
+// for a structural switch, which has no null.)
+bool at_null(const EffectInstance& inst) {
+  bool vanished = true, has_null = false;
+  for (std::size_t i = 0; i < inst.values.size(); ++i) {
+    const auto& spec = inst.effect->parameters[i];
+    if (!spec.null_value) continue;
+    has_null = true;
+    auto u = [&](double v) {
+      return spec.log_scale ? std::log(v / spec.lower) / std::log(spec.upper / spec.lower)
+                            : (v - spec.lower) / (spec.upper - spec.lower);
+    };
+    vanished = vanished && std::abs(u(inst.values[i]) - u(*spec.null_value)) < 0.01;
   }
-  for (std::size_t s = 0; s < before.by_signal.size() && s < after.by_signal.size(); ++s)
-    if (before.by_signal[s].rms > opt.adequate_gap &&
-        excess_reduction(before.by_signal[s].rms, after.by_signal[s].rms) >= opt.min_excess_reduction) {
-      if (why) *why = before.signals[s];
-      return true;
-    }
-  return false;
+  return has_null && vanished;
 }
 
 // Significant windows: chi-square of each window (1/60 of the run) against
@@ -483,6 +489,13 @@ DiagnosisReport diagnose(const std::string& model_file, const std::string& runs_
   Engine eng(model_file, registry, opt);
   eng.runs = load_runs(runs_dir, eng.base());
   const Catalogue cat = load_catalogue(catalogue_file, eng.yaml(), model_file, registry);
+  for (const auto& e : cat.effects)  // a run's operating point would override the re-calibrated value
+    for (const auto& run : eng.runs)
+      for (const auto& op : run.operating_point)
+        if (op.first == e.recalibrates)
+          throw InputError(e.where, "", op.first,
+                           "recalibrate: '" + op.first + "' is set by the operating point of run '" + run.name +
+                               "', so it cannot be re-calibrated");
 
   DiagnosisReport rep;
   rep.model_file = model_file;
@@ -538,28 +551,39 @@ DiagnosisReport diagnose(const std::string& model_file, const std::string& runs_
     er.gap_before = er.gap_after = rep.validation_before.total.rms;
     results.push_back(er);
   }
-  // Screening: the linearised improvement from the sensitivities at the initial values.
+  // Screening: for an effect with a null, the share of the unpatched model's
+  // calibration misfit that a Gauss-Newton step from the sensitivities would
+  // remove, from the null (where the model is the unpatched one) and from the
+  // initial values - a share of a far start's own large misfit says little
+  // about the data. A structural switch has no point in its family that is
+  // the unpatched model: the share of its own misfit at the initial values.
   std::vector<std::pair<double, int>> screened;
   eng.screen_cutoff_ = 2.0;  // always stop after the sensitivities
+  const double ssr_cal0 = ssr_of(r_cal0.data(), r_cal0.size());
   for (std::size_t k = 0; k < cat.effects.size(); ++k) {
     const Effect& e = cat.effects[k];
     if (!e.unavailable.empty()) {
       log("  " + e.name + ": " + e.unavailable);
       continue;
     }
-    std::vector<double> init;
-    for (const auto& p : e.parameters) init.push_back(p.initial);
-    const auto f = eng.fit({EffectInstance{&e, init}}, cal, {}, 1);
-    results[k].screening_improvement = f.screening;
-    // A structural switch (no null) changes the model even at its initial values.
-    const double direct = 1 - ssr_of(f.r_cal.data(), f.r_cal.size()) / ssr_of(r_cal0.data(), r_cal0.size());
-    screened.push_back({std::max(f.screening, direct), static_cast<int>(k)});
-    log(fmt("  screening %-2.0f ", k + 1) + e.name + fmt(": linearised improvement %.1f %%  [%.1f s]",
-                                                          100 * std::max(f.screening, direct), elapsed()));
+    std::vector<double> init, null;
+    for (const auto& p : e.parameters) {
+      init.push_back(p.initial);
+      if (p.null_value) null.push_back(*p.null_value);
+    }
+    double gain = 0;
+    for (const auto* start : {&init, &null}) {
+      if (start->size() != e.parameters.size() || (start == &null && null == init)) continue;
+      const auto f = eng.fit({EffectInstance{&e, *start}}, cal, {}, 1);
+      const double reference = null.size() == init.size() ? ssr_cal0 : ssr_of(f.r_cal.data(), f.r_cal.size());
+      gain = std::max(gain, 1 - ssr_of(f.r_cal.data(), f.r_cal.size()) * (1 - f.screening) / reference);
+    }
+    results[k].screening_improvement = gain;
+    screened.push_back({gain, static_cast<int>(k)});
+    log(fmt("  screening %-2.0f ", k + 1) + e.name + fmt(": linearised improvement %.1f %%  [%.1f s]", 100 * gain, elapsed()));
   }
   std::sort(screened.begin(), screened.end(), std::greater<>());
   eng.screen_cutoff_ = -1;
-  const double ssr_val0 = ssr_of(r_val0.data(), r_val0.size());
   for (std::size_t q = 0; q < screened.size(); ++q) {
     const int k = screened[q].second;
     const Effect& e = cat.effects[k];
@@ -591,17 +615,7 @@ DiagnosisReport diagnose(const std::string& model_file, const std::string& runs_
         (er.failed_validation_runs ? " - the solver failed on a validation run at the fitted values" : ""));
     cands.push_back({&e, f, r_val});
   }
-  // Rank by the penalised held-out improvement.
-  std::vector<int> order;
-  for (std::size_t k = 0; k < results.size(); ++k)
-    if (results[k].unavailable.empty()) order.push_back(static_cast<int>(k));
-  std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
-    const auto &A = results[a], &B = results[b];
-    if (A.screened_out != B.screened_out) return !A.screened_out;
-    if (A.screened_out) return A.screening_improvement > B.screening_improvement;
-    return A.delta_bic > B.delta_bic;
-  });
-  for (std::size_t q = 0; q < order.size(); ++q) results[order[q]].rank = static_cast<int>(q) + 1;
+  const std::vector<int> order = rank_effects(results);
 
   // Groups: near-collinear improvement patterns that the data do not separate.
   auto cand_of = [&](const std::string& n) -> const Cand* {
@@ -631,9 +645,18 @@ DiagnosisReport diagnose(const std::string& model_file, const std::string& runs_
     }
   }
 
-  // Forward selection.
+  // Forward selection. First the best-ranked significant effect.
   std::vector<EffectInstance> chosen;
   std::vector<double> r_val_cur = r_val0, r_cal_cur = r_cal0;
+  auto name_in_verdict = [&](const std::string& name) {
+    rep.verdict.push_back(name);
+    for (const auto& er : results)
+      if (er.name == name) {
+        auto g = er.group;
+        g.insert(g.begin(), er.name);
+        rep.verdict_groups.push_back(g);
+      }
+  };
   const Cand* best = nullptr;
   for (int k : order)
     if (results[k].significant) {
@@ -660,110 +683,82 @@ DiagnosisReport diagnose(const std::string& model_file, const std::string& runs_
           er.gap_after = er.validation_after.total.rms;
         }
     }
-    rep.verdict.push_back(best->e->name);
-    for (const auto& er : results)
-      if (er.name == best->e->name) {
-        auto g = er.group;
-        g.insert(g.begin(), er.name);
-        rep.verdict_groups.push_back(g);
-      }
+    name_in_verdict(best->e->name);
   }
   auto gap_of = [](const std::vector<double>& r) { return std::sqrt(ssr_of(r.data(), r.size()) / r.size()); };
+  auto ssr = [](const std::vector<double>& r) { return ssr_of(r.data(), r.size()); };
+  // Then, while a gap is left: re-screen the remaining candidates against it
+  // (each added to the current model: the linearised gain from its initial
+  // values with every parameter free, and the direct gain at its single fit -
+  // what one effect improves alone says little about what it adds to another),
+  // fit the best four jointly with the chosen effects, and add the one that
+  // removes the most of the validation gap among those that pass both gates
+  // against the current model.
   while (best && static_cast<int>(rep.verdict.size()) < opt.max_effects && gap_of(r_val_cur) > opt.adequate_gap) {
+    const double c0 = ssr(r_cal_cur);
+    std::vector<std::pair<double, EffectInstance>> rescreen;
+    eng.screen_cutoff_ = 2.0;
+    for (int k : order) {
+      const Effect* e = cat.find(results[k].name);
+      bool skip = false;
+      for (const auto& ch : chosen) skip = skip || ch.effect == e || effects_conflict(*ch.effect, *e);
+      for (const auto& g : rep.verdict_groups)
+        for (const auto& n : g) skip = skip || n == e->name;
+      if (skip) continue;
+      std::vector<double> init;
+      for (const auto& p : e->parameters) init.push_back(p.initial);
+      auto start = chosen;
+      start.push_back({e, init});
+      const auto lin = eng.fit(start, cal, {}, 1);
+      const double at_init = ssr(lin.r_cal);
+      double gain = 1 - at_init * (1 - lin.screening) / c0;
+      EffectInstance from{e, init};
+      if (const Cand* c = cand_of(e->name)) {
+        start.back() = c->fit.effects[0];
+        const double at_fit = ssr(eng.residuals({eng.model(start)}, cal)[0]);
+        if (at_fit < at_init) from = c->fit.effects[0];
+        gain = std::max(gain, 1 - at_fit / c0);
+      }
+      log("  re-screening " + e->name + fmt(" against the gap left: %.1f %%", 100 * gain));
+      rescreen.push_back({gain, from});
+    }
+    eng.screen_cutoff_ = -1;
+    std::stable_sort(rescreen.begin(), rescreen.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+    if (rescreen.size() > 4) rescreen.resize(4);
     struct Step {
       const Effect* e;
       Engine::Fit fit;
       std::vector<double> r_val;
-      Engine::Significance s;
+      GapTable gap;
     };
-    std::vector<Step> steps;
-    // Re-screen the remaining candidates at the current model: what one
-    // effect improves alone says little about what it adds to another (a
-    // dominant signal can mask it), so each is added at its single fit (or
-    // initial) values and ranked by the calibration misfit it removes.
-    std::vector<std::pair<double, EffectInstance>> rescreen;
-    {
-      std::vector<EffectInstance> adds;
-      for (int k : order) {
-        const Effect* e = cat.find(results[k].name);
-        bool skip = false;
-        for (const auto& ch : chosen) skip = skip || ch.effect == e || effects_conflict(*ch.effect, *e);
-        for (const auto& g : rep.verdict_groups)
-          for (const auto& n : g) skip = skip || n == e->name;
-        if (skip) continue;
-        if (const Cand* c = cand_of(e->name)) {
-          adds.push_back(c->fit.effects[0]);
-        } else {
-          std::vector<double> init;
-          for (const auto& p : e->parameters) init.push_back(p.initial);
-          adds.push_back({e, init});
-        }
-      }
-      std::vector<Model> models;
-      for (const auto& a : adds) {
-        auto m = chosen;
-        m.push_back(a);
-        models.push_back(eng.model(m));
-      }
-      const auto rs = eng.residuals(models, cal);
-      const double c0 = ssr_of(r_cal_cur.data(), r_cal_cur.size());
-      for (std::size_t q = 0; q < adds.size(); ++q) {
-        const double gain = 1 - ssr_of(rs[q].data(), rs[q].size()) / c0;
-        log("  re-screening " + adds[q].effect->name + fmt(" at the current model: %.1f %%", 100 * gain));
-        if (gain > 0) rescreen.push_back({gain, adds[q]});
-      }
-      std::stable_sort(rescreen.begin(), rescreen.end(),
-                       [](const auto& a, const auto& b) { return a.first > b.first; });
-      if (rescreen.size() > 4) rescreen.resize(4);
-    }
+    const GapTable gap_cur = eng.gaps(r_val_cur, val);
+    std::optional<Step> bs;
     for (const auto& [gain, add] : rescreen) {
-      (void)gain;
       const Effect* e = add.effect;
       auto start = chosen;
       start.push_back(add);
       log("  forward selection: " + rep.verdict.back() + " + " + e->name + fmt("  [%.1f s]", elapsed()));
-      auto f = eng.fit(start, cal, {}, opt.max_iterations);
-      const auto r_val = eng.residuals({eng.model(f.effects)}, val)[0];
-      const auto s = eng.significance(r_val_cur, r_val, val, static_cast<int>(e->parameters.size()));
-      // An added effect fitted back to its null value has vanished: no claim.
-      bool vanished = true, has_null = false;
-      const auto& added = f.effects.back();
-      for (std::size_t i = 0; i < added.values.size(); ++i) {
-        const auto& spec = added.effect->parameters[i];
-        if (!spec.null_value) continue;
-        has_null = true;
-        auto u = [&](double v) {
-          return spec.log_scale ? std::log(v / spec.lower) / std::log(spec.upper / spec.lower)
-                                : (v - spec.lower) / (spec.upper - spec.lower);
-        };
-        vanished = vanished && std::abs(u(added.values[i]) - u(*spec.null_value)) < 0.01;
-      }
-      if (has_null && vanished) {
+      auto f = eng.fit(start, cal, {}, opt.max_iterations, true);
+      if (at_null(f.effects.back())) {
         log("    " + e->name + " fitted back to its null value: not added");
         continue;
       }
-      steps.push_back({e, f, r_val, s});
-    }
-    const GapTable gap_cur = eng.gaps(r_val_cur, val);
-    const Step* bs = nullptr;
-    for (const auto& s : steps) {
+      Step st{e, f, eng.residuals({eng.model(f.effects)}, val)[0], {}};
+      st.gap = eng.gaps(st.r_val, val);
+      const auto s = eng.significance(r_val_cur, st.r_val, val, static_cast<int>(e->parameters.size()));
       std::string why;
-      const bool practical = practically_significant(gap_cur, eng.gaps(s.r_val, val), opt, &why);
-      log("    + " + s.e->name + fmt(": dBIC %.3g", s.s.delta_bic) +
-          (practical ? ", removes enough of the excess gap of " + why : ", not practically significant"));
-      if (s.s.delta_bic > opt.significance_bic && practical && (!bs || s.s.delta_bic > bs->s.delta_bic)) bs = &s;
+      const bool practical = practically_significant(gap_cur, st.gap, opt, &why);
+      log("    + " + e->name + fmt(": validation gap %.3g -> %.3g, dBIC %.3g", gap_cur.total.rms, st.gap.total.rms,
+                                    s.delta_bic) +
+          (practical ? ", removes enough of the gap of " + why : ", not practically significant"));
+      if (s.delta_bic > opt.significance_bic && practical && (!bs || st.gap.total.rms < bs->gap.total.rms))
+        bs = std::move(st);
     }
     if (!bs) break;
     chosen = bs->fit.effects;
     r_val_cur = bs->r_val;
     r_cal_cur = bs->fit.r_cal;
-    rep.verdict.push_back(bs->e->name);
-    for (const auto& er : results)
-      if (er.name == bs->e->name) {
-        auto g = er.group;
-        g.insert(g.begin(), er.name);
-        rep.verdict_groups.push_back(g);
-      }
+    name_in_verdict(bs->e->name);
   }
   for (const auto& c : chosen) rep.final_values.emplace_back(c.effect->name, c.values);
   rep.validation_after = eng.gaps(r_val_cur, val);

@@ -7,12 +7,14 @@
 // are significant against that noise.
 // Which: every available candidate effect is calibrated on the calibration
 // runs (bounded Levenberg-Marquardt, finite-difference sensitivities, runs in
-// parallel) after a linearised screening from the same sensitivities, and
-// scored on the validation runs by a likelihood ratio on the effective sample
-// size (lag-1 autocorrelation of the residuals) with a BIC penalty per
-// parameter. Effects whose improvements the signals cannot tell apart form a
-// group; a second effect is added by forward selection (the remaining
-// candidates re-screened at the current model).
+// parallel) after a linearised screening from the same sensitivities, gated
+// on the validation runs by a likelihood ratio of AR(p)-whitened residuals
+// with a BIC penalty per parameter and by practical significance in noise
+// units, and ranked by the share of the validation gap it removes
+// (framework/diagnose/ranking.hpp). Effects whose improvements the signals
+// cannot tell apart form a group; forward selection re-screens the remaining
+// candidates against the gap left every round and fits each with the chosen
+// effects' parameters free.
 // How far: the validation gap before and after, per signal and phase.
 #pragma once
 
@@ -58,18 +60,21 @@ struct DiagnoseOptions {
   int max_effects = 2;        // forward selection depth
   int max_iterations = 12;    // Levenberg-Marquardt iterations per fit
   int screen_keep = 8;        // full fits for at most this many candidates (best screened first)
-  double significance_bic = 6.0;  // LR_eff - k ln(n_eff) above this: "strong" evidence
+  // Significance, the gate: a likelihood ratio of the validation residuals
+  // after AR(p) whitening (each signal of each run its own series, p <= 5
+  // by BIC) minus a BIC penalty k ln(n) above this ("strong" evidence).
+  double significance_bic = 6.0;
   double group_cosine = 0.9;
-  // Practical significance, because a model-form mismatch of the right effect
-  // leaves residual structure that abundant data make "statistically"
-  // significant: the model counts as explaining the data when its validation
-  // gap is at most `adequate_gap` (noise = 1; the noise estimate itself is
-  // uncertain by ~10 %), and an effect must remove at least
-  // `min_excess_reduction` of the gap in excess of the noise (gap - 1), of
-  // the total or of one signal whose own gap exceeds `adequate_gap` (a
-  // dominant signal must not hide an effect that repairs the others).
+  // Practical significance in noise units (framework/diagnose/ranking.hpp),
+  // because a model-form mismatch of the right effect leaves residual
+  // structure that abundant data make "statistically" significant: the model
+  // explains the data when its validation gap is at most `adequate_gap`
+  // (noise = 1), and an effect must remove at least one noise variance of
+  // mean square and at least what a `noise_uncertainty` error of the noise
+  // level (relative, of sigma) would move it by, on the total or on one
+  // signal whose own gap exceeds `adequate_gap`.
   double adequate_gap = 1.3;
-  double min_excess_reduction = 0.5;
+  double noise_uncertainty = 0.1;
   bool progress = true;
   std::function<void(const std::string&)> log;  // progress lines (default: stderr)
 };
@@ -97,7 +102,7 @@ struct EffectResult {
   std::vector<double> values;
   double gap_before = 0, gap_after = 0;  // validation, normalised RMS
   GapTable validation_after;
-  double lr_eff = 0, delta_bic = 0, p_value = 1, n_eff = 0;
+  double lr_eff = 0, delta_bic = 0, p_value = 1, n_eff = 0;  // whitened LR, whitened samples
   bool significant = false;
   int rank = 0;              // 1 = best; 0 = not ranked (unavailable)
   std::vector<std::string> group;  // effects the data cannot tell apart from this one

@@ -1,5 +1,6 @@
 #include "framework/diagnose/statistics.hpp"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 
@@ -44,24 +45,48 @@ double gamma_q(double a, double x) {
   return std::exp(-x + a * std::log(x) - gln) * h;
 }
 
-// Effective number of independent samples of a residual series, from its
-// lag-1 autocorrelation (AR(1) approximation): n (1 - rho) / (1 + rho).
-double effective_n(const double* r, std::size_t n) {
-  if (n < 3) return static_cast<double>(n);
-  double mean = 0;
-  for (std::size_t i = 0; i < n; ++i) mean += r[i];
-  mean /= n;
-  double c0 = 0, c1 = 0;
-  for (std::size_t i = 0; i < n; ++i) c0 += (r[i] - mean) * (r[i] - mean);
-  for (std::size_t i = 1; i < n; ++i) c1 += (r[i] - mean) * (r[i - 1] - mean);
-  if (c0 <= 0) return static_cast<double>(n);
-  const double rho = std::clamp(c1 / c0, 0.0, 0.999);
-  return std::clamp(n * (1 - rho) / (1 + rho), 1.0, static_cast<double>(n));
+double whitened_log_ratio(const double* r0, const double* r1, std::size_t n, double* samples) {
+  const auto a = fit_ar(r1, n, 5);
+  const double s0 = whitened_ssr(r0, n, a), s1 = whitened_ssr(r1, n, a);
+  *samples = static_cast<double>(n - a.size());
+  return s0 > 0 && s1 > 0 ? *samples * std::log(s0 / s1) : 0.0;
 }
 
 double ssr_of(const double* r, std::size_t n) {
   double s = 0;
   for (std::size_t i = 0; i < n; ++i) s += r[i] * r[i];
+  return s;
+}
+
+std::vector<double> fit_ar(const double* r, std::size_t n, int max_order) {
+  const int pmax = std::clamp<int>(max_order, 0, static_cast<int>(n / 4));
+  const std::size_t m = n - pmax;  // samples every order is fitted on
+  if (pmax == 0 || m < 8) return {};
+  const Eigen::Map<const Eigen::VectorXd> y(r + pmax, m);
+  Eigen::MatrixXd X(m, pmax);
+  for (int i = 0; i < pmax; ++i) X.col(i) = Eigen::Map<const Eigen::VectorXd>(r + pmax - 1 - i, m);
+  auto bic = [&](double ssr, int p) { return m * std::log(std::max(ssr / m, 1e-300)) + p * std::log(double(m)); };
+  std::vector<double> best;
+  double best_bic = bic(y.squaredNorm(), 0);
+  for (int p = 1; p <= pmax; ++p) {
+    const auto Xp = X.leftCols(p);
+    const Eigen::VectorXd a = (Xp.transpose() * Xp).ldlt().solve(Xp.transpose() * y);
+    if (!a.allFinite()) continue;
+    if (const double b = bic((y - Xp * a).squaredNorm(), p); b < best_bic) {
+      best_bic = b;
+      best.assign(a.data(), a.data() + p);
+    }
+  }
+  return best;
+}
+
+double whitened_ssr(const double* r, std::size_t n, const std::vector<double>& a) {
+  double s = 0;
+  for (std::size_t t = a.size(); t < n; ++t) {
+    double e = r[t];
+    for (std::size_t i = 0; i < a.size(); ++i) e -= a[i] * r[t - 1 - i];
+    s += e * e;
+  }
   return s;
 }
 

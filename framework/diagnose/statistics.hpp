@@ -1,6 +1,7 @@
 // Numerical helpers of the diagnosis: interpolation of a sampled signal,
-// the regularised incomplete gamma function (chi-square p-values), the
-// effective sample size of an autocorrelated residual series, sums of squares.
+// the regularised incomplete gamma function (chi-square p-values), sums of
+// squares, and the AR(p) whitening that makes a likelihood ratio honest for smooth,
+// autocorrelated residuals.
 #pragma once
 
 #include <cstddef>
@@ -12,8 +13,18 @@ namespace pneumo::diagnose {
 double interp(const std::vector<double>& t, const std::vector<double>& y, double tq);
 // Regularised upper incomplete gamma Q(a, x).
 double gamma_q(double a, double x);
-// Effective number of independent samples of r[0..n) (lag-1 autocorrelation).
-double effective_n(const double* r, std::size_t n);
 double ssr_of(const double* r, std::size_t n);
+
+// Coefficients a_1..a_p of the autoregression r_t = sum_i a_i r_{t-i} + e_t,
+// fitted to r[0..n) by least squares for p = 0..max_order (all on the samples
+// t >= max_order, so that the orders compete on the same data) and p chosen
+// by BIC. Empty: white (p = 0).
+std::vector<double> fit_ar(const double* r, std::size_t n, int max_order);
+// Sum of squares of the whitened series e_t = r_t - sum_i a_i r_{t-i}, t >= p.
+double whitened_ssr(const double* r, std::size_t n, const std::vector<double>& a);
+// Log-likelihood ratio of residual series r1 over r0 (both n long) after
+// whitening both with r1's AR(p), p <= 5: (n - p) ln(SSR0_w / SSR1_w);
+// `samples` gets n - p.
+double whitened_log_ratio(const double* r0, const double* r1, std::size_t n, double* samples);
 
 }  // namespace pneumo::diagnose
