@@ -280,9 +280,10 @@ NetlistValue netlist_value(const std::string& path, const YAML::Node& key_node, 
   const auto written = std::find_if(decl->parameters.begin(), decl->parameters.end(),
                                     [&](const auto& p) { return p.first == name; });
   if (written != decl->parameters.end()) {
-    if (written->second.IsScalar() && nl.parameter(written->second.Scalar()))
+    const ValueDecl& given = written->second;
+    if (given.shape == ValueDecl::Shape::scalar && !given.si && nl.parameter(given.text))
       fail(path, key_node, key, name,
-           "recalibrate: the netlist gives '" + key + "' as the top-level parameter '" + written->second.Scalar() +
+           "recalibrate: the netlist gives '" + key + "' as the top-level parameter '" + given.text +
                "': re-calibrate that parameter");
     v.value = parameter_value(nl, *decl, *spec, written->second);
   } else if (spec->default_value) {

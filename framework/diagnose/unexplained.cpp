@@ -319,15 +319,18 @@ class Search {
   const std::vector<MeasuredRun>& runs_;
 };
 
+// A balance is named only when its disturbance removes at least half of the
+// excess gap: less, and the "correction" is as much noise fitting as finding.
+constexpr double kMinExplained = 0.5;
+
 std::string percent(double share) { return std::to_string(static_cast<int>(std::lround(100 * share))) + " %"; }
 
 // The report's sentence: where the gap lies, and what the best balance's
 // disturbance says, or that no single one explains it.
-std::string sentence_of(const Unexplained& u, const Candidate& best, const std::string& phase, double mean,
-                        const DiagnoseOptions& opt) {
+std::string sentence_of(const Unexplained& u, const Candidate& best, const std::string& phase, double mean) {
   std::string s = "No candidate explains the remaining gap (" + number(u.gap) + " x noise, most of it in " + u.signal +
                   (u.phase.empty() ? "" : " during " + u.phase) + "); ";
-  if (best.finding.explained < opt.min_excess_reduction)
+  if (best.finding.explained < kMinExplained)
     return s + "nor does a smooth disturbance of any single balance (the best, on " + best.finding.balance +
            ", removes " + percent(best.finding.explained) + " of the excess gap).";
   const bool sensor = best.variable.empty();
@@ -365,7 +368,7 @@ void explain_by_balances(const UnexplainedInput& in, const DiagnoseOptions& opt,
   }
   u.shape = search.shape_of(cands.front());
   const auto [phase, mean] = largest_phase(u.shape, search.used, in);
-  u.sentence = sentence_of(u, cands.front(), in.phase_names->empty() ? "" : (*in.phase_names)[phase], mean, opt);
+  u.sentence = sentence_of(u, cands.front(), in.phase_names->empty() ? "" : (*in.phase_names)[phase], mean);
   u.simulations = search.simulations;
   u.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   if (in.log)
