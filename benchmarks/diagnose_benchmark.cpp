@@ -6,20 +6,21 @@
 // against catalogues/cushion_rig.yaml and prints what it said.
 //
 // Default (--seed N): 40 cases drawn from benchmarks/withheld_forms.yaml -
-// three forms of each withheld effect, none the candidate's own, parameters
-// drawn log-uniformly from just above the noise to strong (a case whose
-// clean validation gap is below --min-gap noise sd is redrawn stronger),
-// operating points drawn per run: 20 single-effect cases (two of each of ten
-// candidates), 8 double-effect cases, 8 cases whose effect no candidate
-// describes and 4 clean cases. The summary gives the share of single cases
-// with the right effect first, double cases with both found, out-of-catalogue
-// cases flagged as unexplained, clean cases with nothing claimed and the
-// median share of the excess gap removed.
+// three forms of each withheld effect, none the candidate's own. Each
+// effect's strength is set so that its own clean validation gap (without
+// noise) is a draw log-uniform in [--min-gap, --max-gap] noise sd (2 to 100:
+// from just above the noise to strong), its other parameters drawn in their
+// ranges; operating points drawn per run: 20 single-effect cases (two of each
+// of ten candidates), 8 double-effect cases, 8 cases whose effect no
+// candidate describes and 4 clean cases. The summary gives the share of
+// single cases with the right effect first, double cases with both found,
+// out-of-catalogue cases flagged as unexplained, clean cases with nothing
+// claimed and the median share of the excess gap removed.
 // --classic: the fixed 15 cases of issue #6 (benchmarks/withheld_effects.yaml,
 // fixed operating points), with their confusion matrix, for comparison.
 //
 //   diagnose_benchmark [--seed N | --classic] [--source DIR] [--work DIR] [--quick] [--threads N]
-//                      [--noise-scale F] [--case NAME] [--screen-keep N] [--min-gap G]
+//                      [--noise-scale F] [--case NAME] [--screen-keep N] [--min-gap G] [--max-gap G] [--form-ranges]
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -65,7 +66,7 @@ struct Case {
   std::vector<OperatingPoint> ops;  // 4 calibration, then 2 validation runs
   unsigned seed = 0;                // noise
   double clean_gap = NAN;           // validation, noise sd, without noise
-  int redraws = 0;
+  int evaluations = 0;              // strengths simulated to reach the drawn gaps
   std::vector<std::vector<std::vector<double>>> clean;  // per run, signal: noiseless samples (empty: not yet)
   bool out_of_catalogue() const {
     return std::any_of(truth.begin(), truth.end(), [](const Draw& d) { return class_of(d.name) == "ooc"; });
@@ -214,7 +215,7 @@ struct Setup {
   YAML::Node model;
   Catalogue forms, candidates;
   int threads = 2;
-  double noise_scale = 1.0, min_gap = 2.0;
+  double noise_scale = 1.0, min_gap = 2.0, max_gap = 100.0;  // effects' own clean gaps, noise sd
 };
 
 // The fixed 15 cases of issue #6.
@@ -286,32 +287,44 @@ class Generator {
     return v;
   }
 
-  // A draw of `form` whose clean validation gap on `ops` is at least the
-  // threshold: quantiles drawn uniformly, moved halfway to the strong end of
-  // the range while the gap is too small, halfway back if the truth fails to
-  // simulate. Empty name: no decidable draw in 6 tries.
-  Draw draw(const Effect& form, const std::vector<OperatingPoint>& ops, const std::vector<Traces>& nominal,
-            int* redraws) {
+  // A draw of `form` whose own clean validation gap on `ops` is close to
+  // `target` noise sd: its other parameters (the form's shape) drawn
+  // uniformly, the first (its strength) solved by bisection over its range,
+  // a run that fails to simulate counting as too strong. The gap reached is
+  // at least the threshold; empty name: the whole range stays below it.
+  Draw draw(const Effect& form, double target, const std::vector<OperatingPoint>& ops,
+            const std::vector<Traces>& nominal, int* evaluations) {
     std::uniform_real_distribution<double> U(0.0, 1.0);
     std::vector<double> u;
     for (std::size_t j = 0; j < form.parameters.size(); ++j) u.push_back(U(rng_));
-    for (int attempt = 0; attempt < 6; ++attempt) {
-      Draw d{form.name, nullptr, values_at(form, u)};
-      if (!form.add_components.IsNull() || !form.replace_components.IsNull() || !form.set.IsNull() ||
-          !form.connect.IsNull() || !form.disconnect.IsNull())
-        d.patch = &form;
+    const bool patch = !form.add_components.IsNull() || !form.replace_components.IsNull() || !form.set.IsNull() ||
+                       !form.connect.IsNull() || !form.disconnect.IsNull();
+    auto at = [&](double u0) {
+      u[0] = u0;
+      return Draw{form.name, patch ? &form : nullptr, values_at(form, u)};
+    };
+    auto gap_at = [&](double u0) {
+      ++*evaluations;
       try {
-        const double gap = clean_gap(clean_runs(s_.model, s_.model_file, {d}, ops, s_.threads), nominal, s_.noise_scale);
-        if (gap >= s_.min_gap) return d;
-        for (double& x : u) x = 0.5 * (x + 1);
+        return clean_gap(clean_runs(s_.model, s_.model_file, {at(u0)}, ops, s_.threads), nominal, s_.noise_scale);
       } catch (const std::exception&) {
-        for (double& x : u) x *= 0.5;
+        return double(INFINITY);
       }
-      ++*redraws;
+    };
+    const double g0 = gap_at(0), g1 = gap_at(1);
+    double weak = g0 <= g1 ? 0 : 1, strong = 1 - weak;
+    double g_weak = std::min(g0, g1), g_strong = std::max(g0, g1);
+    if (g_strong < s_.min_gap) return {};
+    if (g_weak >= target) return at(weak);
+    for (int i = 0; i < 7; ++i) {  // gap(weak) < target <= gap(strong)
+      const double mid = 0.5 * (weak + strong), g = gap_at(mid);
+      (g < target ? weak : strong) = mid;
+      (g < target ? g_weak : g_strong) = g;
     }
-    return {};
+    return std::isfinite(g_strong) ? at(strong) : g_weak >= s_.min_gap ? at(weak) : Draw{};
   }
 
+  double target_gap() { return s_.min_gap * std::pow(s_.max_gap / s_.min_gap, std::uniform_real_distribution<double>(0, 1)(rng_)); }
   const Effect* pick(const std::vector<const Effect*>& v) {
     return v[std::uniform_int_distribution<std::size_t>(0, v.size() - 1)(rng_)];
   }
@@ -336,7 +349,7 @@ Case generate_case(const Setup& s, Generator& g, const std::string& kind, const 
   for (int tries = 0; tries < 20; ++tries) {
     c.ops = g.operating_points();
     c.truth.clear();
-    c.redraws = 0;
+    c.evaluations = 0;
     std::vector<Traces> nominal;
     try {
       nominal = clean_runs(s.model, s.model_file, {}, c.ops, s.threads);
@@ -356,7 +369,7 @@ Case generate_case(const Setup& s, Generator& g, const std::string& kind, const 
     }
     bool ok = true;
     for (const Effect* f : chosen) {
-      Draw d = g.draw(*f, c.ops, nominal, &c.redraws);  // each effect decidable on its own
+      Draw d = g.draw(*f, g.target_gap(), c.ops, nominal, &c.evaluations);  // each effect decidable on its own
       ok = ok && !d.name.empty();
       c.truth.push_back(std::move(d));
     }
@@ -409,6 +422,32 @@ void check_forms(const Setup& s) {
   for (const Effect* f : forms_of(s.forms, "ooc")) {
     const std::string c = candidate_overlapping(*f, s.candidates);
     if (!c.empty()) throw std::runtime_error(f->name + " is not out of the catalogue: candidate " + c + " patches it too");
+  }
+}
+
+// Each form's own clean validation gap at both ends of its strength's range
+// (other parameters mid-range), on one draw of operating points: the ranges
+// must reach from below --min-gap to strong.
+void print_form_ranges(const Setup& s, unsigned seed) {
+  Generator g(s, seed);
+  const auto ops = g.operating_points();
+  const auto nominal = clean_runs(s.model, s.model_file, {}, ops, s.threads);
+  for (const auto& f : s.forms.effects) {
+    std::printf("%-40s", f.name.c_str());
+    for (double u0 : {0.0, 1.0}) {
+      std::vector<double> u(f.parameters.size(), 0.5);
+      u[0] = u0;
+      const bool patch = !f.add_components.IsNull() || !f.replace_components.IsNull() || !f.set.IsNull() ||
+                         !f.connect.IsNull() || !f.disconnect.IsNull();
+      try {
+        const Draw d{f.name, patch ? &f : nullptr, Generator::values_at(f, u)};
+        std::printf("  %s=%-10.3g gap %8.3g", f.parameters[0].name.c_str(), d.values[0],
+                    clean_gap(clean_runs(s.model, s.model_file, {d}, ops, s.threads), nominal, s.noise_scale));
+      } catch (const std::exception& ex) {
+        std::printf("  fails: %s", ex.what());
+      }
+    }
+    std::printf("\n");
   }
 }
 
@@ -537,7 +576,7 @@ int main(int argc, char** argv) {
   Setup s;
   s.source = PNEUMO_SOURCE_DIR;
   std::string work = "/tmp/pneumo_diagnose_benchmark", only_case;
-  bool quick = false, classic = false;
+  bool quick = false, classic = false, form_ranges = false;
   unsigned seed = 1;
   int screen_keep = -1;
   try {
@@ -548,17 +587,19 @@ int main(int argc, char** argv) {
       else if (a == "--work" && more) work = argv[++i];
       else if (a == "--quick") quick = true;
       else if (a == "--classic") classic = true;
+      else if (a == "--form-ranges") form_ranges = true;
       else if (a == "--seed" && more) seed = static_cast<unsigned>(std::stoul(argv[++i]));
       else if (a == "--threads" && more) s.threads = std::stoi(argv[++i]);
       else if (a == "--noise-scale" && more) s.noise_scale = std::stod(argv[++i]);
       else if (a == "--min-gap" && more) s.min_gap = std::stod(argv[++i]);
+      else if (a == "--max-gap" && more) s.max_gap = std::stod(argv[++i]);
       else if (a == "--case" && more) only_case = argv[++i];
       else if (a == "--screen-keep" && more) screen_keep = std::stoi(argv[++i]);
       else throw std::invalid_argument(a);
     }
   } catch (const std::exception&) {
     std::cerr << "usage: diagnose_benchmark [--seed N | --classic] [--source DIR] [--work DIR] [--quick] [--threads N] "
-                 "[--noise-scale F] [--case NAME] [--screen-keep N] [--min-gap G]\n";
+                 "[--noise-scale F] [--case NAME] [--screen-keep N] [--min-gap G] [--max-gap G] [--form-ranges]\n";
     return 2;
   }
   s.model_file = s.source + "/netlists/cushion_rig.yaml";
@@ -573,9 +614,13 @@ int main(int argc, char** argv) {
   if (classic) {
     cases = classic_cases(s.forms);
     if (quick) cases.resize(4);
+  } else if (form_ranges) {
+    print_form_ranges(s, seed);
+    return 0;
   } else {
     check_forms(s);
-    std::printf("seed %u: generating cases (clean validation gap >= %g noise sd each)\n", seed, s.min_gap);
+    std::printf("seed %u: generating cases (each effect's clean validation gap drawn in [%g, %g] noise sd)\n", seed,
+                s.min_gap, s.max_gap);
     std::fflush(stdout);
     cases = generated_cases(s, seed, quick);
   }
@@ -619,8 +664,8 @@ int main(int argc, char** argv) {
                   v.empty() ? "(none)" : v.c_str(), rep.validation_before.total.rms, rep.validation_after.total.rms,
                   secs, rep.simulations);
     else
-      std::printf("%-28s %s\n    clean gap %.3g sd (%d redraws) -> %s%s; gap %.3g -> %.3g (%.0f s)\n", c.name.c_str(),
-                  describe(c, s.forms).c_str(), c.clean_gap, c.redraws, v.empty() ? "(none)" : v.c_str(),
+      std::printf("%-28s %s\n    clean gap %.3g sd (%d strengths tried) -> %s%s; gap %.3g -> %.3g (%.0f s)\n", c.name.c_str(),
+                  describe(c, s.forms).c_str(), c.clean_gap, c.evaluations, v.empty() ? "(none)" : v.c_str(),
                   rep.unexplained ? ", unexplained flagged" : "", rep.validation_before.total.rms,
                   rep.validation_after.total.rms, secs);
     std::fflush(stdout);

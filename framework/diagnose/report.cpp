@@ -122,6 +122,12 @@ std::string unit_of(const DiagnosisReport& r, const std::string& signal) {
   return "";
 }
 
+double noise_of(const DiagnosisReport& r, const std::string& signal) {
+  for (const auto& [n, v] : r.noise)
+    if (n == signal) return v;
+  return NAN;
+}
+
 // Axis ticks at 1, 2 or 5 times a power of ten, about `want` of them.
 std::vector<double> ticks(double lo, double hi, int want, int* decimals) {
   const double raw = (hi - lo) / want, mag = std::pow(10.0, std::floor(std::log10(raw)));
@@ -155,39 +161,63 @@ void axis(std::ostringstream& o, bool horizontal, double lo, double hi, int want
   }
 }
 
-std::string svg_plot(const TracePlot& p, const std::vector<std::string>& phases, const Shown& u) {
-  const double W = 580, H = 250, l = 64, r = 12, t = 24, b = 36;
-  double t0 = p.t.front(), t1 = p.t.back(), lo = INFINITY, hi = -INFINITY;
+// One validation run and signal: measured against simulated in the signal's
+// engineering unit (top) and the residuals in noise units (bottom, the band
+// is +-1 noise sd, where a model that explains the data stays), phases shaded.
+std::string svg_plot(const TracePlot& p, const std::vector<std::string>& phases, const Shown& u, double sigma) {
+  const double W = 580, l = 64, r = 12, t = 24, h1 = 180, h2 = sigma > 0 ? 80 : 0, top2 = t + h1 + 10, b = 36;
+  const double H = top2 + h2 + b;
+  double t0 = p.t.front(), t1 = p.t.back(), lo = INFINITY, hi = -INFINITY, R = 2;
   for (const auto* v : {&p.measured, &p.before, &p.after})
     for (double y : *v)
       if (std::isfinite(y)) lo = std::min(lo, u(y)), hi = std::max(hi, u(y));
   if (!(hi > lo)) hi = lo + 1;
   const double pad = 0.05 * (hi - lo);
   lo -= pad, hi += pad;
+  std::vector<double> res_before, res_after;
+  for (std::size_t i = 0; i < p.t.size(); ++i) {
+    res_before.push_back((p.measured[i] - p.before[i]) / sigma);
+    res_after.push_back((p.measured[i] - p.after[i]) / sigma);
+    for (double z : {res_before.back(), res_after.back()})
+      if (std::isfinite(z)) R = std::max(R, 1.05 * std::fabs(z));
+  }
   auto X = [&](double x) { return l + (x - t0) / (t1 - t0) * (W - l - r); };
-  auto Y = [&](double y) { return t + (hi - y) / (hi - lo) * (H - t - b); };
+  auto Y = [&](double y) { return t + (hi - y) / (hi - lo) * h1; };
+  auto Z = [&](double z) { return top2 + (R - z) / (2 * R) * h2; };
   std::ostringstream o;
   o << "<svg class=\"trace\" data-run=\"" << html(p.run) << "\" data-signal=\"" << html(p.signal)
     << "\" xmlns=\"http://www.w3.org/2000/svg\" viewBox=\"0 0 " << W << " " << H << "\">\n";
   for (std::size_t ph = 0; ph + 1 < p.phase_times.size() && ph < phases.size(); ++ph) {
     const double a = X(std::max(t0, p.phase_times[ph])), c = X(std::min(t1, p.phase_times[ph + 1]));
-    if (c > a) o << "<rect x=\"" << a << "\" y=\"" << t << "\" width=\"" << c - a << "\" height=\"" << H - t - b
+    if (c > a) o << "<rect x=\"" << a << "\" y=\"" << t << "\" width=\"" << c - a << "\" height=\"" << top2 + h2 - t
                  << "\" fill=\"" << shade(ph) << "\"><title>" << html(phases[ph]) << "</title></rect>\n";
   }
-  axis(o, true, t0, t1, 6, X, t, H - b);
+  axis(o, true, t0, t1, 6, X, t, top2 + h2);
   axis(o, false, lo, hi, 5, Y, l, W - r);
-  o << "<rect x=\"" << l << "\" y=\"" << t << "\" width=\"" << W - l - r << "\" height=\"" << H - t - b
-    << "\" fill=\"none\" stroke=\"#888\"/>\n";
-  auto line = [&](const std::vector<double>& v, const char* color, const char* cls, double width) {
+  auto line = [&](const std::vector<double>& v, const std::function<double(double)>& at, const char* color,
+                  const char* cls, double width) {
     o << "<polyline class=\"" << cls << "\" fill=\"none\" stroke=\"" << color << "\" stroke-width=\"" << width
       << "\" points=\"";
     for (std::size_t i = 0; i < v.size(); ++i)
-      if (std::isfinite(v[i])) o << sig(X(p.t[i]), 5) << "," << sig(Y(u(v[i])), 5) << " ";
+      if (std::isfinite(v[i])) o << sig(X(p.t[i]), 5) << "," << sig(at(v[i]), 5) << " ";
     o << "\"/>\n";
   };
-  line(p.measured, "#999", "measured", 2.5);
-  line(p.before, "#d62728", "before", 1.2);
-  line(p.after, "#1f77b4", "after", 1.2);
+  const auto shown_value = [&](double si) { return Y(u(si)); };
+  line(p.measured, shown_value, "#999", "measured", 2.5);
+  line(p.before, shown_value, "#d62728", "before", 1.2);
+  line(p.after, shown_value, "#1f77b4", "after", 1.2);
+  o << "<rect x=\"" << l << "\" y=\"" << t << "\" width=\"" << W - l - r << "\" height=\"" << h1
+    << "\" fill=\"none\" stroke=\"#888\"/>\n";
+  if (h2 > 0) {
+    axis(o, false, -R, R, 4, Z, l, W - r);
+    o << "<rect x=\"" << l << "\" y=\"" << Z(1) << "\" width=\"" << W - l - r << "\" height=\"" << Z(-1) - Z(1)
+      << "\" fill=\"#999\" fill-opacity=\"0.35\"/>\n";
+    line(res_before, Z, "#d62728", "residual-before", 1);
+    line(res_after, Z, "#1f77b4", "residual-after", 1);
+    o << "<rect x=\"" << l << "\" y=\"" << top2 << "\" width=\"" << W - l - r << "\" height=\"" << h2
+      << "\" fill=\"none\" stroke=\"#888\"/><text x=\"" << l + 4 << "\" y=\"" << top2 + 11
+      << "\" font-size=\"10\" fill=\"#555\">residual / noise</text>\n";
+  }
   o << "<text x=\"" << (l + W - r) / 2 << "\" y=\"" << H - 4 << "\" font-size=\"11\" text-anchor=\"middle\">t [s]</text>";
   o << "<text x=\"" << l << "\" y=\"" << t - 8 << "\" font-size=\"12\"><tspan font-weight=\"bold\">" << html(p.signal)
     << "</tspan> [" << html(u.label) << "], " << html(p.run) << "</text>\n</svg>\n";
@@ -209,7 +239,7 @@ std::string svg_phase_bars(const DiagnosisReport& r) {
   double hi = 1.2;
   for (const auto& [b, a] : v) hi = std::max({hi, std::isfinite(b) ? b : 0.0, std::isfinite(a) ? a : 0.0});
   hi *= 1.08;
-  const double W = 900, l = 120, r_margin = 60, bar = 13, group = 2 * bar + 12, t = 8;
+  const double W = 900, l = 120, r_margin = 60, bar = 13, group = 2 * bar + 12, t = 20;
   const double H = t + group * v.size() + 34;
   auto X = [&](double g) { return l + g / hi * (W - l - r_margin); };
   std::ostringstream o;
@@ -232,8 +262,8 @@ std::string svg_phase_bars(const DiagnosisReport& r) {
     }
   }
   o << "<line x1=\"" << X(1) << "\" y1=\"" << t << "\" x2=\"" << X(1) << "\" y2=\"" << H - 34
-    << "\" stroke=\"#333\" stroke-dasharray=\"4,3\"/><text x=\"" << X(1) + 3 << "\" y=\"" << t + 10
-    << "\" font-size=\"11\">noise</text>\n<text x=\"" << (l + W - r_margin) / 2 << "\" y=\"" << H - 4
+    << "\" stroke=\"#333\" stroke-dasharray=\"4,3\"/><text x=\"" << X(1) << "\" y=\"" << t - 6
+    << "\" font-size=\"11\" text-anchor=\"middle\">noise</text>\n<text x=\"" << (l + W - r_margin) / 2 << "\" y=\"" << H - 4
     << "\" font-size=\"11\" text-anchor=\"middle\">validation gap: RMS of (measured - simulated) / noise</text>\n</svg>\n";
   return o.str();
 }
@@ -329,7 +359,7 @@ void write_report_html(const DiagnosisReport& r, const std::string& path) {
   o << "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>pneumo diagnosis</title>\n"
        "<style>body{font-family:sans-serif;max-width:1180px;margin:1em auto;padding:0 10px;line-height:1.35}"
        "table{border-collapse:collapse;max-width:100%}td,th{border:1px solid #ccc;padding:2px 6px;text-align:right;"
-       "vertical-align:top}th{background:#eee}td.l{text-align:left;overflow-wrap:anywhere}tr.present{background:#e8f4e8}"
+       "vertical-align:top;white-space:nowrap}th,td.w{white-space:normal}th{background:#eee}td.l{text-align:left}tr.present{background:#e8f4e8}"
        ".legend span{margin-right:1.2em}code{overflow-wrap:anywhere}svg{max-width:100%;height:auto}"
        ".traces{display:grid;grid-template-columns:repeat(auto-fill,minmax(520px,1fr));gap:6px}"
        "p.note{color:#555;font-size:90%}</style></head><body>\n";
@@ -365,9 +395,7 @@ void write_report_html(const DiagnosisReport& r, const std::string& path) {
   o << "</tr>\n";
   for (std::size_t s = 0; s < r.validation_before.signals.size(); ++s) {
     const std::string& name = r.validation_before.signals[s];
-    double sigma = NAN;
-    for (const auto& [n, v] : r.noise)
-      if (n == name) sigma = v;
+    const double sigma = noise_of(r, name);
     const Shown du = shown(unit_of(r, name), true);
     const bool has_after = s < r.validation_after.by_signal.size();
     o << "<tr><td class=\"l\">" << html(name) << "</td><td>" << sig(du(sigma), 2) << " " << html(du.label) << "</td>";
@@ -399,19 +427,19 @@ void write_report_html(const DiagnosisReport& r, const std::string& path) {
     bool present = false;
     for (const auto& v : r.verdict) present = present || v == e.name;
     o << "<tr class=\"effect" << (present ? " present" : "") << "\"><td>" << (e.rank ? std::to_string(e.rank) : "-")
-      << "</td><td class=\"l\">" << html(e.name) << "</td><td class=\"l\">"
+      << "</td><td class=\"l\">" << html(e.name) << "</td><td class=\"l w\">"
       << html(!e.unavailable.empty() ? e.unavailable
               : e.screened_out        ? "screened out"
               : e.failed_validation_runs ? "fitted; solver failed on " + std::to_string(e.failed_validation_runs) +
                                                " validation run(s)"
                                          : "fitted")
       << "</td><td class=\"l\">";
-    for (std::size_t j = 0; j < e.parameter_names.size(); ++j)
-      o << html(e.parameter_names[j]) << " = " << html(parameter(e.values[j], e.parameter_units[j])) << "<br>";
     const bool fitted = e.unavailable.empty() && !e.screened_out;
+    for (std::size_t j = 0; fitted && j < e.parameter_names.size(); ++j)
+      o << html(e.parameter_names[j]) << " = " << html(parameter(e.values[j], e.parameter_units[j])) << "<br>";
     o << "</td><td>" << gap(e.gap_before) << "</td><td>" << (fitted ? gap(e.gap_after) : "") << "</td><td>"
-      << (fitted ? sig(std::round(e.delta_bic), 3) : "") << "</td><td>" << (fitted ? p_value(e.p_value) : "")
-      << "</td><td>" << (e.significant ? "yes" : "no") << "</td><td class=\"l\">";
+      << (fitted ? fixed(std::round(e.delta_bic), 0) : "") << "</td><td>" << (fitted ? p_value(e.p_value) : "")
+      << "</td><td>" << (e.significant ? "yes" : "no") << "</td><td class=\"l w\">";
     for (const auto& g : e.group) o << html(g) << " ";
     o << "</td></tr>\n";
   }
@@ -421,7 +449,7 @@ void write_report_html(const DiagnosisReport& r, const std::string& path) {
   for (std::size_t p = 0; p < r.phase_names.size(); ++p)
     o << " <span style=\"background:" << shade(p) << ";padding:0 4px\">" << html(r.phase_names[p]) << "</span>";
   o << "</p>\n<div class=\"traces\">\n";
-  for (const auto& p : r.plots) o << svg_plot(p, r.phase_names, shown(unit_of(r, p.signal)));
+  for (const auto& p : r.plots) o << svg_plot(p, r.phase_names, shown(unit_of(r, p.signal)), noise_of(r, p.signal));
   o << "</div>\n</body></html>\n";
   write_text_atomic(path, o.str());
 }
