@@ -346,7 +346,10 @@ std::string parameter(double si, const std::string& unit) {
 // p-values below what the effective sample size can mean are shown as a bound.
 std::string p_value(double p) { return p < 1e-4 ? "&lt; 0.0001" : sig(p, 2); }
 
-std::string share(double part, double total) { return sig(100 * part / (total > 0 ? total : 1), 2) + " %"; }
+std::string share(double part, double total) {
+  const double pct = 100 * part / (total > 0 ? total : 1);
+  return pct < 0.1 ? "&lt; 0.1 %" : sig(pct, 2) + " %";
+}
 
 std::string file_name(const std::string& path) {
   return "<code title=\"" + html(path) + "\">" + html(std::filesystem::path(path).filename().string()) + "</code>";
