@@ -511,6 +511,7 @@ DiagnosisReport diagnose(const std::string& model_file, const std::string& runs_
       rep.noise.emplace_back(name, v[v.size() / 2]);
     }
   }
+  for (const Probe& p : elaborate(eng.base(), registry).probes) rep.signal_units.emplace_back(p.name, p.unit);
   log(fmt("diagnose: %g runs, ", eng.runs.size()) + std::to_string(cat.effects.size()) + " candidate effects, " +
       std::to_string(opt.threads) + " threads");
   eng.compute_phases(cat.phases);

@@ -163,6 +163,7 @@ struct DiagnosisReport {
   std::vector<EffectResult> effects;
   GapTable calibration_before, validation_before, validation_after;
   std::vector<std::pair<std::string, double>> noise;  // signal, sigma (median over runs)
+  std::vector<std::pair<std::string, std::string>> signal_units;  // signal, SI unit of the model output
   std::vector<WindowFinding> windows;
   std::vector<TracePlot> plots;
   std::vector<std::string> calibration_runs, validation_runs;

@@ -1,10 +1,13 @@
 // report.json and a self-contained report.html (inline SVG, no network).
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <sstream>
 
+#include "framework/core/units.hpp"
 #include "framework/io/results.hpp"
 #include "framework/diagnose/diagnose.hpp"
 #include "framework/diagnose/unexplained.hpp"
@@ -69,69 +72,200 @@ std::string gap_json(const GapTable& g, const std::vector<std::string>& phases) 
   return o.str();
 }
 
-std::string svg_plot(const TracePlot& p, const std::vector<std::string>& phases) {
-  const double W = 560, H = 220, l = 60, r = 10, t = 10, b = 30;
-  double t0 = p.t.front(), t1 = p.t.back(), lo = INFINITY, hi = -INFINITY;
+// Rounded to n significant digits, in plain notation where that stays short.
+std::string sig(double v, int n) {
+  if (!std::isfinite(v)) return "-";
+  if (v == 0) return "0";
+  const int e = static_cast<int>(std::floor(std::log10(std::fabs(v))));
+  char buf[48];
+  if (e < -4 || e >= 7) {
+    std::snprintf(buf, sizeof buf, "%.*g", n, v);
+  } else {
+    const double q = std::pow(10.0, e - n + 1);
+    std::snprintf(buf, sizeof buf, "%.*f", std::max(0, n - 1 - e), std::round(v / q) * q);
+  }
+  return buf;
+}
+
+// Gaps are RMS residuals over a noise level estimated to about 10 %: two digits.
+std::string gap(double v) { return sig(v, 2); }
+
+// How the report shows a quantity of an SI unit: bar, mm, degC, cm3,
+// dm3/(s*bar), ms; other units as they are. A `difference` (a noise level)
+// takes no offset (K, not degC). Pressures in the model are absolute.
+struct Shown {
+  std::string label;
+  double scale = 1, offset = 0;
+  double operator()(double si) const { return (si - offset) / scale; }
+};
+
+Shown shown(const std::string& si_unit, bool difference = false) {
+  static const std::vector<std::pair<units::Dimension, std::string>> kEngineering = {
+      {units::dims::pressure, "bar"}, {units::dims::length, "mm"},   {units::dims::temperature, "degC"},
+      {units::dims::volume, "cm3"},   {units::dims::time, "ms"},     {units::dims::sonic_conductance, "dm3/(s*bar)"}};
+  try {
+    const units::Unit u = units::parse_unit(si_unit);
+    if (u.scale != 1 || u.affine() || u.dim.dimensionless()) return {si_unit};
+    for (const auto& [dim, name] : kEngineering) {
+      if (u.dim != dim) continue;
+      if (difference && dim == units::dims::temperature) return {"K"};
+      const units::Unit e = units::parse_unit(name);
+      return {dim == units::dims::pressure && !difference ? "bar abs" : name, e.scale, difference ? 0.0 : e.offset};
+    }
+  } catch (const units::ParseError&) {
+  }
+  return {si_unit};
+}
+
+std::string unit_of(const DiagnosisReport& r, const std::string& signal) {
+  for (const auto& [n, u] : r.signal_units)
+    if (n == signal) return u;
+  return "";
+}
+
+double noise_of(const DiagnosisReport& r, const std::string& signal) {
+  for (const auto& [n, v] : r.noise)
+    if (n == signal) return v;
+  return NAN;
+}
+
+// Axis ticks at 1, 2 or 5 times a power of ten, about `want` of them.
+std::vector<double> ticks(double lo, double hi, int want, int* decimals) {
+  const double raw = (hi - lo) / want, mag = std::pow(10.0, std::floor(std::log10(raw)));
+  const double f = raw / mag, step = (f < 1.5 ? 1 : f < 3 ? 2 : f < 7 ? 5 : 10) * mag;
+  *decimals = std::max(0, -static_cast<int>(std::floor(std::log10(step) + 1e-9)));
+  std::vector<double> out;
+  for (double v = std::ceil(lo / step - 1e-9) * step; v <= hi + 1e-9 * step; v += step) out.push_back(v);
+  return out;
+}
+
+std::string fixed(double v, int decimals) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, std::fabs(v) < 1e-12 ? 0.0 : v);
+  return buf;
+}
+
+// Tick marks, grid lines and labels of one axis. `horizontal`: the time axis.
+void axis(std::ostringstream& o, bool horizontal, double lo, double hi, int want, const std::function<double(double)>& at,
+          double from, double to) {
+  int dec = 0;
+  for (double v : ticks(lo, hi, want, &dec)) {
+    const double c = at(v);
+    if (horizontal)
+      o << "<line x1=\"" << c << "\" y1=\"" << from << "\" x2=\"" << c << "\" y2=\"" << to
+        << "\" stroke=\"#e4e4e4\"/><text x=\"" << c << "\" y=\"" << to + 14
+        << "\" font-size=\"11\" text-anchor=\"middle\">" << fixed(v, dec) << "</text>\n";
+    else
+      o << "<line x1=\"" << from << "\" y1=\"" << c << "\" x2=\"" << to << "\" y2=\"" << c
+        << "\" stroke=\"#e4e4e4\"/><text x=\"" << from - 4 << "\" y=\"" << c + 4
+        << "\" font-size=\"11\" text-anchor=\"end\">" << fixed(v, dec) << "</text>\n";
+  }
+}
+
+// One validation run and signal: measured against simulated in the signal's
+// engineering unit (top) and the residuals in noise units (bottom, the band
+// is +-1 noise sd, where a model that explains the data stays), phases shaded.
+std::string svg_plot(const TracePlot& p, const std::vector<std::string>& phases, const Shown& u, double sigma) {
+  const double W = 580, l = 64, r = 12, t = 24, h1 = 180, h2 = sigma > 0 ? 80 : 0, top2 = t + h1 + 10, b = 36;
+  const double H = top2 + h2 + b;
+  double t0 = p.t.front(), t1 = p.t.back(), lo = INFINITY, hi = -INFINITY, R = 2;
   for (const auto* v : {&p.measured, &p.before, &p.after})
     for (double y : *v)
-      if (std::isfinite(y)) lo = std::min(lo, y), hi = std::max(hi, y);
+      if (std::isfinite(y)) lo = std::min(lo, u(y)), hi = std::max(hi, u(y));
   if (!(hi > lo)) hi = lo + 1;
   const double pad = 0.05 * (hi - lo);
   lo -= pad, hi += pad;
+  std::vector<double> res_before, res_after;
+  for (std::size_t i = 0; i < p.t.size(); ++i) {
+    res_before.push_back((p.measured[i] - p.before[i]) / sigma);
+    res_after.push_back((p.measured[i] - p.after[i]) / sigma);
+    for (double z : {res_before.back(), res_after.back()})
+      if (std::isfinite(z)) R = std::max(R, 1.05 * std::fabs(z));
+  }
   auto X = [&](double x) { return l + (x - t0) / (t1 - t0) * (W - l - r); };
-  auto Y = [&](double y) { return t + (hi - y) / (hi - lo) * (H - t - b); };
+  auto Y = [&](double y) { return t + (hi - y) / (hi - lo) * h1; };
+  auto Z = [&](double z) { return top2 + (R - z) / (2 * R) * h2; };
   std::ostringstream o;
   o << "<svg class=\"trace\" data-run=\"" << html(p.run) << "\" data-signal=\"" << html(p.signal)
-    << "\" xmlns=\"http://www.w3.org/2000/svg\" width=\"" << W << "\" height=\"" << H << "\" viewBox=\"0 0 " << W
-    << " " << H << "\">\n";
+    << "\" xmlns=\"http://www.w3.org/2000/svg\" viewBox=\"0 0 " << W << " " << H << "\">\n";
   for (std::size_t ph = 0; ph + 1 < p.phase_times.size() && ph < phases.size(); ++ph) {
-    const double a = X(p.phase_times[ph]), c = X(p.phase_times[ph + 1]);
-    if (c > a) o << "<rect x=\"" << a << "\" y=\"" << t << "\" width=\"" << c - a << "\" height=\"" << H - t - b
+    const double a = X(std::max(t0, p.phase_times[ph])), c = X(std::min(t1, p.phase_times[ph + 1]));
+    if (c > a) o << "<rect x=\"" << a << "\" y=\"" << t << "\" width=\"" << c - a << "\" height=\"" << top2 + h2 - t
                  << "\" fill=\"" << shade(ph) << "\"><title>" << html(phases[ph]) << "</title></rect>\n";
   }
-  o << "<rect x=\"" << l << "\" y=\"" << t << "\" width=\"" << W - l - r << "\" height=\"" << H - t - b
-    << "\" fill=\"none\" stroke=\"#888\"/>\n";
-  auto line = [&](const std::vector<double>& v, const char* color, const char* cls, double width) {
+  axis(o, true, t0, t1, 6, X, t, top2 + h2);
+  axis(o, false, lo, hi, 5, Y, l, W - r);
+  auto line = [&](const std::vector<double>& v, const std::function<double(double)>& at, const char* color,
+                  const char* cls, double width) {
     o << "<polyline class=\"" << cls << "\" fill=\"none\" stroke=\"" << color << "\" stroke-width=\"" << width
       << "\" points=\"";
     for (std::size_t i = 0; i < v.size(); ++i)
-      if (std::isfinite(v[i])) o << num(X(p.t[i])) << "," << num(Y(v[i])) << " ";
+      if (std::isfinite(v[i])) o << sig(X(p.t[i]), 5) << "," << sig(at(v[i]), 5) << " ";
     o << "\"/>\n";
   };
-  line(p.measured, "#999", "measured", 2.5);
-  line(p.before, "#d62728", "before", 1.2);
-  line(p.after, "#1f77b4", "after", 1.2);
-  o << "<text x=\"" << l << "\" y=\"" << H - 8 << "\" font-size=\"11\">" << num(t0) << " s</text>";
-  o << "<text x=\"" << W - r - 40 << "\" y=\"" << H - 8 << "\" font-size=\"11\">" << num(t1) << " s</text>";
-  o << "<text x=\"2\" y=\"" << t + 10 << "\" font-size=\"11\">" << num(hi) << "</text>";
-  o << "<text x=\"2\" y=\"" << H - b << "\" font-size=\"11\">" << num(lo) << "</text>";
-  o << "<text x=\"" << l + 8 << "\" y=\"" << t + 14 << "\" font-size=\"12\">" << html(p.run) << ": "
-    << html(p.signal) << "</text>\n</svg>\n";
+  const auto shown_value = [&](double si) { return Y(u(si)); };
+  line(p.measured, shown_value, "#999", "measured", 2.5);
+  line(p.before, shown_value, "#d62728", "before", 1.2);
+  line(p.after, shown_value, "#1f77b4", "after", 1.2);
+  o << "<rect x=\"" << l << "\" y=\"" << t << "\" width=\"" << W - l - r << "\" height=\"" << h1
+    << "\" fill=\"none\" stroke=\"#888\"/>\n";
+  if (h2 > 0) {
+    axis(o, false, -R, R, 4, Z, l, W - r);
+    o << "<rect x=\"" << l << "\" y=\"" << Z(1) << "\" width=\"" << W - l - r << "\" height=\"" << Z(-1) - Z(1)
+      << "\" fill=\"#999\" fill-opacity=\"0.35\"/>\n";
+    line(res_before, Z, "#d62728", "residual-before", 1);
+    line(res_after, Z, "#1f77b4", "residual-after", 1);
+    o << "<rect x=\"" << l << "\" y=\"" << top2 << "\" width=\"" << W - l - r << "\" height=\"" << h2
+      << "\" fill=\"none\" stroke=\"#888\"/><text x=\"" << l + 4 << "\" y=\"" << top2 + 11
+      << "\" font-size=\"10\" fill=\"#555\">residual / noise</text>\n";
+  }
+  o << "<text x=\"" << (l + W - r) / 2 << "\" y=\"" << H - 4 << "\" font-size=\"11\" text-anchor=\"middle\">t [s]</text>";
+  o << "<text x=\"" << l << "\" y=\"" << t - 8 << "\" font-size=\"12\"><tspan font-weight=\"bold\">" << html(p.signal)
+    << "</tspan> [" << html(u.label) << "], " << html(p.run) << "</text>\n</svg>\n";
   return o.str();
 }
 
+// Validation gap per phase and in total, before and after the verdict, as
+// RMS residual over noise on one linear axis (the dashed line: noise = 1),
+// so that the after bars show what is left, not a share of a shrunken total.
 std::string svg_phase_bars(const DiagnosisReport& r) {
-  // Share of the squared validation gap by phase: before (top) and after (bottom).
-  const double W = 560, H = 90;
+  std::vector<std::string> names = r.phase_names;
+  std::vector<std::pair<double, double>> v;
+  for (std::size_t p = 0; p < names.size() && p < r.validation_before.phase_total.size(); ++p)
+    v.push_back({r.validation_before.phase_total[p].rms,
+                 p < r.validation_after.phase_total.size() ? r.validation_after.phase_total[p].rms : NAN});
+  names.resize(v.size());
+  names.push_back("all phases");
+  v.push_back({r.validation_before.total.rms, r.validation_after.total.rms});
+  double hi = 1.2;
+  for (const auto& [b, a] : v) hi = std::max({hi, std::isfinite(b) ? b : 0.0, std::isfinite(a) ? a : 0.0});
+  hi *= 1.08;
+  const double W = 900, l = 120, r_margin = 60, bar = 13, group = 2 * bar + 12, t = 20;
+  const double H = t + group * v.size() + 34;
+  auto X = [&](double g) { return l + g / hi * (W - l - r_margin); };
   std::ostringstream o;
-  o << "<svg id=\"phase-bars\" xmlns=\"http://www.w3.org/2000/svg\" width=\"" << W << "\" height=\"" << H << "\">\n";
-  const double before = r.validation_before.total.ssr > 0 ? r.validation_before.total.ssr : 1;
-  int row = 0;
-  for (const GapTable* g : {&r.validation_before, &r.validation_after}) {
-    double x = 70;
-    const double scale = (W - 80) * (row == 0 ? 1.0 : std::min(1.0, g->total.ssr / before)) /
-                         (g->total.ssr > 0 ? g->total.ssr : 1);
-    o << "<text x=\"0\" y=\"" << 25 + row * 35 << "\" font-size=\"12\">" << (row ? "after" : "before") << "</text>";
-    for (std::size_t p = 0; p < r.phase_names.size() && p < g->phase_total.size(); ++p) {
-      const double w = g->phase_total[p].ssr * scale;
-      o << "<rect class=\"phase-bar\" x=\"" << x << "\" y=\"" << 10 + row * 35 << "\" width=\"" << w
-        << "\" height=\"22\" fill=\"" << colour(p) << "\"><title>" << html(r.phase_names[p]) << ": "
-        << num(100 * g->phase_total[p].ssr / (g->total.ssr > 0 ? g->total.ssr : 1)) << " %</title></rect>";
-      x += w;
+  o << "<svg id=\"phase-bars\" xmlns=\"http://www.w3.org/2000/svg\" viewBox=\"0 0 " << W << " " << H
+    << "\" style=\"max-width:" << W << "px\">\n";
+  axis(o, true, 0, hi, 8, X, t, H - 34);
+  for (std::size_t p = 0; p < v.size(); ++p) {
+    const double y = t + p * group + 4;
+    o << "<text x=\"" << l - 6 << "\" y=\"" << y + bar + 4 << "\" font-size=\"12\" text-anchor=\"end\""
+      << (p + 1 == v.size() ? " font-weight=\"bold\"" : "") << ">" << html(names[p]) << "</text>";
+    const double vals[2] = {v[p].first, v[p].second};
+    for (int k = 0; k < 2; ++k) {
+      if (!std::isfinite(vals[k])) continue;
+      const double yy = y + k * bar, w = X(vals[k]) - l;
+      o << "<rect class=\"phase-bar " << (k ? "after" : "before") << "\" x=\"" << l << "\" y=\"" << yy
+        << "\" width=\"" << std::max(w, 1.0) << "\" height=\"" << bar - 1 << "\" fill=\"" << (k ? "#1f77b4" : "#d62728")
+        << "\"><title>" << html(names[p]) << ", " << (k ? "after" : "before") << ": " << gap(vals[k])
+        << "</title></rect><text x=\"" << l + w + 4 << "\" y=\"" << yy + bar - 3 << "\" font-size=\"11\">"
+        << gap(vals[k]) << "</text>\n";
     }
-    ++row;
   }
-  o << "</svg>\n";
+  o << "<line x1=\"" << X(1) << "\" y1=\"" << t << "\" x2=\"" << X(1) << "\" y2=\"" << H - 34
+    << "\" stroke=\"#333\" stroke-dasharray=\"4,3\"/><text x=\"" << X(1) << "\" y=\"" << t - 6
+    << "\" font-size=\"11\" text-anchor=\"middle\">noise</text>\n<text x=\"" << (l + W - r_margin) / 2 << "\" y=\"" << H - 4
+    << "\" font-size=\"11\" text-anchor=\"middle\">validation gap: RMS of (measured - simulated) / noise</text>\n</svg>\n";
   return o.str();
 }
 
@@ -160,6 +294,9 @@ void write_report_json(const DiagnosisReport& r, const std::string& path) {
   for (std::size_t i = 0; i < r.validation_runs.size(); ++i) o << (i ? ", " : "") << str(r.validation_runs[i]);
   o << "],\n\"noise\": {";
   for (std::size_t i = 0; i < r.noise.size(); ++i) o << (i ? ", " : "") << str(r.noise[i].first) << ": " << num(r.noise[i].second);
+  o << "},\n\"signal_units\": {";
+  for (std::size_t i = 0; i < r.signal_units.size(); ++i)
+    o << (i ? ", " : "") << str(r.signal_units[i].first) << ": " << str(r.signal_units[i].second);
   o << "},\n\"gap_unit\": \"RMS of (measured - simulated)/noise; 1 = within noise\",";
   o << "\n\"where\": {\"validation_before\": " << gap_json(r.validation_before, r.phase_names)
     << ",\n  \"validation_after\": " << gap_json(r.validation_after, r.phase_names)
@@ -199,17 +336,47 @@ void write_report_json(const DiagnosisReport& r, const std::string& path) {
   write_text_atomic(path, o.str());
 }
 
+namespace {
+
+// A fitted parameter in its engineering unit, three digits (the report gives
+// no confidence interval that would say more).
+std::string parameter(double si, const std::string& unit) {
+  const Shown u = shown(unit);
+  return sig(u(si), 3) + (u.label.empty() || u.label == "1" ? "" : " " + u.label);
+}
+
+// p-values below what the effective sample size can mean are shown as a bound.
+std::string p_value(double p) { return p < 1e-4 ? "&lt; 0.0001" : sig(p, 2); }
+
+std::string share(double part, double total) {
+  const double pct = 100 * part / (total > 0 ? total : 1);
+  return pct < 0.1 ? "&lt; 0.1 %" : sig(pct, 2) + " %";
+}
+
+std::string file_name(const std::string& path) {
+  return "<code title=\"" + html(path) + "\">" + html(std::filesystem::path(path).filename().string()) + "</code>";
+}
+
+}  // namespace
+
 void write_report_html(const DiagnosisReport& r, const std::string& path) {
   std::ostringstream o;
   o << "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>pneumo diagnosis</title>\n"
-       "<style>body{font-family:sans-serif;max-width:1200px;margin:1em auto}table{border-collapse:collapse}"
-       "td,th{border:1px solid #ccc;padding:2px 6px;text-align:right}th{background:#eee}td.l{text-align:left}"
-       "tr.present{background:#e8f4e8}.legend span{margin-right:1em}</style></head><body>\n";
-  o << "<h1>Sim-to-real gap diagnosis</h1>\n<p>Model <code>" << html(r.model_file) << "</code>, runs <code>"
-    << html(r.runs_dir) << "</code>, catalogue <code>" << html(r.catalogue_file) << "</code>; " << r.simulations
-    << " simulations in " << num(r.seconds) << " s.</p>\n";
+       "<style>body{font-family:sans-serif;max-width:1180px;margin:1em auto;padding:0 10px;line-height:1.35}"
+       "table{border-collapse:collapse;max-width:100%}td,th{border:1px solid #ccc;padding:2px 6px;text-align:right;"
+       "vertical-align:top;white-space:nowrap}th,td.w{white-space:normal}th{background:#eee}td.l{text-align:left}tr.present{background:#e8f4e8}"
+       ".legend span{margin-right:1.2em}code{overflow-wrap:anywhere}svg{max-width:100%;height:auto}"
+       ".traces{display:grid;grid-template-columns:repeat(auto-fill,minmax(520px,1fr));gap:6px}"
+       "p.note{color:#555;font-size:90%}</style></head><body>\n";
+  o << "<h1>Sim-to-real gap diagnosis</h1>\n<p>Model " << file_name(r.model_file) << ", runs "
+    << file_name(r.runs_dir) << " (calibration";
+  for (const auto& n : r.calibration_runs) o << " " << html(n);
+  o << "; validation";
+  for (const auto& n : r.validation_runs) o << " " << html(n);
+  o << "), catalogue " << file_name(r.catalogue_file) << "; " << r.simulations << " simulations in "
+    << sig(r.seconds, 2) << " s.</p>\n";
   o << "<h2>Verdict</h2>\n<p id=\"verdict\">";
-  if (r.verdict.empty()) o << "No effect needed: the model explains the data within the noise (or no candidate helps significantly).";
+  if (r.verdict.empty()) o << "No candidate effect is needed or helps significantly.";
   for (std::size_t i = 0; i < r.verdict_groups.size(); ++i) {
     o << (i ? "; then " : "") << "<b>" << html(r.verdict_groups[i][0]) << "</b>";
     if (r.verdict_groups[i].size() > 1) {
@@ -219,71 +386,77 @@ void write_report_html(const DiagnosisReport& r, const std::string& path) {
     }
   }
   o << "</p>\n<p>Validation gap (RMS of residual / noise; 1 = within noise): before <b>"
-    << num(r.validation_before.total.rms) << "</b>, after <b>" << num(r.validation_after.total.rms) << "</b>.</p>\n";
-  o << "<h2>Gap by signal and phase (validation runs)</h2>\n" << svg_phase_bars(r) << "<div class=\"legend\">";
-  for (std::size_t p = 0; p < r.phase_names.size(); ++p)
-    o << "<span style=\"color:" << colour(p) << "\">" << html(r.phase_names[p]) << "</span>";
-  o << "</div>\n<table id=\"gap-table\"><tr><th>signal</th><th>noise</th>";
-  for (const auto& p : r.phase_names) o << "<th>" << html(p) << " before</th><th>after</th>";
-  o << "<th>total before</th><th>after</th></tr>\n";
+    << gap(r.validation_before.total.rms) << "</b>, after <b>" << gap(r.validation_after.total.rms) << "</b>.</p>\n";
+  // What the verdict leaves unexplained: its section (framework/diagnose/unexplained.*) goes here.
+
+  o << "<h2>Gap by phase and signal (validation runs)</h2>\n"
+    << "<p class=\"legend\"><span style=\"color:#d62728\">&#9632; unpatched model</span>"
+       "<span style=\"color:#1f77b4\">&#9632; with the verdict's effects</span></p>\n"
+    << svg_phase_bars(r);
+  o << "<table id=\"gap-table\"><tr><th rowspan=\"2\">signal</th><th rowspan=\"2\">noise (1 sd)</th>";
+  for (const auto& p : r.phase_names) o << "<th colspan=\"2\">" << html(p) << "</th>";
+  o << "<th colspan=\"2\">all phases</th><th rowspan=\"2\">share of the gap before</th></tr>\n<tr>";
+  for (std::size_t p = 0; p <= r.phase_names.size(); ++p) o << "<th>before</th><th>after</th>";
+  o << "</tr>\n";
   for (std::size_t s = 0; s < r.validation_before.signals.size(); ++s) {
-    double sigma = NAN;
-    for (const auto& [n, v] : r.noise)
-      if (n == r.validation_before.signals[s]) sigma = v;
-    o << "<tr><td class=\"l\">" << html(r.validation_before.signals[s]) << "</td><td>" << num(sigma) << "</td>";
+    const std::string& name = r.validation_before.signals[s];
+    const double sigma = noise_of(r, name);
+    const Shown du = shown(unit_of(r, name), true);
+    const bool has_after = s < r.validation_after.by_signal.size();
+    o << "<tr><td class=\"l\">" << html(name) << "</td><td>" << sig(du(sigma), 2) << " " << html(du.label) << "</td>";
     for (std::size_t p = 0; p < r.phase_names.size(); ++p)
-      o << "<td>" << num(r.validation_before.by_phase[s][p].rms) << "</td><td>"
-        << (s < r.validation_after.by_phase.size() ? num(r.validation_after.by_phase[s][p].rms) : "") << "</td>";
-    o << "<td>" << num(r.validation_before.by_signal[s].rms) << "</td><td>"
-      << (s < r.validation_after.by_signal.size() ? num(r.validation_after.by_signal[s].rms) : "") << "</td></tr>\n";
+      o << "<td>" << gap(r.validation_before.by_phase[s][p].rms) << "</td><td>"
+        << (has_after ? gap(r.validation_after.by_phase[s][p].rms) : "") << "</td>";
+    o << "<td><b>" << gap(r.validation_before.by_signal[s].rms) << "</b></td><td><b>"
+      << (has_after ? gap(r.validation_after.by_signal[s].rms) : "") << "</b></td><td>"
+      << share(r.validation_before.by_signal[s].ssr, r.validation_before.total.ssr) << "</td></tr>\n";
   }
-  o << "</table>\n<p id=\"phase-shares\">Share of the squared validation gap by phase, before:";
+  o << "</table>\n<p id=\"phase-shares\" class=\"note\">Share of the squared validation gap by phase, before:";
   for (std::size_t p = 0; p < r.phase_names.size(); ++p)
     o << " " << html(r.phase_names[p]) << " "
-      << num(100 * r.validation_before.phase_total[p].ssr /
-             (r.validation_before.total.ssr > 0 ? r.validation_before.total.ssr : 1))
-      << " %" << (p + 1 < r.phase_names.size() ? ";" : ".");
-  o << " By signal:";
-  for (std::size_t s = 0; s < r.validation_before.signals.size(); ++s)
-    o << " " << html(r.validation_before.signals[s]) << " "
-      << num(100 * r.validation_before.by_signal[s].ssr /
-             (r.validation_before.total.ssr > 0 ? r.validation_before.total.ssr : 1))
-      << " %" << (s + 1 < r.validation_before.signals.size() ? ";" : ".");
-  o << "</p>\n<details><summary>" << r.windows.size()
+      << share(r.validation_before.phase_total[p].ssr, r.validation_before.total.ssr)
+      << (p + 1 < r.phase_names.size() ? ";" : ".");
+  o << " Gaps are RMS residuals in units of each signal's noise, which the data show themselves.</p>\n";
+  o << "<details><summary>" << r.windows.size()
     << " time windows with residuals significant against the noise (unpatched model, all runs)</summary>\n"
        "<table id=\"windows\"><tr><th>run</th><th>signal</th><th>from [s]</th><th>to [s]</th><th>gap</th></tr>\n";
   for (std::size_t i = 0; i < r.windows.size() && i < 60; ++i)
     o << "<tr><td class=\"l\">" << html(r.windows[i].run) << "</td><td class=\"l\">" << html(r.windows[i].signal)
-      << "</td><td>" << num(r.windows[i].t0) << "</td><td>" << num(r.windows[i].t1) << "</td><td>"
-      << num(r.windows[i].rms) << "</td></tr>\n";
+      << "</td><td>" << fixed(r.windows[i].t0, 3) << "</td><td>" << fixed(r.windows[i].t1, 3) << "</td><td>"
+      << gap(r.windows[i].rms) << "</td></tr>\n";
   o << "</table></details>\n";
   o << unexplained_html(r.unexplained, html);
   o << "<h2>Ranking of candidate effects</h2>\n<table id=\"ranking\"><tr><th>rank</th><th>effect</th><th>status</th>"
-       "<th>parameters</th><th>gap before</th><th>gap after</th><th>&Delta;BIC (eff.)</th><th>p</th>"
+       "<th>fitted parameters</th><th>gap before</th><th>gap after</th><th>&Delta;BIC (eff.)</th><th>p</th>"
        "<th>significant</th><th>indistinguishable from</th></tr>\n";
   for (const auto& e : r.effects) {
     bool present = false;
     for (const auto& v : r.verdict) present = present || v == e.name;
     o << "<tr class=\"effect" << (present ? " present" : "") << "\"><td>" << (e.rank ? std::to_string(e.rank) : "-")
-      << "</td><td class=\"l\">" << html(e.name) << "</td><td class=\"l\">"
+      << "</td><td class=\"l\">" << html(e.name) << "</td><td class=\"l w\">"
       << html(!e.unavailable.empty() ? e.unavailable
               : e.screened_out        ? "screened out"
               : e.failed_validation_runs ? "fitted; solver failed on " + std::to_string(e.failed_validation_runs) +
                                                " validation run(s)"
                                          : "fitted")
       << "</td><td class=\"l\">";
-    for (std::size_t j = 0; j < e.parameter_names.size(); ++j)
-      o << html(e.parameter_names[j]) << " = " << num(e.values[j]) << " " << html(e.parameter_units[j]) << "<br>";
-    o << "</td><td>" << num(e.gap_before) << "</td><td>" << num(e.gap_after) << "</td><td>" << num(e.delta_bic)
-      << "</td><td>" << num(e.p_value) << "</td><td>" << (e.significant ? "yes" : "no") << "</td><td class=\"l\">";
+    const bool fitted = e.unavailable.empty() && !e.screened_out;
+    for (std::size_t j = 0; fitted && j < e.parameter_names.size(); ++j)
+      o << html(e.parameter_names[j]) << " = " << html(parameter(e.values[j], e.parameter_units[j])) << "<br>";
+    o << "</td><td>" << gap(e.gap_before) << "</td><td>" << (fitted ? gap(e.gap_after) : "") << "</td><td>"
+      << (fitted ? fixed(std::round(e.delta_bic), 0) : "") << "</td><td>" << (fitted ? p_value(e.p_value) : "")
+      << "</td><td>" << (e.significant ? "yes" : "no") << "</td><td class=\"l w\">";
     for (const auto& g : e.group) o << html(g) << " ";
     o << "</td></tr>\n";
   }
   o << "</table>\n<h2>Measured against simulated (validation runs)</h2>\n<p class=\"legend\">"
-       "<span style=\"color:#999\">&#9644; measured</span><span style=\"color:#d62728\">&#9644; model before</span>"
-       "<span style=\"color:#1f77b4\">&#9644; model with the verdict's effects</span>; shading: phases.</p>\n";
-  for (const auto& p : r.plots) o << svg_plot(p, r.phase_names);
-  o << "</body></html>\n";
+       "<span style=\"color:#999\">&#9644; measured</span><span style=\"color:#d62728\">&#9644; unpatched model</span>"
+       "<span style=\"color:#1f77b4\">&#9644; model with the verdict's effects</span>shading: phases";
+  for (std::size_t p = 0; p < r.phase_names.size(); ++p)
+    o << " <span style=\"background:" << shade(p) << ";padding:0 4px\">" << html(r.phase_names[p]) << "</span>";
+  o << "</p>\n<div class=\"traces\">\n";
+  for (const auto& p : r.plots) o << svg_plot(p, r.phase_names, shown(unit_of(r, p.signal)), noise_of(r, p.signal));
+  o << "</div>\n</body></html>\n";
   write_text_atomic(path, o.str());
 }
 
