@@ -387,7 +387,7 @@ void write_report_html(const DiagnosisReport& r, const std::string& path) {
   }
   o << "</p>\n<p>Validation gap (RMS of residual / noise; 1 = within noise): before <b>"
     << gap(r.validation_before.total.rms) << "</b>, after <b>" << gap(r.validation_after.total.rms) << "</b>.</p>\n";
-  // What the verdict leaves unexplained: its section (framework/diagnose/unexplained.*) goes here.
+  o << unexplained_html(r.unexplained, html);
 
   o << "<h2>Gap by phase and signal (validation runs)</h2>\n"
     << "<p class=\"legend\"><span style=\"color:#d62728\">&#9632; unpatched model</span>"
@@ -425,7 +425,6 @@ void write_report_html(const DiagnosisReport& r, const std::string& path) {
       << "</td><td>" << fixed(r.windows[i].t0, 3) << "</td><td>" << fixed(r.windows[i].t1, 3) << "</td><td>"
       << gap(r.windows[i].rms) << "</td></tr>\n";
   o << "</table></details>\n";
-  o << unexplained_html(r.unexplained, html);
   o << "<h2>Ranking of candidate effects</h2>\n<table id=\"ranking\"><tr><th>rank</th><th>effect</th><th>status</th>"
        "<th>fitted parameters</th><th>gap before</th><th>gap after</th><th>&Delta;BIC (eff.)</th><th>p</th>"
        "<th>significant</th><th>indistinguishable from</th></tr>\n";

@@ -1,0 +1,393 @@
+// The diagnosis's engine (framework/diagnose/diagnose.cpp's only helper
+// class): the model and its patched variants, their runs at the measured
+// operating points, normalised residuals, gap tables, the whitened
+// significance test, the bounded Levenberg-Marquardt fit and the phases.
+// Included by diagnose.cpp alone.
+#pragma once
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include "framework/analysis/run_metrics.hpp"
+#include "framework/core/parallel.hpp"
+#include "framework/diagnose/diagnose.hpp"
+#include "framework/diagnose/phases.hpp"
+#include "framework/diagnose/statistics.hpp"
+#include "framework/run/run.hpp"
+
+namespace pneumo::diagnose::engine {
+
+
+constexpr long kDisturbedMaxSteps = 20000;  // a disturbed run's step budget (the cushion rig's nominal run takes 1225)
+constexpr double kFailedResidual = 1e4;  // per sample, for a run the solver could not finish
+
+// One measured signal of one run inside a concatenated residual vector.
+struct Segment {
+  int run = 0, signal = 0;  // signal: index into the run's signals
+  std::size_t offset = 0, n = 0;
+};
+
+struct Layout {
+  std::vector<int> runs;  // indices into all runs
+  std::vector<Segment> segments;
+  std::size_t size = 0;
+};
+
+struct Model {  // a patched model ready to run
+  std::string text;
+  MeasurementModel measurement;
+};
+
+class Engine {
+ public:
+  Engine(const std::string& model_file, const Registry& registry, const DiagnoseOptions& options)
+      : model_file_(model_file), registry_(registry), options_(options) {
+    std::ifstream in(model_file);
+    if (!in) throw InputError(SourceLocation{model_file, 0, 0}, "", "", "cannot open the model file");
+    std::stringstream ss;
+    ss << in.rdbuf();
+    model_text_ = ss.str();
+    base_netlist_ = parse_netlist(model_text_, model_file);
+    (void)elaborate(base_netlist_, registry);  // input errors now
+    model_yaml_ = YAML::Load(model_text_);
+  }
+
+  const Netlist& base() const { return base_netlist_; }
+  const YAML::Node& yaml() const { return model_yaml_; }
+  std::vector<MeasuredRun> runs;
+  std::vector<std::string> phase_names;
+  std::vector<std::vector<int>> phases;            // per run, per sample
+  std::vector<std::vector<double>> phase_times;    // per run: each phase's start, then the run's end
+  std::atomic<long> simulations{0};
+
+  Model model(const std::vector<EffectInstance>& effects) const {
+    Model m;
+    m.text = effects.empty() ? model_text_ : YAML::Dump(apply_effects(model_yaml_, effects, &m.measurement));
+    return m;
+  }
+
+  // The model at run `k`'s operating point over its measured span.
+  Netlist netlist_of(const Model& m, int k) const {
+    const MeasuredRun& run = runs[k];
+    Netlist nl = parse_netlist(m.text, model_file_);
+    for (const auto& [name, value] : run.operating_point) apply_override(nl, name + "=" + value);
+    nl.simulation.t_end = run.t.back() + 1e-9;
+    const double dt = (run.t.back() - run.t.front()) / std::max<std::size_t>(1, run.t.size() - 1);
+    nl.simulation.output_interval = std::min(nl.simulation.output_interval, dt);
+    return nl;
+  }
+
+  // Simulated signals of run `k` at its measurement times; empty if the run failed.
+  std::vector<std::vector<double>> simulate(const Model& m, int k, const std::vector<Disturbance>& disturbances = {}) {
+    ++simulations;
+    const MeasuredRun& run = runs[k];
+    RunResult res;
+    try {
+      const Netlist nl = netlist_of(m, k);
+      SolverOptions so = solver_options(nl.simulation);
+      so.disturbances = disturbances;
+      // A disturbance that drives a state out of its domain (a chamber's
+      // mass below zero) leaves the solver crawling: such a run fails.
+      if (!disturbances.empty()) so.max_steps = kDisturbedMaxSteps;
+      res = run_circuit(elaborate(nl, registry_), so);
+    } catch (const std::exception&) {
+      return {};
+    }
+    if (!res.solver.ok || res.table.rows.size() < 2) return {};
+    std::vector<double> ts;
+    for (const auto& row : res.table.rows) ts.push_back(row[0]);
+    std::vector<std::vector<double>> out;
+    for (const auto& s : run.signals) {
+      const int c = res.table.column(s);
+      std::vector<double> ys;
+      for (const auto& row : res.table.rows) ys.push_back(row[c]);
+      if (auto it = m.measurement.lag.find(s); it != m.measurement.lag.end() && it->second > 0) {
+        ys = lag_filter(ts, ys, it->second);
+      }
+      std::vector<double> at;
+      at.reserve(run.t.size());
+      for (double t : run.t) at.push_back(interp(ts, ys, t));
+      out.push_back(std::move(at));
+    }
+    return out;
+  }
+
+  static std::vector<double> lag_filter(const std::vector<double>& ts, const std::vector<double>& u, double tau) {
+    std::vector<double> y(u.size());
+    y[0] = u[0];
+    for (std::size_t i = 1; i < u.size(); ++i) {
+      const double h = ts[i] - ts[i - 1], a = std::exp(-h / tau);
+      const double slope = h > 0 ? (u[i] - u[i - 1]) / h : 0.0;
+      // y' = (u - y)/tau with u linear over the step: exact solution.
+      y[i] = a * y[i - 1] + (1 - a) * u[i - 1] + slope * (h - tau * (1 - a));
+    }
+    return y;
+  }
+
+  Layout layout(Role role) const {
+    Layout L;
+    for (int k = 0; k < static_cast<int>(runs.size()); ++k) {
+      if (runs[k].role != role) continue;
+      L.runs.push_back(k);
+      for (int s = 0; s < static_cast<int>(runs[k].signals.size()); ++s) {
+        L.segments.push_back({k, s, L.size, runs[k].t.size()});
+        L.size += runs[k].t.size();
+      }
+    }
+    return L;
+  }
+
+  // Normalised residuals (measured - simulated)/sigma for several models at once.
+  std::vector<std::vector<double>> residuals(const std::vector<Model>& models, const Layout& L) {
+    const int nr = static_cast<int>(L.runs.size());
+    std::vector<std::vector<std::vector<double>>> out_sim(models.size() * nr);
+    parallel_for(static_cast<long>(models.size()) * nr, options_.threads,
+                 [&](int, long j) { out_sim[j] = simulate(models[j / nr], L.runs[j % nr]); });
+    std::vector<std::vector<double>> r(models.size(), std::vector<double>(L.size));
+    for (std::size_t m = 0; m < models.size(); ++m)
+      for (const auto& seg : L.segments) {
+        const int j = static_cast<int>(m) * nr +
+                      static_cast<int>(std::find(L.runs.begin(), L.runs.end(), seg.run) - L.runs.begin());
+        const auto& run = runs[seg.run];
+        for (std::size_t i = 0; i < seg.n; ++i)
+          r[m][seg.offset + i] = out_sim[j].empty() ? kFailedResidual
+                                                    : (run.y[seg.signal][i] - out_sim[j][seg.signal][i]) /
+                                                          run.sigma[seg.signal];
+      }
+    return r;
+  }
+
+  GapTable gaps(const std::vector<double>& r, const Layout& L) const {
+    GapTable g;
+    std::map<std::string, int> idx;
+    for (const auto& seg : L.segments) {
+      const auto& name = runs[seg.run].signals[seg.signal];
+      if (!idx.count(name)) {
+        idx[name] = static_cast<int>(g.signals.size());
+        g.signals.push_back(name);
+      }
+    }
+    g.by_signal.assign(g.signals.size(), {});
+    g.by_phase.assign(g.signals.size(), std::vector<Gap>(phase_names.size()));
+    g.phase_total.assign(phase_names.size(), {});
+    for (const auto& seg : L.segments) {
+      const int s = idx[runs[seg.run].signals[seg.signal]];
+      for (std::size_t i = 0; i < seg.n; ++i) {
+        const double q = r[seg.offset + i] * r[seg.offset + i];
+        const int ph = phases[seg.run][i];
+        for (Gap* gp : {&g.total, &g.by_signal[s], &g.by_phase[s][ph], &g.phase_total[ph]}) {
+          gp->ssr += q;
+          gp->n += 1;
+        }
+      }
+    }
+    auto fin = [](Gap& x) { x.rms = x.n ? std::sqrt(x.ssr / x.n) : 0.0; };
+    fin(g.total);
+    for (auto& x : g.by_signal) fin(x);
+    for (auto& a : g.by_phase)
+      for (auto& x : a) fin(x);
+    for (auto& x : g.phase_total) fin(x);
+    return g;
+  }
+
+  struct Significance {
+    double lr = 0, n_eff = 0, delta_bic = 0, p = 1;
+  };
+  // Likelihood ratio of model 1 over model 0 after whitening both residual
+  // series with the AR(p) model of model 1's (each signal of each run its
+  // own series): under "model 0 is as good" the whitened residuals are near
+  // white, so a change that is smooth like the residual it leaves - the
+  // kind an AR(1) effective sample size over-credits - counts only as much
+  // as it stands out of that residual's own predictable course.
+  Significance significance(const std::vector<double>& r0, const std::vector<double>& r1, const Layout& L,
+                            int added_parameters) const {
+    Significance s;
+    for (const auto& seg : L.segments) {
+      double m = 0;
+      s.lr += whitened_log_ratio(&r0[seg.offset], &r1[seg.offset], seg.n, &m);
+      s.n_eff += m;
+    }
+    s.delta_bic = s.lr - added_parameters * std::log(std::max(2.0, s.n_eff));
+    // A switch without free parameters (k = 0) has no chi-square reference.
+    s.p = s.lr <= 0 ? 1.0 : added_parameters > 0 ? gamma_q(0.5 * added_parameters, 0.5 * s.lr) : NAN;
+    return s;
+  }
+
+  struct Fit {
+    std::vector<EffectInstance> effects;
+    std::vector<double> r_cal;
+    double screening = 0;  // linearised share of SSR removed at the start
+    int evaluations = 0;
+  };
+
+  // Bounded Levenberg-Marquardt in scaled coordinates u in [0, 1]; with
+  // `grid_start`, a coarse grid over the last effect's parameters (the
+  // others held at their start values) picks the starting point.
+  Fit fit(std::vector<EffectInstance> start, const Layout& cal, const std::vector<double>& r_start_hint,
+          int max_iterations, bool grid_start = false) {
+    struct P {
+      const EffectParameter* spec;
+      int effect, index;
+    };
+    std::vector<P> ps;
+    for (int e = 0; e < static_cast<int>(start.size()); ++e)
+      for (int i = 0; i < static_cast<int>(start[e].effect->parameters.size()); ++i)
+        ps.push_back({&start[e].effect->parameters[i], e, i});
+    const int np = static_cast<int>(ps.size());
+    auto to_u = [&](const P& p, double v) {
+      const auto& s = *p.spec;
+      return s.log_scale ? std::log(v / s.lower) / std::log(s.upper / s.lower) : (v - s.lower) / (s.upper - s.lower);
+    };
+    auto from_u = [&](const P& p, double u) {
+      const auto& s = *p.spec;
+      u = std::clamp(u, 0.0, 1.0);
+      return s.log_scale ? s.lower * std::pow(s.upper / s.lower, u) : s.lower + u * (s.upper - s.lower);
+    };
+    auto instances = [&](const Eigen::VectorXd& u) {
+      auto inst = start;
+      for (int k = 0; k < np; ++k) inst[ps[k].effect].values[ps[k].index] = from_u(ps[k], u[k]);
+      return inst;
+    };
+    Eigen::VectorXd u(np);
+    for (int k = 0; k < np; ++k) u[k] = to_u(ps[k], start[ps[k].effect].values[ps[k].index]);
+    Fit f;
+    std::vector<double> r = r_start_hint.empty() ? residuals({model(instances(u))}, cal)[0] : r_start_hint;
+    f.evaluations += 1;
+    std::vector<int> last;  // the last effect's parameters
+    for (int k = 0; k < np; ++k)
+      if (ps[k].effect == static_cast<int>(start.size()) - 1) last.push_back(k);
+    if (grid_start && (last.size() == 1 || last.size() == 2)) {
+      // A coarse grid of starting points (in scaled coordinates) against
+      // local minima: the best point, or the initial values, starts LM.
+      const std::vector<double> levels = last.size() == 1 ? std::vector<double>{0.05, 0.25, 0.5, 0.75, 0.95}
+                                                          : std::vector<double>{0.15, 0.5, 0.85};
+      std::vector<Eigen::VectorXd> points;
+      for (double a : levels) {
+        Eigen::VectorXd p = u;
+        p[last[0]] = a;
+        if (last.size() == 1) {
+          points.push_back(p);
+        } else {
+          for (double b : levels) {
+            p[last[1]] = b;
+            points.push_back(p);
+          }
+        }
+      }
+      std::vector<Model> models;
+      for (const auto& p : points) models.push_back(model(instances(p)));
+      const auto rs = residuals(models, cal);
+      f.evaluations += static_cast<int>(points.size());
+      double best = ssr_of(r.data(), r.size());
+      for (std::size_t k = 0; k < points.size(); ++k)
+        if (const double c = ssr_of(rs[k].data(), rs[k].size()); c < best) {
+          best = c;
+          u = points[k];
+          r = rs[k];
+        }
+    }
+    double cost = ssr_of(r.data(), r.size());
+    const double cost0 = cost;
+    double lambda = 1e-2;
+    const double h = 3e-3;
+    for (int it = 0; it < max_iterations && np > 0; ++it) {
+      std::vector<Model> probes;
+      std::vector<double> steps(np);
+      for (int k = 0; k < np; ++k) {
+        Eigen::VectorXd up = u;
+        steps[k] = u[k] + h <= 1.0 ? h : -h;
+        up[k] += steps[k];
+        probes.push_back(model(instances(up)));
+      }
+      const auto rp = residuals(probes, cal);
+      f.evaluations += np;
+      Eigen::MatrixXd J(r.size(), np);
+      for (int k = 0; k < np; ++k)
+        for (std::size_t i = 0; i < r.size(); ++i) J(i, k) = (rp[k][i] - r[i]) / steps[k];
+      const Eigen::Map<const Eigen::VectorXd> rv(r.data(), r.size());
+      const Eigen::MatrixXd A = J.transpose() * J;
+      const Eigen::VectorXd g = J.transpose() * rv;
+      if (it == 0) {  // screening: SSR removed by the unconstrained Gauss-Newton step
+        const Eigen::VectorXd d = A.ldlt().solve(-g);
+        f.screening = std::clamp(-(g.dot(d)) / std::max(cost0, 1e-300), 0.0, 1.0);
+        if (f.screening < screen_cutoff_) break;  // the caller decides; no full fit
+      }
+      bool accepted = false;
+      for (int tries = 0; tries < 6 && !accepted; ++tries) {
+        Eigen::MatrixXd M = A;
+        for (int k = 0; k < np; ++k) M(k, k) += lambda * std::max(A(k, k), 1e-12) + 1e-12;
+        const Eigen::VectorXd d = M.ldlt().solve(-g);
+        Eigen::VectorXd un = (u + d).cwiseMax(0.0).cwiseMin(1.0);
+        if ((un - u).norm() < 1e-7) break;
+        const auto rn = residuals({model(instances(un))}, cal)[0];
+        f.evaluations += 1;
+        const double cn = ssr_of(rn.data(), rn.size());
+        if (cn < cost) {
+          const double gain = (cost - cn) / cost;
+          u = un;
+          r = rn;
+          cost = cn;
+          lambda = std::max(lambda / 4, 1e-7);
+          accepted = true;
+          if (gain < 1e-4) it = max_iterations;  // converged
+        } else {
+          lambda *= 8;
+        }
+      }
+      if (!accepted) break;
+    }
+    f.effects = instances(u);
+    f.r_cal = r;
+    return f;
+  }
+  double screen_cutoff_ = -1;  // < 0: never stop at screening
+
+  // What the unpatched model's run at each operating point tells the
+  // phases (framework/diagnose/phases.hpp): its events' first times and
+  // its metrics' values.
+  void compute_phases(const std::vector<PhaseDecl>& declared) {
+    const Model base = model({});
+    std::vector<PhaseStarts> starts(runs.size());
+    std::vector<std::vector<double>> times;
+    for (std::size_t k = 0; k < runs.size(); ++k) {
+      times.push_back(runs[k].t);
+      Netlist nl = netlist_of(base, static_cast<int>(k));
+      const std::vector<bool> all(nl.metrics.size(), true);
+      add_metric_outputs(nl, all);
+      RunResult res;
+      try {
+        res = run_simulation(nl, registry_);
+      } catch (const std::exception&) {
+        continue;  // input errors surfaced when the model was loaded; a failed run gets one phase
+      }
+      ++simulations;
+      for (const auto& e : res.solver.events)
+        if (!e.tag.empty()) starts[k].emplace(e.component + "." + e.tag, e.t);
+      if (!declared.empty() && res.solver.ok) {
+        const auto values = evaluate_metrics(nl, all, res, {});
+        for (std::size_t i = 0; i < nl.metrics.size(); ++i) starts[k][nl.metrics[i].name] = values[i];
+      }
+    }
+    Phases ph = assign_phases(declared, times, starts);
+    phase_names = std::move(ph.names);
+    phases = std::move(ph.of_sample);
+    phase_times = std::move(ph.times);
+  }
+
+  const DiagnoseOptions& options() const { return options_; }
+  const Registry& registry() const { return registry_; }
+
+ private:
+  std::string model_file_, model_text_;
+  const Registry& registry_;
+  DiagnoseOptions options_;
+  Netlist base_netlist_;
+  YAML::Node model_yaml_;
+};
+
+}  // namespace pneumo::diagnose::engine
