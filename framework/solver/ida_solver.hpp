@@ -35,6 +35,13 @@ struct SolverStats {
   long jacobian_recombinations = 0;  // IDA's requests answered from the last evaluation's parts
   long nonlinear_iterations = 0;
   long nonlinear_failures = 0;
+  long linear_setups = 0;  // Newton matrices IDA asked for (evaluated or recombined), each factorised
+  // The sparse LU (KLU; timed_linear_solver.hpp): factorisations with new
+  // pivots (of them, with a new ordering), refactorisations, solves.
+  long lu_factorisations = 0;
+  long lu_analyses = 0;
+  long lu_refactorisations = 0;
+  long lu_solves = 0;
   long error_test_failures = 0;
   long root_evals = 0;
   long reinitialisations = 0;
@@ -47,6 +54,12 @@ struct SolverStats {
   // the steps of the part that took most (steps is their sum).
   int parts = 1;
   long part_steps_max = 0;
+  // Where the time went (steady clock, seconds): residuals (explicit
+  // unknowns included), Newton matrices (AD, recombination), LU setups and
+  // solves, and the whole integration (the rest: IDA's own work, roots,
+  // outputs, events).
+  double seconds_residual = 0, seconds_jacobian = 0, seconds_lu_setup = 0, seconds_lu_solve = 0,
+         seconds_total = 0;
 };
 
 struct SolverResult {
