@@ -139,7 +139,7 @@ void print_cost(const char* what, const std::vector<int>& ns, const std::vector<
 // Where the line's cost goes (the run with the median wall time of each N).
 void print_breakdown(const std::vector<int>& ns, const std::vector<Figure>& figs) {
   if (figs.empty()) return;
-  std::printf("where the line's time goes (one run each; a: exponent of the fit ~ N^a)\n  %-28s", "N");
+  std::printf("where the line's time goes (the median run of each N; a: exponent of the fit ~ N^a)\n  %-28s", "N");
   for (int n : ns) std::printf(" %9d", n);
   std::printf("\n");
   const char* count = " %9.0f";
@@ -147,6 +147,7 @@ void print_breakdown(const std::vector<int>& ns, const std::vector<Figure>& figs
   const char* share = " %8.1f%%";
   using F = const Figure&;
   print_cost("wall (ms)", ns, figs, [](F f) { return f.wall; }, ms);
+  print_cost("CPU (ms)", ns, figs, [](F f) { return f.cpu; }, ms);
   print_cost("unknowns of IDA", ns, figs, [](F f) { return double(f.stats.variables); }, count);
   print_cost("Newton matrix nonzeros", ns, figs, [](F f) { return double(f.stats.nonzeros); }, count);
   print_cost("steps", ns, figs, [](F f) { return double(f.stats.steps); }, count);
@@ -225,6 +226,7 @@ int main(int argc, char** argv) {
   if (ns.size() > 1)
     std::printf("fit wall ~ N^a: parts 1 thread a = %.3f, parts 2 threads a = %.3f, one System a = %.3f\n",
                 exponent(ns, split1), exponent(ns, split2), exponent(ns, whole));
+  if (ns.size() > 1) std::printf("fit CPU ~ N^a: parts 1 thread a = %.3f\n", exponent(ns, split1_cpu));
   const auto at = [&](int n) { return std::find(ns.begin(), ns.end(), n) - ns.begin(); };
   if (static_cast<std::size_t>(at(64)) < ns.size() && static_cast<std::size_t>(at(8)) < ns.size())
     std::printf("per copy, N = 64 over N = 8: parts 1 thread %.3f, parts 2 threads %.3f, one System %.3f\n",

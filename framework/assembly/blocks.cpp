@@ -44,6 +44,18 @@ class FlowSumBlock final : public Block {
   void residual(double, const Pattern* y, const Pattern*, Pattern* r, const EvalContext&) const override { eval(y, r); }
 };
 
+// The smoothed outflows w_j of the ports (m_flow_j, T_out_j) = (y[j],
+// y[j + 1]), j = 1, 3, ... < end, into the node, added to w_sum, and w_j
+// T_out_j to wt_sum.
+template <class T>
+void add_weights(const T* y, std::size_t end, double eps, T& w_sum, T& wt_sum) {
+  for (std::size_t j = 1; j < end; j += 2) {
+    const T w = smooth_pos(T(-y[j]), eps);  // outflow of port j = flow into the node
+    w_sum = w_sum + w;
+    wt_sum = wt_sum + w * y[j + 1];
+  }
+}
+
 // inStream for a node of three or more pneumatic ports: the temperature of
 // the gas arriving at port i is the mix of what the other ports deliver,
 // weighted by their smoothed outflows into the node (Modelica's stream
@@ -58,11 +70,7 @@ class StreamMixBlock final : public Block {
     const double eps = c.gas->m_flow_small;
     T w_sum = 0.0, wt_sum = 0.0;
     const std::size_t groups = 1 + 2 * static_cast<std::size_t>(ports);
-    for (std::size_t j = 1; j < groups; j += 2) {
-      const T w = smooth_pos(T(-y[j]), eps);  // outflow of port j = flow into the node
-      w_sum = w_sum + w;
-      wt_sum = wt_sum + w * y[j + 1];
-    }
+    add_weights(y, groups, eps, w_sum, wt_sum);
     for (std::size_t j = groups; j + 1 < vars.size(); j += 2) {
       w_sum = w_sum + y[j];
       wt_sum = wt_sum + y[j + 1];
@@ -88,11 +96,7 @@ class StreamSumBlock final : public Block {
     const double eps = c.gas->m_flow_small;
     T w_sum = 0.0, wt_sum = 0.0;
     const std::size_t h = vars.size() - 1;
-    for (std::size_t j = 1; j < h; j += 2) {
-      const T w = smooth_pos(T(-y[j]), eps);
-      w_sum = w_sum + w;
-      wt_sum = wt_sum + w * y[j + 1];
-    }
+    add_weights(y, h, eps, w_sum, wt_sum);
     r[0] = y[0] - w_sum;
     r[1] = y[h] - wt_sum;
   }
