@@ -156,34 +156,34 @@ void print_breakdown(const std::vector<int>& ns, const std::vector<Figure>& figs
   print_cost("residuals", ns, figs, [](F f) { return double(f.stats.residual_evals); }, count);
   print_cost("Newton matrices evaluated", ns, figs, [](F f) { return double(f.stats.jacobian_evals); }, count);
   print_cost("  recombined", ns, figs, [](F f) { return double(f.stats.jacobian_recombinations); }, count);
-  print_cost("LU factorisations", ns, figs, [](F f) { return double(f.stats.lu_factorisations); }, count);
-  print_cost("  with a new ordering", ns, figs, [](F f) { return double(f.stats.lu_analyses); }, count);
-  print_cost("LU refactorisations", ns, figs, [](F f) { return double(f.stats.lu_refactorisations); }, count);
-  print_cost("LU solves", ns, figs, [](F f) { return double(f.stats.lu_solves); }, count);
+  print_cost("LU factorisations", ns, figs, [](F f) { return double(f.stats.lu.factorisations); }, count);
+  print_cost("  with a new ordering", ns, figs, [](F f) { return double(f.stats.lu.analyses); }, count);
+  print_cost("LU refactorisations", ns, figs, [](F f) { return double(f.stats.lu.refactorisations); }, count);
+  print_cost("LU solves", ns, figs, [](F f) { return double(f.stats.lu.solves); }, count);
   const auto rest = [](F f) {
     const auto& s = f.stats;
-    return s.seconds_total - s.seconds_residual - s.seconds_jacobian - s.seconds_lu_setup - s.seconds_lu_solve;
+    return s.seconds_total - s.seconds_residual - s.seconds_jacobian - s.lu.setup_seconds - s.lu.solve_seconds;
   };
   print_cost("integration (ms)", ns, figs, [](F f) { return 1e3 * f.stats.seconds_total; }, ms);
   print_cost("  residual (ms)", ns, figs, [](F f) { return 1e3 * f.stats.seconds_residual; }, ms);
   print_cost("  Newton matrix, AD (ms)", ns, figs, [](F f) { return 1e3 * f.stats.seconds_jacobian; }, ms);
-  print_cost("  LU setup (ms)", ns, figs, [](F f) { return 1e3 * f.stats.seconds_lu_setup; }, ms);
-  print_cost("  LU solve (ms)", ns, figs, [](F f) { return 1e3 * f.stats.seconds_lu_solve; }, ms);
+  print_cost("  LU setup (ms)", ns, figs, [](F f) { return 1e3 * f.stats.lu.setup_seconds; }, ms);
+  print_cost("  LU solve (ms)", ns, figs, [](F f) { return 1e3 * f.stats.lu.solve_seconds; }, ms);
   print_cost("  rest (ms)", ns, figs, [&](F f) { return 1e3 * rest(f); }, ms);
   const auto of_total = [](double part, F f) { return 100.0 * part / f.stats.seconds_total; };
   print_cost("  residual share", ns, figs, [&](F f) { return of_total(f.stats.seconds_residual, f); }, share);
   print_cost("  Newton matrix share", ns, figs, [&](F f) { return of_total(f.stats.seconds_jacobian, f); }, share);
-  print_cost("  LU setup share", ns, figs, [&](F f) { return of_total(f.stats.seconds_lu_setup, f); }, share);
-  print_cost("  LU solve share", ns, figs, [&](F f) { return of_total(f.stats.seconds_lu_solve, f); }, share);
+  print_cost("  LU setup share", ns, figs, [&](F f) { return of_total(f.stats.lu.setup_seconds, f); }, share);
+  print_cost("  LU solve share", ns, figs, [&](F f) { return of_total(f.stats.lu.solve_seconds, f); }, share);
   print_cost("  rest share", ns, figs, [&](F f) { return of_total(rest(f), f); }, share);
   print_cost("per residual (us)", ns, figs,
              [](F f) { return 1e6 * f.stats.seconds_residual / f.stats.residual_evals; }, ms);
   print_cost("per Newton matrix (us)", ns, figs,
              [](F f) { return 1e6 * f.stats.seconds_jacobian / std::max(1L, f.stats.jacobian_evals); }, ms);
   print_cost("per LU setup (us)", ns, figs,
-             [](F f) { return 1e6 * f.stats.seconds_lu_setup / std::max(1L, f.stats.lu_refactorisations + f.stats.lu_analyses); }, ms);
+             [](F f) { return 1e6 * f.stats.lu.setup_seconds / std::max(1L, f.stats.lu.refactorisations + f.stats.lu.analyses); }, ms);
   print_cost("per LU solve (us)", ns, figs,
-             [](F f) { return 1e6 * f.stats.seconds_lu_solve / std::max(1L, f.stats.lu_solves); }, ms);
+             [](F f) { return 1e6 * f.stats.lu.solve_seconds / std::max(1L, f.stats.lu.solves); }, ms);
 }
 
 // Copy k's own supply pressure and cushion throttle setting.

@@ -302,13 +302,13 @@ void System::add_internal_variables(const Component& comp, Block& b) {
   }
 }
 
-// A framework block at a node: one row (named `row_names`, or after the
-// label), or one for each of `row_names`.
+// A framework block at a node: a row for each of `row_names` (one named
+// after the label when none is given).
 void System::add_node_block(std::unique_ptr<Block> b, std::string label, std::vector<std::string> row_names,
                             NodeLayout& l, int node) {
   // The evaluator's scratch and the Pattern scalar hold kMaxLocal locals a
-  // block: a stream mix reads 2 g + 2 c - 1 of a node's ports in c groups
-  // of at most g (StreamGroups).
+  // block: a stream mix reads 2 g + 2 c - 3 at a node of c groups of at
+  // most g ports (StreamGroups).
   if (b->vars.size() > static_cast<std::size_t>(kMaxLocal))
     throw InputError(l.where[node], "", "",
                      "this connection joins " + std::to_string(l.nodes[node].size()) + " ports; its " + label +
@@ -352,7 +352,7 @@ void System::route_streams(NodeLayout& l) {
       for (int g = 0; g < groups.count && groups.count > 1; ++g) {
         auto sum = make_stream_sum_block();
         const std::string name = "stream group " + std::to_string(g + 1) + " at " + at;
-        // Started at zero flow: each weight eps / 2, at the ambient temperature.
+        // Start values as at zero flow: each weight eps / 2, at the ambient temperature.
         const double w0 = 0.5 * c.gas.m_flow_small * (groups.first(g + 1) - groups.first(g));
         sums.emplace_back(new_var(name + ".W", w0, 0, 1e-4), new_var(name + ".H", w0 * c.gas.T_ambient, 0, 3e-2));
         sum->vars = {sums.back().first};

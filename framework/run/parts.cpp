@@ -33,14 +33,9 @@ void add_stats(SolverStats& sum, const SolverStats& s) {
   sum.nonlinear_iterations += s.nonlinear_iterations;
   sum.nonlinear_failures += s.nonlinear_failures;
   sum.linear_setups += s.linear_setups;
-  sum.lu_factorisations += s.lu_factorisations;
-  sum.lu_analyses += s.lu_analyses;
-  sum.lu_refactorisations += s.lu_refactorisations;
-  sum.lu_solves += s.lu_solves;
+  sum.lu += s.lu;
   sum.seconds_residual += s.seconds_residual;
   sum.seconds_jacobian += s.seconds_jacobian;
-  sum.seconds_lu_setup += s.seconds_lu_setup;
-  sum.seconds_lu_solve += s.seconds_lu_solve;
   sum.seconds_total += s.seconds_total;
   sum.error_test_failures += s.error_test_failures;
   sum.root_evals += s.root_evals;

@@ -448,12 +448,7 @@ void Integration::finish() {
   s.explicit_variables = system_.explicit_size();
   s.nonzeros = system_.nnz();
   s.part_steps_max = s.steps;
-  s.lu_factorisations = lu_.factorisations;
-  s.lu_analyses = lu_.analyses;
-  s.lu_refactorisations = lu_.refactorisations;
-  s.lu_solves = lu_.solves;
-  s.seconds_lu_setup = lu_.setup_seconds;
-  s.seconds_lu_solve = lu_.solve_seconds;
+  s.lu = lu_;
   s.seconds_residual = user_.seconds_residual;
   s.seconds_jacobian = user_.seconds_jacobian;
 }

@@ -13,6 +13,7 @@
 
 #include "framework/assembly/system.hpp"
 #include "framework/model/simulation_options.hpp"
+#include "framework/solver/timed_linear_solver.hpp"
 
 namespace pneumo {
 
@@ -36,12 +37,7 @@ struct SolverStats {
   long nonlinear_iterations = 0;
   long nonlinear_failures = 0;
   long linear_setups = 0;  // Newton matrices IDA asked for (evaluated or recombined), each factorised
-  // The sparse LU (KLU; timed_linear_solver.hpp): factorisations with new
-  // pivots (of them, with a new ordering), refactorisations, solves.
-  long lu_factorisations = 0;
-  long lu_analyses = 0;
-  long lu_refactorisations = 0;
-  long lu_solves = 0;
+  LinearSolverCounts lu;   // the sparse LU's work and time (timed_linear_solver.hpp)
   long error_test_failures = 0;
   long root_evals = 0;
   long reinitialisations = 0;
@@ -55,11 +51,10 @@ struct SolverStats {
   int parts = 1;
   long part_steps_max = 0;
   // Where the time went (steady clock, seconds): residuals (explicit
-  // unknowns included), Newton matrices (AD, recombination), LU setups and
-  // solves, and the whole integration (the rest: IDA's own work, roots,
+  // unknowns included), Newton matrices (AD, recombination), and the whole
+  // integration (the rest, besides those and the LU: IDA's own work, roots,
   // outputs, events).
-  double seconds_residual = 0, seconds_jacobian = 0, seconds_lu_setup = 0, seconds_lu_solve = 0,
-         seconds_total = 0;
+  double seconds_residual = 0, seconds_jacobian = 0, seconds_total = 0;
 };
 
 struct SolverResult {

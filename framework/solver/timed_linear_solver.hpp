@@ -16,6 +16,16 @@ struct LinearSolverCounts {
   long refactorisations = 0;  // the last pivots kept, new values
   long solves = 0;
   double setup_seconds = 0.0, solve_seconds = 0.0;
+
+  LinearSolverCounts& operator+=(const LinearSolverCounts& o) {
+    factorisations += o.factorisations;
+    analyses += o.analyses;
+    refactorisations += o.refactorisations;
+    solves += o.solves;
+    setup_seconds += o.setup_seconds;
+    solve_seconds += o.solve_seconds;
+    return *this;
+  }
 };
 
 // A SUNLinearSolver over `klu` (a SUNLinSol_KLU, owned by the caller and
