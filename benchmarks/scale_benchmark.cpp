@@ -6,8 +6,12 @@
 //    N independent parts (run_circuit) on one thread and on two, and - for
 //    comparison - as one System with one IDA (what every netlist paid
 //    before);
-//  * "line": N cylinders on one supply (one coupled part), N = 1, 2, ..., 16
-//    (a node of 33 pneumatic ports exceeds assembly's limit of locals a block).
+//  * "line": N cylinders on one supply (one coupled part), N = 1, 2, ..., 64,
+//    with where its cost goes: IDA's steps, Newton iterations, residuals,
+//    Newton matrices (evaluated, recombined), LU factorisations (with a new
+//    ordering), refactorisations and solves, and the time shares of the
+//    residual, the Newton matrix (AD), the LU setup and solve and the rest
+//    (SolverStats), each with the exponent of its fit ~ N^a.
 //
 // Each figure: the median of `runs` runs of elaborate + assemble + integrate;
 // wall and CPU time (of the process: all threads), IDA steps (the sum over
@@ -24,6 +28,7 @@
 #include <cstdlib>
 #include <ctime>
 #include <fstream>
+#include <functional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -53,6 +58,7 @@ struct Figure {
   double wall = 0, cpu = 0;  // ms, medians
   long steps = 0, steps_max = 0;
   int parts = 0;
+  SolverStats stats;  // of the run with the median wall time
 };
 
 enum class Mode { parts, one_system };
@@ -60,6 +66,7 @@ enum class Mode { parts, one_system };
 // `runs` runs of the netlist; the medians.
 Figure measure(const Netlist& nl, Mode mode, int threads, int runs) {
   std::vector<double> wall, cpu;
+  std::vector<SolverStats> stats;
   Figure f;
   for (int r = 0; r < runs; ++r) {
     const auto t0 = std::chrono::steady_clock::now();
@@ -82,7 +89,12 @@ Figure measure(const Netlist& nl, Mode mode, int threads, int runs) {
     f.steps = run.solver.stats.steps;
     f.steps_max = run.solver.stats.part_steps_max;
     f.parts = run.solver.stats.parts;
+    stats.push_back(run.solver.stats);
   }
+  std::vector<std::size_t> order(wall.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return wall[a] < wall[b]; });
+  f.stats = stats[order[order.size() / 2]];
   std::sort(wall.begin(), wall.end());
   std::sort(cpu.begin(), cpu.end());
   f.wall = wall[wall.size() / 2];
@@ -111,6 +123,69 @@ void print_row(const char* what, int n, const Figure& f) {
   std::fflush(stdout);
 }
 
+// One cost of the line against N, with its fitted exponent.
+void print_cost(const char* what, const std::vector<int>& ns, const std::vector<Figure>& figs,
+                const std::function<double(const Figure&)>& cost, const char* format) {
+  std::vector<double> v;
+  std::printf("  %-28s", what);
+  for (const auto& f : figs) {
+    v.push_back(std::max(cost(f), 1e-9));
+    std::printf(format, cost(f));
+  }
+  if (ns.size() > 1) std::printf("   a = %5.2f", exponent(ns, v));
+  std::printf("\n");
+}
+
+// Where the line's cost goes (the run with the median wall time of each N).
+void print_breakdown(const std::vector<int>& ns, const std::vector<Figure>& figs) {
+  if (figs.empty()) return;
+  std::printf("where the line's time goes (the median run of each N; a: exponent of the fit ~ N^a)\n  %-28s", "N");
+  for (int n : ns) std::printf(" %9d", n);
+  std::printf("\n");
+  const char* count = " %9.0f";
+  const char* ms = " %9.1f";
+  const char* share = " %8.1f%%";
+  using F = const Figure&;
+  print_cost("wall (ms)", ns, figs, [](F f) { return f.wall; }, ms);
+  print_cost("CPU (ms)", ns, figs, [](F f) { return f.cpu; }, ms);
+  print_cost("unknowns of IDA", ns, figs, [](F f) { return double(f.stats.variables); }, count);
+  print_cost("Newton matrix nonzeros", ns, figs, [](F f) { return double(f.stats.nonzeros); }, count);
+  print_cost("steps", ns, figs, [](F f) { return double(f.stats.steps); }, count);
+  print_cost("re-initialisations", ns, figs, [](F f) { return double(f.stats.reinitialisations); }, count);
+  print_cost("Newton iterations", ns, figs, [](F f) { return double(f.stats.nonlinear_iterations); }, count);
+  print_cost("residuals", ns, figs, [](F f) { return double(f.stats.residual_evals); }, count);
+  print_cost("Newton matrices evaluated", ns, figs, [](F f) { return double(f.stats.jacobian_evals); }, count);
+  print_cost("  recombined", ns, figs, [](F f) { return double(f.stats.jacobian_recombinations); }, count);
+  print_cost("LU factorisations", ns, figs, [](F f) { return double(f.stats.lu.factorisations); }, count);
+  print_cost("  with a new ordering", ns, figs, [](F f) { return double(f.stats.lu.analyses); }, count);
+  print_cost("LU refactorisations", ns, figs, [](F f) { return double(f.stats.lu.refactorisations); }, count);
+  print_cost("LU solves", ns, figs, [](F f) { return double(f.stats.lu.solves); }, count);
+  const auto rest = [](F f) {
+    const auto& s = f.stats;
+    return s.seconds_total - s.seconds_residual - s.seconds_jacobian - s.lu.setup_seconds - s.lu.solve_seconds;
+  };
+  print_cost("integration (ms)", ns, figs, [](F f) { return 1e3 * f.stats.seconds_total; }, ms);
+  print_cost("  residual (ms)", ns, figs, [](F f) { return 1e3 * f.stats.seconds_residual; }, ms);
+  print_cost("  Newton matrix, AD (ms)", ns, figs, [](F f) { return 1e3 * f.stats.seconds_jacobian; }, ms);
+  print_cost("  LU setup (ms)", ns, figs, [](F f) { return 1e3 * f.stats.lu.setup_seconds; }, ms);
+  print_cost("  LU solve (ms)", ns, figs, [](F f) { return 1e3 * f.stats.lu.solve_seconds; }, ms);
+  print_cost("  rest (ms)", ns, figs, [&](F f) { return 1e3 * rest(f); }, ms);
+  const auto of_total = [](double part, F f) { return 100.0 * part / f.stats.seconds_total; };
+  print_cost("  residual share", ns, figs, [&](F f) { return of_total(f.stats.seconds_residual, f); }, share);
+  print_cost("  Newton matrix share", ns, figs, [&](F f) { return of_total(f.stats.seconds_jacobian, f); }, share);
+  print_cost("  LU setup share", ns, figs, [&](F f) { return of_total(f.stats.lu.setup_seconds, f); }, share);
+  print_cost("  LU solve share", ns, figs, [&](F f) { return of_total(f.stats.lu.solve_seconds, f); }, share);
+  print_cost("  rest share", ns, figs, [&](F f) { return of_total(rest(f), f); }, share);
+  print_cost("per residual (us)", ns, figs,
+             [](F f) { return 1e6 * f.stats.seconds_residual / f.stats.residual_evals; }, ms);
+  print_cost("per Newton matrix (us)", ns, figs,
+             [](F f) { return 1e6 * f.stats.seconds_jacobian / std::max(1L, f.stats.jacobian_evals); }, ms);
+  print_cost("per LU setup (us)", ns, figs,
+             [](F f) { return 1e6 * f.stats.lu.setup_seconds / std::max(1L, f.stats.lu.refactorisations + f.stats.lu.analyses); }, ms);
+  print_cost("per LU solve (us)", ns, figs,
+             [](F f) { return 1e6 * f.stats.lu.solve_seconds / std::max(1L, f.stats.lu.solves); }, ms);
+}
+
 // Copy k's own supply pressure and cushion throttle setting.
 void vary(int k, YAML::Node p) {
   p["p_supply"] = std::to_string(4.0 + 0.25 * (k % 9)) + " bar";
@@ -122,9 +197,7 @@ void vary(int k, YAML::Node p) {
 int main(int argc, char** argv) {
   const int runs = argc > 1 ? std::max(1, std::atoi(argv[1])) : 3;
   const int max_copies = argc > 2 ? std::atoi(argv[2]) : 128;
-  // N = 32 on one supply joins 33 pneumatic ports at the supply's node,
-  // past assembly's limit of locals a block (an input error): not run.
-  const int max_line = argc > 3 ? std::atoi(argv[3]) : 16;
+  const int max_line = argc > 3 ? std::atoi(argv[3]) : 64;
   std::ifstream file(std::string(PNEUMO_SOURCE_DIR) + "/netlists/cushion_rig.yaml");
   std::stringstream text;
   text << file.rdbuf();
@@ -153,6 +226,7 @@ int main(int argc, char** argv) {
   if (ns.size() > 1)
     std::printf("fit wall ~ N^a: parts 1 thread a = %.3f, parts 2 threads a = %.3f, one System a = %.3f\n",
                 exponent(ns, split1), exponent(ns, split2), exponent(ns, whole));
+  if (ns.size() > 1) std::printf("fit CPU ~ N^a: parts 1 thread a = %.3f\n", exponent(ns, split1_cpu));
   const auto at = [&](int n) { return std::find(ns.begin(), ns.end(), n) - ns.begin(); };
   if (static_cast<std::size_t>(at(64)) < ns.size() && static_cast<std::size_t>(at(8)) < ns.size())
     std::printf("per copy, N = 64 over N = 8: parts 1 thread %.3f, parts 2 threads %.3f, one System %.3f\n",
@@ -163,15 +237,15 @@ int main(int argc, char** argv) {
                 split1_cpu[at(64)] / 64 / (split1_cpu[at(8)] / 8));
 
   std::vector<int> nl_ns;
-  std::vector<double> line;
+  std::vector<Figure> line;
   std::printf("N cylinders on one supply (one coupled part)\n");
   for (int n = 1; n <= max_line; n *= 2) {
     const Netlist nl = parse_netlist(pneumo_scale::copies_netlist(rig, n, vary, "supply"), "line.yaml");
     const Figure f = measure(nl, Mode::parts, 1, runs);
     print_row("line", n, f);
     nl_ns.push_back(n);
-    line.push_back(f.wall);
+    line.push_back(f);
   }
-  if (nl_ns.size() > 1) std::printf("fit wall ~ N^a: line a = %.3f\n", exponent(nl_ns, line));
+  print_breakdown(nl_ns, line);
   return 0;
 }

@@ -15,6 +15,7 @@
 #include "framework/netlist/netlist.hpp"
 #include "framework/run/parts.hpp"
 #include "framework/run/run.hpp"
+#include "tests/test_support.hpp"
 
 namespace pneumo {
 namespace {
@@ -121,24 +122,80 @@ TEST(IndependentParts, CopiesOnOneSupplyAreOneCoupledPart) {
   EXPECT_EQ(r.solver.stats.part_steps_max, r.solver.stats.steps);
 }
 
-// 32 copies on one supply join 33 pneumatic ports at the supply's node:
-// its stream mixing would read 65 variables, past the 64 locals a block
-// holds. An input error naming the connection's line, not an overrun.
-TEST(IndependentParts, ANodeOfMoreThan32PneumaticPortsIsAnInputErrorAtItsConnection) {
-  const std::string text = pneumo_scale::copies_netlist(rig_text(), 32, {}, "supply");
-  const Netlist nl = parse_netlist(text, "line.yaml");
-  EXPECT_EQ(independent_parts(elaborate(nl, builtin_registry())).size(), 1u);
-  try {
-    (void)run_simulation(nl, builtin_registry());
-    FAIL() << "a node of 33 pneumatic ports was assembled";
-  } catch (const InputError& e) {
-    EXPECT_EQ(e.where().file, "line.yaml");
-    EXPECT_GT(e.where().line, 0);
-    EXPECT_NE(std::string(e.what()).find("joins 33 ports"), std::string::npos) << e.what();
+// n insulated volumes (different V, p0, T0), each through a throttle of
+// its own to one junction: a node of n pneumatic ports. Beyond 32 ports the
+// stream mixing reads the other groups' sums instead of every port (the 64
+// locals a block holds); the gas must keep its total mass (to rounding, as
+// at three ports in conservation_test) and internal energy (the smoothed
+// mixing weights: 1e-6, as there), and end at the energy balance's common
+// pressure sum(p V) / sum(V).
+struct Junction {
+  std::string text;
+  double m0 = 0, U0 = 0, p_end = 0;
+};
+
+Junction junction_of(int n) {
+  const GasModel air;
+  Junction j;
+  std::string comps, conns, outs, node = "  - [";
+  double pv = 0, v = 0;
+  for (int k = 0; k < n; ++k) {
+    const std::string t = "t" + std::to_string(k), th = "v" + std::to_string(k);
+    const double V = 1e-4 * (1 + k % 5), p0 = 1e5 * (1 + k % 7), T0 = 260.0 + 10.0 * (k % 9);
+    comps += "  " + t + ": {type: volume, V: " + test_support::num(V) + " m3, p0: " + test_support::num(p0) +
+             " Pa, T0: " + test_support::num(T0) + " K}\n";
+    comps += "  " + th + ": {type: iso6358_throttle, C: " + test_support::num(0.05 + 0.01 * (k % 4)) +
+             " dm3/(s*bar), b: 0.3}\n";
+    conns += "  - [" + t + ".port, " + th + ".a]\n";
+    node += (k ? ", " : "") + th + ".b";
+    outs += "  m" + std::to_string(k) + ": " + t + ".m\n  U" + std::to_string(k) + ": " + t + ".U\n  p" +
+            std::to_string(k) + ": " + t + ".p\n";
+    j.m0 += p0 * V / (air.R * T0);
+    j.U0 += p0 * V / (air.kappa - 1.0);
+    pv += p0 * V;
+    v += V;
   }
-  // 16 copies (17 ports) assemble.
-  EXPECT_NO_THROW(System(elaborate(parse_netlist(pneumo_scale::copies_netlist(rig_text(), 16, {}, "supply"), "l.yaml"),
-                                   builtin_registry())));
+  j.p_end = pv / v;
+  j.text = "components:\n" + comps + "connections:\n" + conns + node + "]\noutputs:\n" + outs +
+           "simulation: {t_end: 30 s, rtol: 1e-8, atol: 1e-8, output_interval: 0.5 s}\n";
+  return j;
+}
+
+TEST(IndependentParts, AJunctionOf64PortsConservesMassAndEnergy) {
+  const int n = 64;
+  const Junction j = junction_of(n);
+  const RunResult r = test_support::run_text(j.text, "junction.yaml");
+  ASSERT_TRUE(r.solver.ok) << r.solver.message;
+  double worst_m = 0, worst_U = 0;
+  for (const auto& row : r.table.rows) {
+    double m = 0, U = 0;
+    for (int k = 0; k < n; ++k) {
+      m += row[r.table.column("m" + std::to_string(k))];
+      U += row[r.table.column("U" + std::to_string(k))];
+    }
+    worst_m = std::max(worst_m, test_support::rel_err(m, j.m0));
+    worst_U = std::max(worst_U, test_support::rel_err(U, j.U0));
+  }
+  EXPECT_LT(worst_m, 1e-12);
+  EXPECT_LT(worst_U, 1e-6);
+  for (int k = 0; k < n; ++k)
+    EXPECT_LT(test_support::rel_err(r.table.rows.back()[r.table.column("p" + std::to_string(k))], j.p_end), 1e-5)
+        << "volume " << k;
+}
+
+// 273 ports: a mix would read 65 variables in any grouping (17 groups of
+// up to 17); an input error naming the connection's line, not an overrun.
+TEST(IndependentParts, ANodeOfMoreThan272PneumaticPortsIsAnInputErrorAtItsConnection) {
+  const Netlist nl = parse_netlist(junction_of(273).text, "junction.yaml");
+  try {
+    System system(elaborate(nl, builtin_registry()));
+    FAIL() << "a node of 273 pneumatic ports was assembled";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where().file, "junction.yaml");
+    EXPECT_EQ(e.where().line, 2 * 273 + 2 + 273 + 1) << e.what();  // components, "connections:", the tanks' lines
+    EXPECT_NE(std::string(e.what()).find("joins 273 ports"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("at most 272 pneumatic ports"), std::string::npos) << e.what();
+  }
 }
 
 // The merge on a hand-made pair of parts: x = 2 t in part 0 (an event at

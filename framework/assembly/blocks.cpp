@@ -26,37 +26,79 @@ class ComponentBlock final : public Block {
   }
 };
 
-// Through variables of a node sum to zero (Kirchhoff).
+// Through variables of a node sum to zero (Kirchhoff); or, of a group of
+// a node's ports, sum to the group's total, vars[0].
 class FlowSumBlock final : public Block {
  public:
+  explicit FlowSumBlock(bool total_first) : total_first(total_first) {}
   template <class T>
   void eval(const T* y, T* r) const {
-    T s = y[0];
-    for (std::size_t i = 1; i < vars.size(); ++i) s = s + y[i];
-    r[0] = s;
+    const std::size_t first = total_first ? 1 : 0;
+    T s = y[first];
+    for (std::size_t i = first + 1; i < vars.size(); ++i) s = s + y[i];
+    r[0] = total_first ? s - y[0] : s;
   }
+  const bool total_first;
   void residual(double, const double* y, const double*, double* r, const EvalContext&) const override { eval(y, r); }
   void residual(double, const Dual* y, const Dual*, Dual* r, const EvalContext&) const override { eval(y, r); }
   void residual(double, const Pattern* y, const Pattern*, Pattern* r, const EvalContext&) const override { eval(y, r); }
 };
 
+// The smoothed outflows w_j of the ports (m_flow_j, T_out_j) = (y[j],
+// y[j + 1]), j = 1, 3, ... < end, into the node, added to w_sum, and w_j
+// T_out_j to wt_sum.
+template <class T>
+void add_weights(const T* y, std::size_t end, double eps, T& w_sum, T& wt_sum) {
+  for (std::size_t j = 1; j < end; j += 2) {
+    const T w = smooth_pos(T(-y[j]), eps);  // outflow of port j = flow into the node
+    w_sum = w_sum + w;
+    wt_sum = wt_sum + w * y[j + 1];
+  }
+}
+
 // inStream for a node of three or more pneumatic ports: the temperature of
 // the gas arriving at port i is the mix of what the other ports deliver,
 // weighted by their smoothed outflows into the node (Modelica's stream
 // connector rule, regularised so that it stays defined at zero flow).
-// vars: [T_in_i, (m_flow_j, T_out_j) for j != i]
+// vars: [T_in_i, (m_flow_j, T_out_j) for `ports` ports j != i, then
+// (W, H) of groups of the other ports (StreamSumBlock)]
 class StreamMixBlock final : public Block {
+ public:
+  explicit StreamMixBlock(int ports) : ports(ports) {}
+  template <class T>
+  void eval(const T* y, T* r, const EvalContext& c) const {
+    const double eps = c.gas->m_flow_small;
+    T w_sum = 0.0, wt_sum = 0.0;
+    const std::size_t groups = 1 + 2 * static_cast<std::size_t>(ports);
+    add_weights(y, groups, eps, w_sum, wt_sum);
+    for (std::size_t j = groups; j + 1 < vars.size(); j += 2) {
+      w_sum = w_sum + y[j];
+      wt_sum = wt_sum + y[j + 1];
+    }
+    r[0] = y[0] - wt_sum / w_sum;
+  }
+  const int ports;
+  void residual(double, const double* y, const double*, double* r, const EvalContext& c) const override { eval(y, r, c); }
+  void residual(double, const Dual* y, const Dual*, Dual* r, const EvalContext& c) const override { eval(y, r, c); }
+  void residual(double, const Pattern* y, const Pattern*, Pattern* r, const EvalContext& c) const override { eval(y, r, c); }
+};
+
+// The weights of a group of a node's ports, summed once for every port
+// outside the group that mixes them: W = sum w_j, H = sum w_j T_out_j,
+// w_j as in StreamMixBlock; W and H are solved explicitly from the flows
+// and temperatures (kept as unknowns of IDA, the line benchmark's 33-port
+// node failed to converge after an event). vars: [W, (m_flow_j, T_out_j)
+// of the group, H]
+class StreamSumBlock final : public Block {
  public:
   template <class T>
   void eval(const T* y, T* r, const EvalContext& c) const {
     const double eps = c.gas->m_flow_small;
     T w_sum = 0.0, wt_sum = 0.0;
-    for (std::size_t j = 1; j + 1 < vars.size(); j += 2) {
-      const T w = smooth_pos(T(-y[j]), eps);  // outflow of port j = flow into the node
-      w_sum = w_sum + w;
-      wt_sum = wt_sum + w * y[j + 1];
-    }
-    r[0] = y[0] - wt_sum / w_sum;
+    const std::size_t h = vars.size() - 1;
+    add_weights(y, h, eps, w_sum, wt_sum);
+    r[0] = y[0] - w_sum;
+    r[1] = y[h] - wt_sum;
   }
   void residual(double, const double* y, const double*, double* r, const EvalContext& c) const override { eval(y, r, c); }
   void residual(double, const Dual* y, const Dual*, Dual* r, const EvalContext& c) const override { eval(y, r, c); }
@@ -87,8 +129,9 @@ class SignalDefaultBlock final : public Block {
 }  // namespace
 
 std::unique_ptr<Block> make_component_block() { return std::make_unique<ComponentBlock>(); }
-std::unique_ptr<Block> make_flow_sum_block() { return std::make_unique<FlowSumBlock>(); }
-std::unique_ptr<Block> make_stream_mix_block() { return std::make_unique<StreamMixBlock>(); }
+std::unique_ptr<Block> make_flow_sum_block(bool total_first) { return std::make_unique<FlowSumBlock>(total_first); }
+std::unique_ptr<Block> make_stream_mix_block(int ports) { return std::make_unique<StreamMixBlock>(ports); }
+std::unique_ptr<Block> make_stream_sum_block() { return std::make_unique<StreamSumBlock>(); }
 std::unique_ptr<Block> make_kinematic_block() { return std::make_unique<KinematicBlock>(); }
 std::unique_ptr<Block> make_signal_default_block(double value) {
   auto b = std::make_unique<SignalDefaultBlock>();
@@ -96,6 +139,7 @@ std::unique_ptr<Block> make_signal_default_block(double value) {
   return b;
 }
 bool is_stream_mix(const Block& b) { return dynamic_cast<const StreamMixBlock*>(&b) != nullptr; }
+bool is_stream_sum(const Block& b) { return dynamic_cast<const StreamSumBlock*>(&b) != nullptr; }
 
 void gather(const Block& b, const double* y, const double* yp, double* ly, double* lyp) {
   for (const auto& [i, c] : b.constants) {

@@ -65,17 +65,24 @@ class Block {
 // structure fills in vars, rows and labels): Kirchhoff's sum of the through
 // variables (vars: the flows), ...
 std::unique_ptr<Block> make_component_block();
-std::unique_ptr<Block> make_flow_sum_block();
+// (with total_first: vars[0] is the sum of the others, a group's flow)
+std::unique_ptr<Block> make_flow_sum_block(bool total_first = false);
 // ... the mixed inStream temperature of a node of three or more pneumatic
 // ports,
-// vars: [T_in_i, (m_flow_j, T_out_j) for j != i]
-std::unique_ptr<Block> make_stream_mix_block();
+// vars: [T_in_i, (m_flow_j, T_out_j) for `ports` ports j != i, (W, H) of
+// groups of the other ports]
+std::unique_ptr<Block> make_stream_mix_block(int ports);
+// ... the sums of such a group (two rows), vars: [W, (m_flow_j, T_out_j)
+// of the group's ports, H],
+std::unique_ptr<Block> make_stream_sum_block();
 // ... ds/dt = v of a translational node, vars: [s, v],
 std::unique_ptr<Block> make_kinematic_block();
 // ... and the default value of an unconnected optional input, vars: [it].
 std::unique_ptr<Block> make_signal_default_block(double value);
 // The stream-mixing rows: their temperatures stay unknowns of IDA.
 bool is_stream_mix(const Block& b);
+// A group's sums for the mixes of a large node.
+bool is_stream_sum(const Block& b);
 
 // Copy a block's local variables (and their derivatives) out of the global
 // vectors (the hot path: every block evaluation starts here).

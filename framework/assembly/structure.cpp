@@ -30,6 +30,45 @@ struct PortVars {
   int t_out = -1;
 };
 
+namespace {
+
+// How route_streams groups the n ports of a node for stream mixing: one
+// group of all up to 32 ports (their mix reads 2 n - 1 locals, within
+// kMaxLocal); beyond, ceil(sqrt(n)) groups of consecutive ports whose sizes
+// differ by at most one (a mix reads 2 g + 2 c - 3 locals: its own group's
+// other ports and the other groups' sums).
+constexpr int kMixOneByOne = (kMaxLocal + 1) / 2;
+constexpr int stream_groups(int n) {
+  int c = 1;
+  while (n > kMixOneByOne && c * c < n) ++c;
+  return c;
+}
+constexpr int mix_locals(int n) {
+  const int c = stream_groups(n), g = (n + c - 1) / c;
+  return c == 1 ? 2 * n - 1 : 2 * g + 2 * c - 3;
+}
+// The largest node whose mixes fit (272 ports for kMaxLocal = 64).
+constexpr int max_mixed_ports() {
+  int n = 3;
+  while (mix_locals(n + 1) <= kMaxLocal) ++n;
+  return n;
+}
+
+struct StreamGroups {
+  static constexpr int kMaxPorts = max_mixed_ports();
+
+  explicit StreamGroups(int ports) : n(ports), count(stream_groups(ports)) {}
+  int first(int g) const { return static_cast<int>(static_cast<long>(g) * n / count); }
+  int of(int port) const {
+    int g = 0;
+    while (first(g + 1) <= port) ++g;
+    return g;
+  }
+  const int n, count;
+};
+
+}  // namespace
+
 // Ports joined into nodes by the netlist's connections, and the unknowns
 // made for them; `row` counts the rows made so far.
 struct NodeLayout {
@@ -263,28 +302,35 @@ void System::add_internal_variables(const Component& comp, Block& b) {
   }
 }
 
-// A framework block of one row at a node.
-void System::add_node_block(std::unique_ptr<Block> b, std::string label, std::string row_name, NodeLayout& l,
-                            int node) {
+// A framework block at a node: a row for each of `row_names` (one named
+// after the label when none is given).
+void System::add_node_block(std::unique_ptr<Block> b, std::string label, std::vector<std::string> row_names,
+                            NodeLayout& l, int node) {
   // The evaluator's scratch and the Pattern scalar hold kMaxLocal locals a
-  // block: a stream mix at a node of n pneumatic ports reads 2 n - 1.
+  // block: a stream mix reads 2 g + 2 c - 3 at a node of c groups of at
+  // most g ports (StreamGroups).
   if (b->vars.size() > static_cast<std::size_t>(kMaxLocal))
     throw InputError(l.where[node], "", "",
                      "this connection joins " + std::to_string(l.nodes[node].size()) + " ports; its " + label +
                          " reads " + std::to_string(b->vars.size()) + " variables, more than the limit of " +
-                         std::to_string(kMaxLocal) +
-                         " (at most 32 pneumatic ports a node): split it into several nodes joined by volumes");
+                         std::to_string(kMaxLocal) + " (at most " + std::to_string(StreamGroups::kMaxPorts) +
+                         " pneumatic ports a node): split it into several nodes joined by volumes");
   b->label = std::move(label);
   b->where = l.where[node];
-  b->row0 = l.row++;
-  b->n_rows = 1;
-  b->row_names.push_back(row_name.empty() ? b->label : std::move(row_name));
+  if (row_names.empty()) row_names.push_back(b->label);
+  b->row0 = l.row;
+  b->n_rows = static_cast<int>(row_names.size());
+  l.row += b->n_rows;
+  b->row_names = std::move(row_names);
   blocks_.push_back(std::move(b));
 }
 
 // Stream routing: T_in of each pneumatic port. A port alone sees its own
 // T_out, two ports each the other's; at three or more ports T_in is the mix
-// (StreamMixBlock).
+// (StreamMixBlock): of the other ports one by one up to 32 ports (2 n - 1
+// locals, within kMaxLocal); at more, of the other ports of its own group
+// one by one and of the other groups' sums (StreamSumBlock), which keeps a
+// mix's locals and work near 4 sqrt(n) instead of 2 n.
 void System::route_streams(NodeLayout& l) {
   const Circuit& c = circuit_;
   auto t_in_slot = [&](const PortId& p) -> int& {
@@ -299,19 +345,41 @@ void System::route_streams(NodeLayout& l) {
       t_in_slot(ports[0]) = l.vars(ports[1]).t_out;
       t_in_slot(ports[1]) = l.vars(ports[0]).t_out;
     } else {
+      const StreamGroups groups(static_cast<int>(ports.size()));
+      const std::string at = node_text(c, ports);
+      // Each group's sums W, H (when there are several groups).
+      std::vector<std::pair<int, int>> sums;
+      for (int g = 0; g < groups.count && groups.count > 1; ++g) {
+        auto sum = make_stream_sum_block();
+        const std::string name = "stream group " + std::to_string(g + 1) + " at " + at;
+        // Start values as at zero flow: each weight eps / 2, at the ambient temperature.
+        const double w0 = 0.5 * c.gas.m_flow_small * (groups.first(g + 1) - groups.first(g));
+        sums.emplace_back(new_var(name + ".W", w0, 0, 1e-4), new_var(name + ".H", w0 * c.gas.T_ambient, 0, 3e-2));
+        sum->vars = {sums.back().first};
+        for (int j = groups.first(g); j < groups.first(g + 1); ++j) {
+          sum->vars.push_back(l.vars(ports[j]).flow);
+          sum->vars.push_back(l.vars(ports[j]).t_out);
+        }
+        sum->vars.push_back(sums.back().second);
+        add_node_block(std::move(sum), "stream group sums at " + at,
+                       {"sum of weights of " + name, "sum of weighted T_out of " + name}, l, static_cast<int>(ni));
+      }
       for (std::size_t i = 0; i < ports.size(); ++i) {
-        auto mix = make_stream_mix_block();
+        const int own = groups.of(static_cast<int>(i));
         const int t_in = new_var(c.port_name(ports[i]) + ".T_in", c.gas.T_ambient, 0, 300.0);
         t_in_slot(ports[i]) = t_in;
-        mix->vars.push_back(t_in);
-        for (std::size_t j = 0; j < ports.size(); ++j) {
-          if (j == i) continue;
-          mix->vars.push_back(l.vars(ports[j]).flow);
-          mix->vars.push_back(l.vars(ports[j]).t_out);
+        std::vector<int> vars{t_in};
+        for (int j = groups.first(own); j < groups.first(own + 1); ++j) {
+          if (j == static_cast<int>(i)) continue;
+          vars.push_back(l.vars(ports[j]).flow);
+          vars.push_back(l.vars(ports[j]).t_out);
         }
-        add_node_block(std::move(mix), "stream mixing at " + node_text(c, ports),
-                       "inStream(T) of " + c.port_name(ports[i]) + " at " + node_text(c, ports), l,
-                       static_cast<int>(ni));
+        auto mix = make_stream_mix_block(static_cast<int>(vars.size() / 2));
+        for (int g = 0; g < static_cast<int>(sums.size()); ++g)
+          if (g != own) vars.insert(vars.end(), {sums[g].first, sums[g].second});
+        mix->vars = std::move(vars);
+        add_node_block(std::move(mix), "stream mixing at " + at, {"inStream(T) of " + c.port_name(ports[i]) + " at " + at},
+                       l, static_cast<int>(ni));
       }
     }
   }
@@ -332,18 +400,36 @@ void System::add_node_balances(NodeLayout& l) {
       if (driven) continue;
       auto def = make_signal_default_block(ps.default_value);
       def->vars = {l.across[ni]};
-      add_node_block(std::move(def), "default of unconnected input " + c.port_name(ports[0]), "", l, node);
+      add_node_block(std::move(def), "default of unconnected input " + c.port_name(ports[0]), {}, l, node);
       continue;
     }
     if (ps.domain == Domain::translational) {
       auto kin = make_kinematic_block();
       kin->vars = {l.across[ni], l.velocity[ni]};
-      add_node_block(std::move(kin), "kinematics ds/dt = v at " + node_text(c, ports), "", l, node);
+      add_node_block(std::move(kin), "kinematics ds/dt = v at " + node_text(c, ports), {}, l, node);
+    }
+    const char* what = ps.domain == Domain::pneumatic ? "mass" : ps.domain == Domain::thermal ? "heat" : "force";
+    const std::string at = node_text(c, ports);
+    std::vector<int> flows;
+    for (const auto& p : ports) flows.push_back(l.vars(p).flow);
+    // More flows than a block's locals: the balance adds the sums of groups
+    // of them (unknowns of their own, each a group's sum).
+    if (flows.size() > static_cast<std::size_t>(kMaxLocal)) {
+      const StreamGroups groups(static_cast<int>(flows.size()));
+      std::vector<int> totals;
+      for (int g = 0; g < groups.count; ++g) {
+        auto part = make_flow_sum_block(true);
+        const std::string name = std::string(what) + " flow of group " + std::to_string(g + 1) + " at " + at;
+        part->vars = {new_var(name, 0.0, 0, nominal_[flows[0]])};
+        part->vars.insert(part->vars.end(), flows.begin() + groups.first(g), flows.begin() + groups.first(g + 1));
+        totals.push_back(part->vars[0]);
+        add_node_block(std::move(part), name, {}, l, node);
+      }
+      flows = totals;
     }
     auto sum = make_flow_sum_block();
-    for (const auto& p : ports) sum->vars.push_back(l.vars(p).flow);
-    const char* what = ps.domain == Domain::pneumatic ? "mass" : ps.domain == Domain::thermal ? "heat" : "force";
-    add_node_block(std::move(sum), std::string(what) + " balance at " + node_text(c, ports), "", l, node);
+    sum->vars = flows;
+    add_node_block(std::move(sum), std::string(what) + " balance at " + at, {}, l, node);
   }
 }
 

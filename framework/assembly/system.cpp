@@ -88,6 +88,14 @@ void System::build_slots() {
   }
 }
 
+int System::stream_mixing_rows() const {
+  int rows = 0;
+  for (const auto& [r, q] : plan_.kept_full_rows)
+    for (const auto& b : blocks_)
+      if (r >= b->row0 && r < b->row0 + b->n_rows && (is_stream_mix(*b) || is_stream_sum(*b))) ++rows;
+  return rows;
+}
+
 System::~System() = default;
 
 }  // namespace pneumo

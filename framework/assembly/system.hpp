@@ -128,6 +128,10 @@ class System {
   long nnz() const { return static_cast<long>(row_idx_.size()); }
   // 1.0 for differential variables (some equation has its y'), 0.0 algebraic.
   const std::vector<double>& differential() const { return id_; }
+  // How many of IDA's rows are stream-mixing rows (is_stream_mix, and the
+  // groups' sums of large nodes): rows without y', as many as the
+  // algebraic unknowns they determine.
+  int stream_mixing_rows() const;
   // Typical magnitude of each variable, for absolute tolerances.
   const std::vector<double>& nominal() const { return nominal_; }
   const std::vector<std::string>& variable_names() const { return var_names_; }
@@ -173,7 +177,8 @@ class System {
   void add_node_variables(NodeLayout& l);
   void add_component_block(int ci, NodeLayout& l, int& mode, int& root);
   void add_internal_variables(const Component& comp, Block& b);
-  void add_node_block(std::unique_ptr<Block> b, std::string label, std::string row_name, NodeLayout& l, int node);
+  void add_node_block(std::unique_ptr<Block> b, std::string label, std::vector<std::string> row_names, NodeLayout& l,
+                      int node);
   void route_streams(NodeLayout& l);
   void add_node_balances(NodeLayout& l);
   void build_pattern();

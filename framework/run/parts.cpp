@@ -32,6 +32,11 @@ void add_stats(SolverStats& sum, const SolverStats& s) {
   sum.jacobian_recombinations += s.jacobian_recombinations;
   sum.nonlinear_iterations += s.nonlinear_iterations;
   sum.nonlinear_failures += s.nonlinear_failures;
+  sum.linear_setups += s.linear_setups;
+  sum.lu += s.lu;
+  sum.seconds_residual += s.seconds_residual;
+  sum.seconds_jacobian += s.seconds_jacobian;
+  sum.seconds_total += s.seconds_total;
   sum.error_test_failures += s.error_test_failures;
   sum.root_evals += s.root_evals;
   sum.reinitialisations += s.reinitialisations;

@@ -13,6 +13,7 @@
 #include "framework/assembly/system.hpp"
 #include "framework/solver/ida_solver.hpp"
 #include "framework/solver/newton_matrix.hpp"
+#include "framework/solver/timed_linear_solver.hpp"
 
 namespace pneumo {
 
@@ -25,6 +26,7 @@ struct UserData {
   void* ida = nullptr;
   NewtonMatrixParts parts;
   const ProbeSet* integrands = nullptr;
+  double seconds_residual = 0.0, seconds_jacobian = 0.0;  // in the callbacks
   // IDA integrates scaled variables y / nominal: pressures (1e5 Pa) and
   // masses (1e-6 kg) in one Newton matrix would otherwise differ by 1e11 and
   // leave the sparse LU numerically singular.

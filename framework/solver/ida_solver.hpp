@@ -13,6 +13,7 @@
 
 #include "framework/assembly/system.hpp"
 #include "framework/model/simulation_options.hpp"
+#include "framework/solver/timed_linear_solver.hpp"
 
 namespace pneumo {
 
@@ -50,6 +51,8 @@ struct SolverStats {
   long jacobian_recombinations = 0;  // IDA's requests answered from the last evaluation's parts
   long nonlinear_iterations = 0;
   long nonlinear_failures = 0;
+  long linear_setups = 0;  // Newton matrices IDA asked for (evaluated or recombined), each factorised
+  LinearSolverCounts lu;   // the sparse LU's work and time (timed_linear_solver.hpp)
   long error_test_failures = 0;
   long root_evals = 0;
   long reinitialisations = 0;
@@ -62,6 +65,11 @@ struct SolverStats {
   // the steps of the part that took most (steps is their sum).
   int parts = 1;
   long part_steps_max = 0;
+  // Where the time went (steady clock, seconds): residuals (explicit
+  // unknowns included), Newton matrices (AD, recombination), and the whole
+  // integration (the rest, besides those and the LU: IDA's own work, roots,
+  // outputs, events).
+  double seconds_residual = 0, seconds_jacobian = 0, seconds_total = 0;
 };
 
 struct SolverResult {
