@@ -180,7 +180,9 @@ TEST(Diagnose, FindsWithheldLeakAndShrinksTheGap) {
   // The noise estimated from the data is the noise put in (a MAD estimate
   // from 225 samples has a standard error near 8 %; 25 % is three of them).
   for (const auto& [name, sigma] : r.noise)
-    if (name == "p_A") EXPECT_NEAR(sigma, 2e3, 500);
+    if (name == "p_A") {
+      EXPECT_NEAR(sigma, 2e3, 500);
+    }
 }
 
 TEST(Diagnose, ReportJsonHasVerdictEffectsAndWhere) {

@@ -185,7 +185,9 @@ TEST(Unexplained, LeakOfATankNoCandidateDescribesIsFoundInThatTank) {
   EXPECT_TRUE(best.confirmed);
   EXPECT_GT(best.explained, 0.8);
   for (const auto& b : u.balances)
-    if (b.balance.rfind("first.", 0) == 0) EXPECT_LT(b.explained, 0.5) << b.balance;
+    if (b.balance.rfind("first.", 0) == 0) {
+      EXPECT_LT(b.explained, 0.5) << b.balance;
+    }
   EXPECT_NE(u.sentence.find("out of " + best.balance), std::string::npos) << u.sentence;
   // The fitted disturbance takes mass or energy out of the second tank in every run.
   ASSERT_EQ(u.shape.size(), 2u);

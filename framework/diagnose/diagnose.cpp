@@ -16,6 +16,7 @@
 #include "framework/diagnose/engine.hpp"
 #include "framework/diagnose/phases.hpp"
 #include "framework/diagnose/ranking.hpp"
+#include "framework/diagnose/sensors.hpp"
 #include "framework/diagnose/statistics.hpp"
 #include "framework/diagnose/unexplained.hpp"
 #include "framework/run/run.hpp"
@@ -103,6 +104,44 @@ Unexplained leftover(Engine& eng, const Model& verdict, const DiagnosisReport& r
                       [&](int k, const std::vector<Disturbance>& d) { return eng.simulate(verdict, k, d); }, log};
   explain_by_balances(in, eng.options(), u);
   return u;
+}
+
+// Which sensor would separate each verdict effect from those the data cannot
+// tell apart from it (its group), each at its own single fit: measured
+// noise per SI unit where a signal has the unit, the measured quantities by
+// their output's COMPONENT.QUANTITY.
+std::vector<SensorChoice> decisive_sensors(const Engine& eng, const DiagnosisReport& rep,
+                                           const std::map<std::string, std::vector<EffectInstance>>& fits) {
+  std::map<std::string, std::vector<double>> sigmas;
+  std::map<std::string, std::string> measured;
+  for (const auto& [signal, unit] : rep.signal_units) {
+    for (const auto& [name, sigma] : rep.noise)
+      if (name == signal) sigmas[unit].push_back(sigma);
+    for (const auto& o : eng.base().outputs)
+      if (o.name == signal) measured[o.component + "." + o.quantity] = signal;
+  }
+  std::map<std::string, double> by_unit;
+  for (auto& [unit, v] : sigmas) {
+    std::sort(v.begin(), v.end());
+    by_unit[unit] = v[v.size() / 2];
+  }
+  const auto noise = sensor_noise(by_unit);
+  auto netlists = [&](const std::vector<EffectInstance>& effects) {
+    const Model m = eng.model(effects);
+    std::vector<Netlist> out;
+    for (std::size_t k = 0; k < eng.runs.size(); ++k) out.push_back(eng.netlist_of(m, static_cast<int>(k)));
+    return out;
+  };
+  std::vector<SensorChoice> out;
+  for (const auto& group : rep.verdict_groups) {
+    if (group.size() < 2 || !fits.count(group[0])) continue;
+    const auto runs_a = netlists(fits.at(group[0]));
+    for (std::size_t j = 1; j < group.size(); ++j)
+      if (fits.count(group[j]))
+        out.push_back(choose_sensor(group[0], group[j], runs_a, netlists(fits.at(group[j])), eng.registry(), noise,
+                                    measured, eng.options().threads));
+  }
+  return out;
 }
 
 std::string fmt(const char* f, double a, double b = 0, double c = 0) {
@@ -428,6 +467,11 @@ DiagnosisReport diagnose(const std::string& model_file, const std::string& runs_
     if ((a.rank == 0) != (b.rank == 0)) return a.rank != 0;
     return a.rank < b.rank;
   });
+  {
+    std::map<std::string, std::vector<EffectInstance>> fits;
+    for (const auto& c : cands) fits[c.e->name] = c.fit.effects;
+    rep.sensors = decisive_sensors(eng, rep, fits);
+  }
   if (rep.validation_after.total.rms > opt.adequate_gap)
     rep.unexplained = leftover(eng, eng.model(chosen), rep, cal, val, r_cal_cur, r_val_cur, log);
   rep.seconds = elapsed();

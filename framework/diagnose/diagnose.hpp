@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "framework/diagnose/catalogue.hpp"
+#include "framework/diagnose/sensors.hpp"
 #include "framework/model/registry.hpp"
 #include "framework/netlist/netlist.hpp"
 
@@ -168,6 +169,7 @@ struct DiagnosisReport {
   std::vector<TracePlot> plots;
   std::vector<std::string> calibration_runs, validation_runs;
   std::vector<std::pair<std::string, std::vector<double>>> final_values;  // effect -> fitted values in the verdict model
+  std::vector<SensorChoice> sensors;  // per verdict effect and one the data cannot tell from it: what would
   std::optional<Unexplained> unexplained;  // empty: the verdict brings the gap down to noise
   double seconds = 0;
   long simulations = 0;

@@ -46,11 +46,9 @@ std::string html(const std::string& s) {
   return o;
 }
 
-// Phase colours, repeated when there are more phases: shading (light) and bars.
+// Phase shading, repeated when there are more phases.
 const char* const kShade[] = {"#f4f4f4", "#fff4e0", "#eef6ff", "#ffecec", "#eefbee", "#f6eeff"};
-const char* const kColour[] = {"#bbb", "#f0a030", "#4c8fd6", "#d64c4c", "#4cb04c", "#9b6bd6"};
 const char* shade(std::size_t p) { return kShade[p % 6]; }
-const char* colour(std::size_t p) { return kColour[p % 6]; }
 
 std::string gap_json(const GapTable& g, const std::vector<std::string>& phases) {
   std::ostringstream o;
@@ -331,6 +329,17 @@ void write_report_json(const DiagnosisReport& r, const std::string& path) {
     if (!e.unavailable.empty() || e.screened_out) o << "}";
     else o << ", \"where_after\": " << gap_json(e.validation_after, r.phase_names) << "}";
   }
+  o << "],\n\"sensors\": [";
+  for (std::size_t i = 0; i < r.sensors.size(); ++i) {
+    const auto& c = r.sensors[i];
+    o << (i ? ",\n  " : "\n  ") << "{\"effects\": [" << str(c.effect_a) << ", " << str(c.effect_b)
+      << "], \"measured_best\": {\"signal\": " << str(c.measured_signal)
+      << ", \"separation\": " << num(c.measured_separation) << "}, \"best\": [";
+    for (std::size_t j = 0; j < c.best.size(); ++j)
+      o << (j ? ", " : "") << "{\"quantity\": " << str(c.best[j].quantity) << ", \"unit\": " << str(c.best[j].unit)
+        << ", \"sigma\": " << num(c.best[j].sigma) << ", \"separation\": " << num(c.best[j].separation) << "}";
+    o << "]}";
+  }
   o << "],\n\"unexplained\": " << unexplained_json(r.unexplained, num, str);
   o << ",\n\"seconds\": " << num(r.seconds) << ",\n\"simulations\": " << r.simulations << "\n}\n";
   write_text_atomic(path, o.str());
@@ -387,6 +396,8 @@ void write_report_html(const DiagnosisReport& r, const std::string& path) {
   }
   o << "</p>\n<p>Validation gap (RMS of residual / noise; 1 = within noise): before <b>"
     << gap(r.validation_before.total.rms) << "</b>, after <b>" << gap(r.validation_after.total.rms) << "</b>.</p>\n";
+  for (const auto& c : r.sensors)
+    if (!c.best.empty()) o << "<p class=\"sensor\">To tell them apart: " << html(sensor_sentence(c)) << ".</p>\n";
   o << unexplained_html(r.unexplained, html);
 
   o << "<h2>Gap by phase and signal (validation runs)</h2>\n"
