@@ -150,337 +150,415 @@ std::string fmt(const char* f, double a, double b = 0, double c = 0) {
   return buf;
 }
 
-}  // namespace
-
-DiagnosisReport diagnose(const std::string& model_file, const std::string& runs_dir,
-                         const std::string& catalogue_file, const Registry& registry, const DiagnoseOptions& opt) {
-  const auto t_start = std::chrono::steady_clock::now();
-  auto log = [&](const std::string& s) {
-    if (!opt.progress) return;
-    if (opt.log) opt.log(s);
-    else std::cerr << s << std::endl;
-  };
-  auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count(); };
-  Engine eng(model_file, registry, opt);
-  eng.runs = load_runs(runs_dir, eng.base());
-  const Catalogue cat = load_catalogue(catalogue_file, eng.yaml(), model_file, registry);
-  for (const auto& e : cat.effects)  // a run's operating point would override the re-calibrated value
-    for (const auto& run : eng.runs)
-      for (const auto& op : run.operating_point)
-        if (op.first == e.recalibrates)
-          throw InputError(e.where, "", op.first,
-                           "recalibrate: '" + op.first + "' is set by the operating point of run '" + run.name +
-                               "', so it cannot be re-calibrated");
-
-  DiagnosisReport rep;
-  rep.model_file = model_file;
-  rep.catalogue_file = catalogue_file;
-  rep.runs_dir = runs_dir;
-  for (const auto& r : eng.runs) (r.role == Role::calibration ? rep.calibration_runs : rep.validation_runs).push_back(r.name);
-  {
-    std::map<std::string, std::vector<double>> sig;
-    for (const auto& r : eng.runs)
-      for (std::size_t s = 0; s < r.signals.size(); ++s) sig[r.signals[s]].push_back(r.sigma[s]);
-    for (auto& [name, v] : sig) {
-      std::sort(v.begin(), v.end());
-      rep.noise.emplace_back(name, v[v.size() / 2]);
-    }
+// One diagnosis, step by step (README "Diagnosing the sim-to-real gap"):
+// the data and the unpatched model's gap (where), every candidate screened
+// and fitted alone, ranked and grouped (which), the verdict by forward
+// selection, then what it leaves unexplained and which sensor would decide.
+class Diagnosis {
+ public:
+  Diagnosis(const std::string& model_file, const std::string& runs_dir, const std::string& catalogue_file,
+            const Registry& registry, const DiagnoseOptions& opt)
+      : opt_(opt), eng_(model_file, registry, opt) {
+    eng_.runs = load_runs(runs_dir, eng_.base());
+    cat_ = load_catalogue(catalogue_file, eng_.yaml(), model_file, registry);
+    refuse_recalibrating_operating_points();
+    rep_.model_file = model_file;
+    rep_.catalogue_file = catalogue_file;
+    rep_.runs_dir = runs_dir;
   }
-  for (const Probe& p : elaborate(eng.base(), registry).probes) rep.signal_units.emplace_back(p.name, p.unit);
-  log(fmt("diagnose: %g runs, ", eng.runs.size()) + std::to_string(cat.effects.size()) + " candidate effects, " +
-      std::to_string(opt.threads) + " threads");
-  eng.compute_phases(cat.phases);
-  rep.phase_names = eng.phase_names;
-  const Layout cal = eng.layout(Role::calibration), val = eng.layout(Role::validation);
 
-  // Where: the unpatched model.
-  const Model base_model = eng.model({});
-  const auto r_cal0 = eng.residuals({base_model}, cal)[0];
-  const auto r_val0 = eng.residuals({base_model}, val)[0];
-  rep.calibration_before = eng.gaps(r_cal0, cal);
-  rep.validation_before = eng.gaps(r_val0, val);
-  log(fmt("base model: validation gap %.3g (noise = 1), calibration gap %.3g  [%.1f s]",
-          rep.validation_before.total.rms, rep.calibration_before.total.rms, elapsed()));
-  // Significant windows: chi-square of each window against the noise level
-  // (under "model right" the normalised residuals are white with unit variance).
-  significant_windows(eng.runs, cal, r_cal0, rep.windows);
-  significant_windows(eng.runs, val, r_val0, rep.windows);
+  DiagnosisReport run() {
+    describe_data();
+    where();
+    fit_alone(screen());
+    order_ = rank_effects(results_);
+    group();
+    if (name_first_effect())
+      while (static_cast<int>(rep_.verdict.size()) < opt_.max_effects && gap_of(r_val_cur_) > opt_.adequate_gap &&
+             add_effect()) {
+      }
+    finish();
+    return std::move(rep_);
+  }
 
-  // Which: screening and fits of every available candidate.
+ private:
   struct Cand {
     const Effect* e;
     Engine::Fit fit;
     std::vector<double> r_val;
   };
-  std::vector<Cand> cands;
-  std::vector<EffectResult> results;
-  for (const auto& e : cat.effects) {
-    EffectResult er;
-    er.name = e.name;
-    er.description = e.description;
-    er.unavailable = e.unavailable;
-    for (const auto& p : e.parameters) {
-      er.parameter_names.push_back(p.name);
-      er.parameter_units.push_back(p.unit);
-      er.values.push_back(p.null_value ? *p.null_value : p.initial);
-    }
-    er.gap_before = er.gap_after = rep.validation_before.total.rms;
-    results.push_back(er);
+  struct Step {
+    const Effect* e;
+    Engine::Fit fit;
+    std::vector<double> r_val;
+    GapTable gap;
+  };
+
+  void log(const std::string& s) const {
+    if (!opt_.progress) return;
+    if (opt_.log) opt_.log(s);
+    else std::cerr << s << std::endl;
   }
+  double elapsed() const { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start_).count(); }
+  static double ssr(const std::vector<double>& r) { return ssr_of(r.data(), r.size()); }
+  static double gap_of(const std::vector<double>& r) { return std::sqrt(ssr(r) / r.size()); }
+  static std::vector<double> initial_values(const Effect& e) {
+    std::vector<double> v;
+    for (const auto& p : e.parameters) v.push_back(p.initial);
+    return v;
+  }
+  const Cand* cand_of(const std::string& n) const {
+    for (const auto& c : cands_)
+      if (c.e->name == n) return &c;
+    return nullptr;
+  }
+
+  // A run's operating point would override the re-calibrated value.
+  void refuse_recalibrating_operating_points() const {
+    for (const auto& e : cat_.effects)
+      for (const auto& run : eng_.runs)
+        for (const auto& op : run.operating_point)
+          if (op.first == e.recalibrates)
+            throw InputError(e.where, "", op.first,
+                             "recalibrate: '" + op.first + "' is set by the operating point of run '" + run.name +
+                                 "', so it cannot be re-calibrated");
+  }
+
+  // The runs, the noise each signal shows (median over runs), the signals'
+  // units and the phases.
+  void describe_data() {
+    for (const auto& r : eng_.runs)
+      (r.role == Role::calibration ? rep_.calibration_runs : rep_.validation_runs).push_back(r.name);
+    std::map<std::string, std::vector<double>> sig;
+    for (const auto& r : eng_.runs)
+      for (std::size_t s = 0; s < r.signals.size(); ++s) sig[r.signals[s]].push_back(r.sigma[s]);
+    for (auto& [name, v] : sig) {
+      std::sort(v.begin(), v.end());
+      rep_.noise.emplace_back(name, v[v.size() / 2]);
+    }
+    for (const Probe& p : elaborate(eng_.base(), eng_.registry()).probes) rep_.signal_units.emplace_back(p.name, p.unit);
+    log(fmt("diagnose: %g runs, ", eng_.runs.size()) + std::to_string(cat_.effects.size()) + " candidate effects, " +
+        std::to_string(opt_.threads) + " threads");
+    eng_.compute_phases(cat_.phases);
+    rep_.phase_names = eng_.phase_names;
+    cal_ = eng_.layout(Role::calibration);
+    val_ = eng_.layout(Role::validation);
+  }
+
+  // Where: the unpatched model's gap, and the windows whose residuals are
+  // significant against the noise (chi-square of each window: under "model
+  // right" the normalised residuals are white with unit variance).
+  void where() {
+    base_model_ = eng_.model({});
+    r_cal0_ = eng_.residuals({base_model_}, cal_)[0];
+    r_val0_ = eng_.residuals({base_model_}, val_)[0];
+    r_cal_cur_ = r_cal0_;
+    r_val_cur_ = r_val0_;
+    rep_.calibration_before = eng_.gaps(r_cal0_, cal_);
+    rep_.validation_before = eng_.gaps(r_val0_, val_);
+    log(fmt("base model: validation gap %.3g (noise = 1), calibration gap %.3g  [%.1f s]",
+            rep_.validation_before.total.rms, rep_.calibration_before.total.rms, elapsed()));
+    significant_windows(eng_.runs, cal_, r_cal0_, rep_.windows);
+    significant_windows(eng_.runs, val_, r_val0_, rep_.windows);
+    for (const auto& e : cat_.effects) {
+      EffectResult er;
+      er.name = e.name;
+      er.description = e.description;
+      er.unavailable = e.unavailable;
+      for (const auto& p : e.parameters) {
+        er.parameter_names.push_back(p.name);
+        er.parameter_units.push_back(p.unit);
+        er.values.push_back(p.null_value ? *p.null_value : p.initial);
+      }
+      er.gap_before = er.gap_after = rep_.validation_before.total.rms;
+      results_.push_back(er);
+    }
+  }
+
   // Screening: for an effect with a null, the share of the unpatched model's
   // calibration misfit that a Gauss-Newton step from the sensitivities would
   // remove, from the null (where the model is the unpatched one) and from the
   // initial values - a share of a far start's own large misfit says little
   // about the data. A structural switch has no point in its family that is
   // the unpatched model: the share of its own misfit at the initial values.
-  std::vector<std::pair<double, int>> screened;
-  eng.screen_cutoff_ = 2.0;  // always stop after the sensitivities
-  const double ssr_cal0 = ssr_of(r_cal0.data(), r_cal0.size());
-  for (std::size_t k = 0; k < cat.effects.size(); ++k) {
-    const Effect& e = cat.effects[k];
-    if (!e.unavailable.empty()) {
-      log("  " + e.name + ": " + e.unavailable);
-      continue;
+  // Returns (gain, effect index), best first.
+  std::vector<std::pair<double, int>> screen() {
+    std::vector<std::pair<double, int>> screened;
+    eng_.screen_cutoff_ = 2.0;  // always stop after the sensitivities
+    const double ssr_cal0 = ssr(r_cal0_);
+    for (std::size_t k = 0; k < cat_.effects.size(); ++k) {
+      const Effect& e = cat_.effects[k];
+      if (!e.unavailable.empty()) {
+        log("  " + e.name + ": " + e.unavailable);
+        continue;
+      }
+      std::vector<double> init = initial_values(e), null;
+      for (const auto& p : e.parameters)
+        if (p.null_value) null.push_back(*p.null_value);
+      double gain = 0;
+      for (const auto* start : {&init, &null}) {
+        if (start->size() != e.parameters.size() || (start == &null && null == init)) continue;
+        const auto f = eng_.fit({EffectInstance{&e, *start}}, cal_, {}, 1);
+        const double reference = null.size() == init.size() ? ssr_cal0 : ssr(f.r_cal);
+        gain = std::max(gain, 1 - ssr(f.r_cal) * (1 - f.screening) / reference);
+      }
+      results_[k].screening_improvement = gain;
+      screened.push_back({gain, static_cast<int>(k)});
+      log(fmt("  screening %-2.0f ", k + 1) + e.name +
+          fmt(": linearised improvement %.1f %%  [%.1f s]", 100 * gain, elapsed()));
     }
-    std::vector<double> init, null;
-    for (const auto& p : e.parameters) {
-      init.push_back(p.initial);
-      if (p.null_value) null.push_back(*p.null_value);
-    }
-    double gain = 0;
-    for (const auto* start : {&init, &null}) {
-      if (start->size() != e.parameters.size() || (start == &null && null == init)) continue;
-      const auto f = eng.fit({EffectInstance{&e, *start}}, cal, {}, 1);
-      const double reference = null.size() == init.size() ? ssr_cal0 : ssr_of(f.r_cal.data(), f.r_cal.size());
-      gain = std::max(gain, 1 - ssr_of(f.r_cal.data(), f.r_cal.size()) * (1 - f.screening) / reference);
-    }
-    results[k].screening_improvement = gain;
-    screened.push_back({gain, static_cast<int>(k)});
-    log(fmt("  screening %-2.0f ", k + 1) + e.name + fmt(": linearised improvement %.1f %%  [%.1f s]", 100 * gain, elapsed()));
+    std::sort(screened.begin(), screened.end(), std::greater<>());
+    eng_.screen_cutoff_ = -1;
+    return screened;
   }
-  std::sort(screened.begin(), screened.end(), std::greater<>());
-  eng.screen_cutoff_ = -1;
-  for (std::size_t q = 0; q < screened.size(); ++q) {
-    const int k = screened[q].second;
-    const Effect& e = cat.effects[k];
-    if (static_cast<int>(q) >= opt.screen_keep || screened[q].first < 0.002) {
-      results[k].screened_out = true;
-      continue;
+
+  // The best screened candidates, each calibrated alone and judged on the
+  // validation runs.
+  void fit_alone(const std::vector<std::pair<double, int>>& screened) {
+    for (std::size_t q = 0; q < screened.size(); ++q) {
+      const int k = screened[q].second;
+      const Effect& e = cat_.effects[k];
+      if (static_cast<int>(q) >= opt_.screen_keep || screened[q].first < 0.002) {
+        results_[k].screened_out = true;
+        continue;
+      }
+      auto f = eng_.fit({EffectInstance{&e, initial_values(e)}}, cal_, {}, opt_.max_iterations, true);
+      const auto r_val = eng_.residuals({eng_.model(f.effects)}, val_)[0];
+      judge(results_[k], f, r_val);
+      log(fmt("  fit %-2.0f/%-2.0f ", q + 1, std::min<double>(screened.size(), opt_.screen_keep)) + e.name +
+          fmt(": validation gap %.3g -> %.3g, dBIC %.3g", results_[k].gap_before, results_[k].gap_after,
+              results_[k].delta_bic) +
+          fmt("  (%.0f simulations) [%.1f s]", f.evaluations * cal_.runs.size(), elapsed()) +
+          (results_[k].failed_validation_runs ? " - the solver failed on a validation run at the fitted values" : ""));
+      cands_.push_back({&e, f, r_val});
     }
-    std::vector<double> init;
-    for (const auto& p : e.parameters) init.push_back(p.initial);
-    auto f = eng.fit({EffectInstance{&e, init}}, cal, {}, opt.max_iterations, true);
-    const auto r_val = eng.residuals({eng.model(f.effects)}, val)[0];
-    auto& er = results[k];
+  }
+
+  void judge(EffectResult& er, const Engine::Fit& f, const std::vector<double>& r_val) const {
     er.values = f.effects[0].values;
     er.fit_evaluations = f.evaluations;
-    er.validation_after = eng.gaps(r_val, val);
+    er.validation_after = eng_.gaps(r_val, val_);
     er.gap_after = er.validation_after.total.rms;
-    for (const auto& seg : val.segments)
+    for (const auto& seg : val_.segments)
       if (seg.signal == 0 && r_val[seg.offset] == kFailedResidual) ++er.failed_validation_runs;
-    const auto s = eng.significance(r_val0, r_val, val, static_cast<int>(e.parameters.size()));
+    const auto s = eng_.significance(r_val0_, r_val, val_, static_cast<int>(f.effects[0].values.size()));
     er.lr_eff = s.lr;
     er.delta_bic = s.delta_bic;
     er.p_value = s.p;
     er.n_eff = s.n_eff;
-    er.significant = s.delta_bic > opt.significance_bic && er.gap_before > opt.adequate_gap &&
-                     practically_significant(rep.validation_before, er.validation_after, opt);
-    log(fmt("  fit %-2.0f/%-2.0f ", q + 1, std::min<double>(screened.size(), opt.screen_keep)) + e.name +
-        fmt(": validation gap %.3g -> %.3g, dBIC %.3g", er.gap_before, er.gap_after, er.delta_bic) +
-        fmt("  (%.0f simulations) [%.1f s]", f.evaluations * cal.runs.size(), elapsed()) +
-        (er.failed_validation_runs ? " - the solver failed on a validation run at the fitted values" : ""));
-    cands.push_back({&e, f, r_val});
+    er.significant = s.delta_bic > opt_.significance_bic && er.gap_before > opt_.adequate_gap &&
+                     practically_significant(rep_.validation_before, er.validation_after, opt_);
   }
-  const std::vector<int> order = rank_effects(results);
 
-  // Groups: near-collinear improvement patterns that the data do not separate.
-  auto cand_of = [&](const std::string& n) -> const Cand* {
-    for (const auto& c : cands)
-      if (c.e->name == n) return &c;
-    return nullptr;
-  };
-  auto improvement_cosine = [&](const Cand& a, const Cand& b) {
-    double ab = 0, aa = 0, bb = 0;
-    for (std::size_t i = 0; i < r_val0.size(); ++i) {
-      const double da = r_val0[i] - a.r_val[i], db = r_val0[i] - b.r_val[i];
-      ab += da * db, aa += da * da, bb += db * db;
-    }
-    return aa > 0 && bb > 0 ? ab / std::sqrt(aa * bb) : 0.0;
-  };
-  for (auto& er : results) {
-    const Cand* a = cand_of(er.name);
-    if (!a || !er.significant) continue;
-    for (const auto& other : results) {
-      const Cand* b = cand_of(other.name);
-      if (!b || b == a || !other.significant) continue;
-      // Indistinguishable: same improvement pattern, and neither fit is
-      // significantly better than the other on the validation runs.
-      const auto s_ab = eng.significance(b->r_val, a->r_val, val, 0);
-      if (improvement_cosine(*a, *b) > opt.group_cosine && std::abs(s_ab.lr) < opt.significance_bic)
-        er.group.push_back(other.name);
+  // Groups: near-collinear improvement patterns that the data do not
+  // separate - and neither fit significantly better than the other on the
+  // validation runs.
+  void group() {
+    auto improvement_cosine = [&](const Cand& a, const Cand& b) {
+      double ab = 0, aa = 0, bb = 0;
+      for (std::size_t i = 0; i < r_val0_.size(); ++i) {
+        const double da = r_val0_[i] - a.r_val[i], db = r_val0_[i] - b.r_val[i];
+        ab += da * db, aa += da * da, bb += db * db;
+      }
+      return aa > 0 && bb > 0 ? ab / std::sqrt(aa * bb) : 0.0;
+    };
+    for (auto& er : results_) {
+      const Cand* a = cand_of(er.name);
+      if (!a || !er.significant) continue;
+      for (const auto& other : results_) {
+        const Cand* b = cand_of(other.name);
+        if (!b || b == a || !other.significant) continue;
+        const auto s_ab = eng_.significance(b->r_val, a->r_val, val_, 0);
+        if (improvement_cosine(*a, *b) > opt_.group_cosine && std::abs(s_ab.lr) < opt_.significance_bic)
+          er.group.push_back(other.name);
+      }
     }
   }
 
-  // Forward selection. First the best-ranked significant effect.
-  std::vector<EffectInstance> chosen;
-  std::vector<double> r_val_cur = r_val0, r_cal_cur = r_cal0;
-  auto name_in_verdict = [&](const std::string& name) {
-    rep.verdict.push_back(name);
-    for (const auto& er : results)
+  void name_in_verdict(const std::string& name) {
+    rep_.verdict.push_back(name);
+    for (const auto& er : results_)
       if (er.name == name) {
         auto g = er.group;
         g.insert(g.begin(), er.name);
-        rep.verdict_groups.push_back(g);
+        rep_.verdict_groups.push_back(g);
       }
-  };
-  const Cand* best = nullptr;
-  for (int k : order)
-    if (results[k].significant) {
-      best = cand_of(results[k].name);
-      break;
-    }
-  if (best) {
-    chosen = best->fit.effects;
-    r_val_cur = best->r_val;
-    r_cal_cur = best->fit.r_cal;
-    // Polish the first effect alone with a second iteration budget, so that a
-    // second effect is credited only for what the first cannot do (a joint
-    // fit would otherwise also get the first effect's unfinished iterations).
+  }
+
+  // The best-ranked significant effect, polished alone with a second
+  // iteration budget, so that a second effect is credited only for what the
+  // first cannot do (a joint fit would otherwise also get the first effect's
+  // unfinished iterations). False: no effect is significant.
+  bool name_first_effect() {
+    const Cand* best = nullptr;
+    for (int k : order_)
+      if (results_[k].significant) {
+        best = cand_of(results_[k].name);
+        break;
+      }
+    if (!best) return false;
+    chosen_ = best->fit.effects;
+    r_val_cur_ = best->r_val;
+    r_cal_cur_ = best->fit.r_cal;
     log("  polishing " + best->e->name + fmt("  [%.1f s]", elapsed()));
-    auto polished = eng.fit(chosen, cal, r_cal_cur, opt.max_iterations);
-    if (ssr_of(polished.r_cal.data(), polished.r_cal.size()) < ssr_of(r_cal_cur.data(), r_cal_cur.size())) {
-      chosen = polished.effects;
-      r_cal_cur = polished.r_cal;
-      r_val_cur = eng.residuals({eng.model(chosen)}, val)[0];
-      for (auto& er : results)
+    auto polished = eng_.fit(chosen_, cal_, r_cal_cur_, opt_.max_iterations);
+    if (ssr(polished.r_cal) < ssr(r_cal_cur_)) {
+      chosen_ = polished.effects;
+      r_cal_cur_ = polished.r_cal;
+      r_val_cur_ = eng_.residuals({eng_.model(chosen_)}, val_)[0];
+      for (auto& er : results_)
         if (er.name == best->e->name) {
-          er.values = chosen[0].values;
-          er.validation_after = eng.gaps(r_val_cur, val);
+          er.values = chosen_[0].values;
+          er.validation_after = eng_.gaps(r_val_cur_, val_);
           er.gap_after = er.validation_after.total.rms;
         }
     }
     name_in_verdict(best->e->name);
+    return true;
   }
-  auto gap_of = [](const std::vector<double>& r) { return std::sqrt(ssr_of(r.data(), r.size()) / r.size()); };
-  auto ssr = [](const std::vector<double>& r) { return ssr_of(r.data(), r.size()); };
-  // Then, while a gap is left: re-screen the remaining candidates against it
-  // (each added to the current model: the linearised gain from its initial
-  // values with every parameter free, and the direct gain at its single fit -
-  // what one effect improves alone says little about what it adds to another),
-  // fit the best four jointly with the chosen effects, and add the one that
-  // removes the most of the validation gap among those that pass both gates
-  // against the current model.
-  while (best && static_cast<int>(rep.verdict.size()) < opt.max_effects && gap_of(r_val_cur) > opt.adequate_gap) {
-    const double c0 = ssr(r_cal_cur);
-    std::vector<std::pair<double, EffectInstance>> rescreen;
-    eng.screen_cutoff_ = 2.0;
-    for (int k : order) {
-      const Effect* e = cat.find(results[k].name);
+
+  // The remaining candidates re-screened against the gap left, each added to
+  // the current model: the linearised gain from its initial values with every
+  // parameter free, and the direct gain at its single fit (what one effect
+  // improves alone says little about what it adds to another). The best four,
+  // each with the start that did better.
+  std::vector<EffectInstance> rescreen() {
+    const double c0 = ssr(r_cal_cur_);
+    std::vector<std::pair<double, EffectInstance>> gains;
+    eng_.screen_cutoff_ = 2.0;
+    for (int k : order_) {
+      const Effect* e = cat_.find(results_[k].name);
       bool skip = false;
-      for (const auto& ch : chosen) skip = skip || ch.effect == e || effects_conflict(*ch.effect, *e);
-      for (const auto& g : rep.verdict_groups)
+      for (const auto& ch : chosen_) skip = skip || ch.effect == e || effects_conflict(*ch.effect, *e);
+      for (const auto& g : rep_.verdict_groups)
         for (const auto& n : g) skip = skip || n == e->name;
       if (skip) continue;
-      std::vector<double> init;
-      for (const auto& p : e->parameters) init.push_back(p.initial);
-      auto start = chosen;
-      start.push_back({e, init});
-      const auto lin = eng.fit(start, cal, {}, 1);
+      auto start = chosen_;
+      start.push_back({e, initial_values(*e)});
+      const auto lin = eng_.fit(start, cal_, {}, 1);
       const double at_init = ssr(lin.r_cal);
       double gain = 1 - at_init * (1 - lin.screening) / c0;
-      EffectInstance from{e, init};
+      EffectInstance from{e, initial_values(*e)};
       if (const Cand* c = cand_of(e->name)) {
         start.back() = c->fit.effects[0];
-        const double at_fit = ssr(eng.residuals({eng.model(start)}, cal)[0]);
+        const double at_fit = ssr(eng_.residuals({eng_.model(start)}, cal_)[0]);
         if (at_fit < at_init) from = c->fit.effects[0];
         gain = std::max(gain, 1 - at_fit / c0);
       }
       log("  re-screening " + e->name + fmt(" against the gap left: %.1f %%", 100 * gain));
-      rescreen.push_back({gain, from});
+      gains.push_back({gain, from});
     }
-    eng.screen_cutoff_ = -1;
-    std::stable_sort(rescreen.begin(), rescreen.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
-    if (rescreen.size() > 4) rescreen.resize(4);
-    struct Step {
-      const Effect* e;
-      Engine::Fit fit;
-      std::vector<double> r_val;
-      GapTable gap;
-    };
-    const GapTable gap_cur = eng.gaps(r_val_cur, val);
+    eng_.screen_cutoff_ = -1;
+    std::stable_sort(gains.begin(), gains.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+    std::vector<EffectInstance> out;
+    for (std::size_t i = 0; i < gains.size() && i < 4; ++i) out.push_back(gains[i].second);
+    return out;
+  }
+
+  // Forward selection: the re-screened candidates fitted jointly with the
+  // chosen effects (their parameters free); the one that removes the most of
+  // the validation gap among those that pass both gates against the current
+  // model is added. False: none does.
+  bool add_effect() {
+    const GapTable gap_cur = eng_.gaps(r_val_cur_, val_);
     std::optional<Step> bs;
-    for (const auto& [gain, add] : rescreen) {
+    for (const auto& add : rescreen()) {
       const Effect* e = add.effect;
-      auto start = chosen;
+      auto start = chosen_;
       start.push_back(add);
-      log("  forward selection: " + rep.verdict.back() + " + " + e->name + fmt("  [%.1f s]", elapsed()));
-      auto f = eng.fit(start, cal, {}, opt.max_iterations, true);
+      log("  forward selection: " + rep_.verdict.back() + " + " + e->name + fmt("  [%.1f s]", elapsed()));
+      auto f = eng_.fit(start, cal_, {}, opt_.max_iterations, true);
       if (at_null(f.effects.back())) {
         log("    " + e->name + " fitted back to its null value: not added");
         continue;
       }
-      Step st{e, f, eng.residuals({eng.model(f.effects)}, val)[0], {}};
-      st.gap = eng.gaps(st.r_val, val);
-      const auto s = eng.significance(r_val_cur, st.r_val, val, static_cast<int>(e->parameters.size()));
+      Step st{e, f, eng_.residuals({eng_.model(f.effects)}, val_)[0], {}};
+      st.gap = eng_.gaps(st.r_val, val_);
+      const auto s = eng_.significance(r_val_cur_, st.r_val, val_, static_cast<int>(e->parameters.size()));
       std::string why;
-      const bool practical = practically_significant(gap_cur, st.gap, opt, &why);
-      log("    + " + e->name + fmt(": validation gap %.3g -> %.3g, dBIC %.3g", gap_cur.total.rms, st.gap.total.rms,
-                                    s.delta_bic) +
+      const bool practical = practically_significant(gap_cur, st.gap, opt_, &why);
+      log("    + " + e->name +
+          fmt(": validation gap %.3g -> %.3g, dBIC %.3g", gap_cur.total.rms, st.gap.total.rms, s.delta_bic) +
           (practical ? ", removes enough of the gap of " + why : ", not practically significant"));
-      if (s.delta_bic > opt.significance_bic && practical && (!bs || st.gap.total.rms < bs->gap.total.rms))
+      if (s.delta_bic > opt_.significance_bic && practical && (!bs || st.gap.total.rms < bs->gap.total.rms))
         bs = std::move(st);
     }
-    if (!bs) break;
-    chosen = bs->fit.effects;
-    r_val_cur = bs->r_val;
-    r_cal_cur = bs->fit.r_cal;
+    if (!bs) return false;
+    chosen_ = bs->fit.effects;
+    r_val_cur_ = bs->r_val;
+    r_cal_cur_ = bs->fit.r_cal;
     name_in_verdict(bs->e->name);
+    return true;
   }
-  for (const auto& c : chosen) rep.final_values.emplace_back(c.effect->name, c.values);
-  rep.validation_after = eng.gaps(r_val_cur, val);
 
-  // Traces for the report: validation runs, measured against before and after.
-  {
-    const Model after = eng.model(chosen);
-    for (int k : val.runs) {
-      const auto before_sim = eng.simulate(base_model, k);
-      const auto after_sim = eng.simulate(after, k);
-      const auto& run = eng.runs[k];
+  // Decimated traces of every validation run, measured against before and after.
+  void traces() {
+    const Model after = eng_.model(chosen_);
+    for (int k : val_.runs) {
+      const auto before_sim = eng_.simulate(base_model_, k);
+      const auto after_sim = eng_.simulate(after, k);
+      const auto& run = eng_.runs[k];
       const std::size_t stride = std::max<std::size_t>(1, run.t.size() / 400);
       for (std::size_t s = 0; s < run.signals.size(); ++s) {
         TracePlot tp;
         tp.run = run.name;
         tp.signal = run.signals[s];
-        tp.phase_times = eng.phase_times[k];
+        tp.phase_times = eng_.phase_times[k];
         for (std::size_t i = 0; i < run.t.size(); i += stride) {
           tp.t.push_back(run.t[i]);
           tp.measured.push_back(run.y[s][i]);
           tp.before.push_back(before_sim.empty() ? NAN : before_sim[s][i]);
           tp.after.push_back(after_sim.empty() ? NAN : after_sim[s][i]);
         }
-        rep.plots.push_back(std::move(tp));
+        rep_.plots.push_back(std::move(tp));
       }
     }
   }
-  rep.effects = results;
-  std::sort(rep.effects.begin(), rep.effects.end(), [](const EffectResult& a, const EffectResult& b) {
-    if ((a.rank == 0) != (b.rank == 0)) return a.rank != 0;
-    return a.rank < b.rank;
-  });
-  {
+
+  // The verdict's values and gap, the traces, the ranking, which sensor
+  // would decide, and what is left unexplained.
+  void finish() {
+    for (const auto& c : chosen_) rep_.final_values.emplace_back(c.effect->name, c.values);
+    rep_.validation_after = eng_.gaps(r_val_cur_, val_);
+    traces();
+    rep_.effects = results_;
+    std::sort(rep_.effects.begin(), rep_.effects.end(), [](const EffectResult& a, const EffectResult& b) {
+      if ((a.rank == 0) != (b.rank == 0)) return a.rank != 0;
+      return a.rank < b.rank;
+    });
     std::map<std::string, std::vector<EffectInstance>> fits;
-    for (const auto& c : cands) fits[c.e->name] = c.fit.effects;
-    rep.sensors = decisive_sensors(eng, rep, fits);
+    for (const auto& c : cands_) fits[c.e->name] = c.fit.effects;
+    rep_.sensors = decisive_sensors(eng_, rep_, fits);
+    auto logger = [this](const std::string& s) { log(s); };
+    if (rep_.validation_after.total.rms > opt_.adequate_gap)
+      rep_.unexplained = leftover(eng_, eng_.model(chosen_), rep_, cal_, val_, r_cal_cur_, r_val_cur_, logger);
+    rep_.seconds = elapsed();
+    rep_.simulations = eng_.simulations;
+    std::string v;
+    for (const auto& n : rep_.verdict) v += (v.empty() ? "" : ", ") + n;
+    log(fmt("verdict: [", 0) + v + fmt("]; validation gap %.3g -> %.3g; %.1f s", rep_.validation_before.total.rms,
+                                       rep_.validation_after.total.rms, rep_.seconds));
   }
-  if (rep.validation_after.total.rms > opt.adequate_gap)
-    rep.unexplained = leftover(eng, eng.model(chosen), rep, cal, val, r_cal_cur, r_val_cur, log);
-  rep.seconds = elapsed();
-  rep.simulations = eng.simulations;
-  std::string v;
-  for (const auto& n : rep.verdict) v += (v.empty() ? "" : ", ") + n;
-  log(fmt("verdict: [", 0) + v + fmt("]; validation gap %.3g -> %.3g; %.1f s", rep.validation_before.total.rms,
-                                     rep.validation_after.total.rms, rep.seconds));
-  return rep;
+
+  const std::chrono::steady_clock::time_point t_start_ = std::chrono::steady_clock::now();
+  const DiagnoseOptions& opt_;
+  Engine eng_;
+  Catalogue cat_;
+  DiagnosisReport rep_;
+  Layout cal_, val_;
+  Model base_model_;
+  std::vector<double> r_cal0_, r_val0_, r_cal_cur_, r_val_cur_;
+  std::vector<EffectResult> results_;
+  std::vector<Cand> cands_;
+  std::vector<int> order_;
+  std::vector<EffectInstance> chosen_;
+};
+
+}  // namespace
+
+DiagnosisReport diagnose(const std::string& model_file, const std::string& runs_dir,
+                         const std::string& catalogue_file, const Registry& registry, const DiagnoseOptions& opt) {
+  return Diagnosis(model_file, runs_dir, catalogue_file, registry, opt).run();
 }
 
 }  // namespace pneumo::diagnose
