@@ -1,0 +1,283 @@
+// Elaboration: a Netlist's declarations made into component instances with
+// SI parameters (converted, defaulted and range checked), connections of
+// resolved ports and output probes.
+#include <algorithm>
+#include <set>
+
+#include "framework/netlist/netlist.hpp"
+#include "framework/netlist/reader.hpp"
+
+namespace pneumo {
+
+using namespace netlist_detail;
+
+namespace {
+
+Dimension spec_dimension(const ParameterSpec& spec) { return units::dimension_of(spec.unit); }
+
+}  // namespace
+
+double parameter_value(const Netlist& nl, const ComponentDecl& c, const ParameterSpec& spec,
+                       const ValueDecl& node) {
+  Reader r(nl.file);
+  if (node.si) return *node.si;
+  const std::string text = r.scalar_text(node, c.name, spec.name, "the value");
+  const Dimension dim = spec_dimension(spec);
+  if (is_identifier(text)) {
+    const TopParameter* tp = nl.parameter(text);
+    if (!tp) {
+      std::vector<std::string> names;
+      for (const auto& p : nl.parameters) names.push_back(p.name);
+      r.fail(node, c.name, spec.name,
+             "'" + text + "' is not a number, a quantity with unit (e.g. '2 " + (spec.unit.empty() ? "1" : spec.unit) +
+                 "') or the name of a top-level parameter; " +
+                 (names.empty() ? std::string("the netlist declares no top-level parameters")
+                                : "top-level parameters: " + choices_hint(text, names)));
+    }
+    if (tp->had_unit && !(tp->dim == dim))
+      r.fail(node, c.name, spec.name,
+             "top-level parameter '" + text + "' (" + tp->where.to_string() + ") has dimension " +
+                 tp->dim.to_string() + " but this parameter needs " + spec.unit + " (" + dim.to_string() + ")");
+    return tp->si_value;
+  }
+  return r.quantity(node, nl.gas.p_ambient, dim, spec.unit, c.name, spec.name);
+}
+
+namespace {
+
+// A component's registry entry; an unknown type is an error at its line.
+const Registry::Entry& entry_of(const Registry& registry, const ComponentDecl& c) {
+  const Registry::Entry* entry = registry.find(c.type);
+  if (!entry)
+    throw InputError(c.type_where.line > 0 ? c.type_where : c.where, c.name, "type",
+                     "unknown component type '" + c.type + "'; " + choices_hint(c.type, registry.types()) +
+                         " (run 'pneumo components' for the list)");
+  return *entry;
+}
+
+double scalar_parameter(const Reader& r, const Netlist& nl, const ComponentDecl& c, const ParameterSpec& spec,
+                        const ValueDecl& pnode) {
+  const std::string& pname = spec.name;
+  const double v = parameter_value(nl, c, spec, pnode);
+  if (!spec.in_range(v)) {
+    std::string from;
+    if (pnode.shape == ValueDecl::Shape::scalar && !pnode.si && is_identifier(pnode.text))
+      if (const TopParameter* tp = nl.parameter(pnode.text))
+        from = " (from top-level parameter '" + tp->name + "' at " + tp->where.to_string() + ")";
+    r.fail(pnode, c.name, pname, "value " + units::format_si(v, spec_dimension(spec)) + from +
+                                     " is out of range; valid: " + spec.range_text() + " (" + spec.unit + ")");
+  }
+  return v;
+}
+
+// A table: rows of the spec's columns, each cell converted and range checked.
+Table table_parameter(const Reader& r, const Netlist& nl, const ComponentDecl& c, const ParameterSpec& spec,
+                      const ValueDecl& pnode) {
+  const std::string& pname = spec.name;
+  if (pnode.shape != ValueDecl::Shape::list || pnode.items.empty())
+    r.fail(pnode, c.name, pname, "a table is a list of rows, e.g. [[0, 0], [1.5, 0.12 dm3/(s*bar)]]");
+  Table t;
+  for (const auto& row : pnode.items) {
+    if (row.shape != ValueDecl::Shape::list || row.items.size() != spec.columns.size())
+      r.fail(row, c.name, pname,
+             "each row needs " + std::to_string(spec.columns.size()) + " values (" + join(spec.columns) + ")");
+    std::vector<double> vals;
+    std::size_t col = 0;
+    for (const auto& cell : row.items) {
+      ParameterSpec cs = ParameterSpec::scalar(pname, spec.columns[col++], "");
+      const double v = parameter_value(nl, c, cs, cell);
+      if (!cs.in_range(v))
+        r.fail(cell, c.name, pname,
+               "row " + std::to_string(t.size() + 1) + ", column " + std::to_string(col) + ": value " +
+                   units::format_si(v, spec_dimension(cs)) + " is out of range; valid: " + cs.range_text() +
+                   " (" + cs.unit + ")");
+      vals.push_back(v);
+    }
+    t.push_back(std::move(vals));
+  }
+  return t;
+}
+
+std::string text_parameter(const Reader& r, const ComponentDecl& c, const ParameterSpec& spec,
+                           const ValueDecl& pnode) {
+  const std::string& pname = spec.name;
+  const std::string v = r.scalar_text(pnode, c.name, pname, "the value");
+  if (!spec.choices.empty() &&
+      std::find(spec.choices.begin(), spec.choices.end(), v) == spec.choices.end())
+    r.fail(pnode, c.name, pname, "'" + v + "' is not allowed; " + choices_hint(v, spec.choices));
+  return v;
+}
+
+// The parameters the declaration gives, converted by their specs.
+std::set<std::string> given_parameters(const Reader& r, const Netlist& nl, const ComponentDecl& c,
+                                       const ComponentInfo& info, ParameterValues& out) {
+  std::set<std::string> given;
+  for (const auto& [pname, pnode] : c.parameters) {
+    const ParameterSpec* spec = info.parameter(pname);
+    if (!spec) {
+      std::vector<std::string> names;
+      for (const auto& s : info.parameters) names.push_back(s.name);
+      throw InputError(c.where_of(pname), c.name, pname,
+                       "unknown parameter of type '" + c.type + "'; " + choices_hint(pname, names) +
+                           " (run 'pneumo components " + c.type + "')");
+    }
+    given.insert(pname);
+    switch (spec->kind) {
+      case ParameterKind::scalar: out.set_scalar(pname, scalar_parameter(r, nl, c, *spec, pnode)); break;
+      case ParameterKind::table: out.set_table(pname, table_parameter(r, nl, c, *spec, pnode)); break;
+      case ParameterKind::text: out.set_text(pname, text_parameter(r, c, *spec, pnode)); break;
+    }
+  }
+  return given;
+}
+
+// Defaults of the parameters not given; a required one missing is an error.
+void default_parameters(const ComponentDecl& c, const ComponentInfo& info, const std::set<std::string>& given,
+                        ParameterValues& out) {
+  for (const auto& spec : info.parameters) {
+    if (given.count(spec.name)) continue;
+    if (spec.kind == ParameterKind::scalar && spec.default_value) {
+      out.set_scalar(spec.name, *spec.default_value);
+    } else if (spec.kind == ParameterKind::text && spec.default_text) {
+      out.set_text(spec.name, *spec.default_text);
+    } else if (spec.is_optional || (spec.kind == ParameterKind::table && !spec.required_table)) {
+      // optional: absent
+    } else {
+      throw InputError(c.where, c.name, spec.name,
+                       "missing required parameter '" + spec.name + "' of type '" + c.type + "' (" +
+                           (spec.kind == ParameterKind::table ? std::string("table") : spec.unit) + ", " +
+                           spec.description + "); add it, e.g. {type: " + c.type + ", " + spec.name + ": ...}");
+    }
+  }
+}
+
+std::unique_ptr<Component> make_component(const Reader& r, const Netlist& nl, const ComponentDecl& c,
+                                          const Registry& registry) {
+  const Registry::Entry& entry = entry_of(registry, c);
+  Construction k;
+  k.name = c.name;
+  const auto given = given_parameters(r, nl, c, *entry.info, k.params);
+  default_parameters(c, *entry.info, given, k.params);
+  try {
+    k.info = entry.instance_info(k.params);
+    return entry.make(k);
+  } catch (const ParameterError& e) {
+    SourceLocation w = c.where;
+    for (const auto& [pname, pnode] : c.parameters)
+      if (pname == e.parameter()) w = pnode.where;
+    throw InputError(w, c.name, e.parameter(), e.what());
+  }
+}
+
+PortId resolve_port(const Circuit& circuit, const std::map<std::string, int>& index, const PortRefDecl& ref) {
+  auto it = index.find(ref.component);
+  if (it == index.end()) {
+    std::vector<std::string> names;
+    for (const auto& [n, i] : index) names.push_back(n);
+    throw InputError(ref.where, ref.component, "", "no component named '" + ref.component + "'; " +
+                                                       choices_hint(ref.component, names));
+  }
+  const auto& info = circuit.components[it->second]->info();
+  const int port = info.port_index(ref.port);
+  if (port < 0) {
+    std::vector<std::string> names;
+    for (const auto& p : info.ports) names.push_back(p.name);
+    throw InputError(ref.where, ref.component, "",
+                     "type '" + info.type + "' has no port '" + ref.port + "'; " + choices_hint(ref.port, names));
+  }
+  return {it->second, port};
+}
+
+// The probe behind an output: an observable, a local variable, or a signal
+// port by its name alone (source.y for the value of port y).
+Probe make_probe(const Netlist& nl, const Circuit& circuit, const std::map<std::string, int>& index,
+                 const OutputDecl& o) {
+  auto it = index.find(o.component);
+  if (it == index.end()) {
+    std::vector<std::string> names;
+    for (const auto& [n, i] : index) names.push_back(n);
+    throw InputError(o.where, o.component, "", "output '" + o.name + "': no component named '" + o.component +
+                                                   "'; " + choices_hint(o.component, names));
+  }
+  const Component& comp = *circuit.components[it->second];
+  Probe probe;
+  probe.name = o.name;
+  probe.component = it->second;
+  const auto& obs = comp.info().observables;
+  for (std::size_t i = 0; i < obs.size(); ++i)
+    if (obs[i].name == o.quantity) {
+      probe.kind = Probe::Kind::observable;
+      probe.index = static_cast<int>(i);
+      probe.unit = obs[i].unit;
+    }
+  if (probe.index < 0) {
+    const auto names = local_variable_names(comp);
+    const auto unit_names = local_variable_units(comp);
+    for (std::size_t i = 0; i < names.size(); ++i)
+      if (names[i] == o.quantity) {
+        probe.kind = Probe::Kind::local;
+        probe.index = static_cast<int>(i);
+        probe.unit = unit_names[i];
+      }
+  }
+  // A signal port by its name alone (source.y for the value of port y).
+  if (probe.index < 0) {
+    const int port = comp.info().port_index(o.quantity);
+    if (port >= 0 && comp.info().ports[port].domain == Domain::signal) {
+      probe.kind = Probe::Kind::local;
+      probe.index = comp.port_offset(port);
+      probe.unit = local_variable_units(comp)[probe.index];
+    }
+  }
+  if (probe.index < 0) {
+    std::vector<std::string> valid;
+    for (const auto& ob : obs) valid.push_back(ob.name);
+    for (const auto& n : local_variable_names(comp)) valid.push_back(n);
+    throw InputError(o.where, o.component, "", "output '" + o.name + "': type '" + comp.info().type +
+                                                   "' has no variable '" + o.quantity + "'; " +
+                                                   choices_hint(o.quantity, valid));
+  }
+  if (o.integral) {
+    probe.integral = true;
+    probe.unit = probe.unit == "W" ? "J" : probe.unit == "kg/s" ? "kg" : probe.unit + "*s";
+  }
+  if (!o.unit.empty()) {
+    const units::Unit u = units::parse_unit(o.unit);
+    if (!(u.dim == units::dimension_of(probe.unit)))
+      throw InputError(o.unit_where, o.component, "",
+                       "output '" + o.name + "': unit '" + o.unit + "' (" + u.dim.to_string() + ") does not fit '" +
+                           o.quantity + "' in " + probe.unit + " (" + units::dimension_of(probe.unit).to_string() +
+                           ")");
+    probe.display = {o.unit, u.scale, u.offset + (u.gauge ? nl.gas.p_ambient : 0.0)};
+  }
+  return probe;
+}
+
+}  // namespace
+
+Circuit elaborate(const Netlist& nl, const Registry& registry) {
+  const Reader r(nl.file);
+  Circuit circuit;
+  circuit.gas = nl.gas;
+  std::map<std::string, int> index;
+  for (const auto& c : nl.components) {
+    circuit.components.push_back(make_component(r, nl, c, registry));
+    circuit.component_where.push_back(c.where);
+    index[c.name] = static_cast<int>(circuit.components.size()) - 1;
+  }
+  for (const auto& conn : nl.connections) {
+    Connection c;
+    c.where = conn.where;
+    for (const auto& ref : conn.ports) {
+      const PortId id = resolve_port(circuit, index, ref);
+      if (std::find(c.ports.begin(), c.ports.end(), id) != c.ports.end())
+        throw InputError(ref.where, ref.component, "", "port '" + ref.port + "' appears twice in one connection");
+      c.ports.push_back(id);
+    }
+    circuit.connections.push_back(std::move(c));
+  }
+  for (const auto& o : nl.outputs) circuit.probes.push_back(make_probe(nl, circuit, index, o));
+  return circuit;
+}
+
+}  // namespace pneumo
