@@ -371,12 +371,12 @@ std::string file_name(const std::string& path) {
 void write_report_html(const DiagnosisReport& r, const std::string& path) {
   std::ostringstream o;
   o << "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>pneumo diagnosis</title>\n"
-       "<style>body{font-family:sans-serif;max-width:1180px;margin:1em auto;padding:0 10px;line-height:1.35}"
+       "<style>body{font-family:sans-serif;max-width:1140px;margin:1em auto;padding:0 10px;line-height:1.35}"
        "table{border-collapse:collapse;max-width:100%}td,th{border:1px solid #ccc;padding:2px 6px;text-align:right;"
        "vertical-align:top;white-space:nowrap}th,td.w{white-space:normal}th{background:#eee}td.l{text-align:left}tr.present{background:#e8f4e8}"
        ".legend span{margin-right:1.2em}code{overflow-wrap:anywhere}svg{max-width:100%;height:auto}"
        ".traces{display:grid;grid-template-columns:repeat(auto-fill,minmax(520px,1fr));gap:6px}"
-       "p.note{color:#555;font-size:90%}</style></head><body>\n";
+       "p.note{color:#555;font-size:90%}#ranking td{white-space:normal}</style></head><body>\n";
   o << "<h1>Sim-to-real gap diagnosis</h1>\n<p>Model " << file_name(r.model_file) << ", runs "
     << file_name(r.runs_dir) << " (calibration";
   for (const auto& n : r.calibration_runs) o << " " << html(n);
