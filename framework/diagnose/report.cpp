@@ -366,40 +366,8 @@ std::string file_name(const std::string& path) {
   return "<code title=\"" + html(path) + "\">" + html(std::filesystem::path(path).filename().string()) + "</code>";
 }
 
-}  // namespace
-
-void write_report_html(const DiagnosisReport& r, const std::string& path) {
-  std::ostringstream o;
-  o << "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>pneumo diagnosis</title>\n"
-       "<style>body{font-family:sans-serif;max-width:1140px;margin:1em auto;padding:0 10px;line-height:1.35}"
-       "table{border-collapse:collapse;max-width:100%}td,th{border:1px solid #ccc;padding:2px 6px;text-align:right;"
-       "vertical-align:top;white-space:nowrap}th,td.w{white-space:normal}th{background:#eee}td.l{text-align:left}tr.present{background:#e8f4e8}"
-       ".legend span{margin-right:1.2em}code{overflow-wrap:anywhere}svg{max-width:100%;height:auto}"
-       ".traces{display:grid;grid-template-columns:repeat(auto-fill,minmax(520px,1fr));gap:6px}"
-       "p.note{color:#555;font-size:90%}#ranking td{white-space:normal}</style></head><body>\n";
-  o << "<h1>Sim-to-real gap diagnosis</h1>\n<p>Model " << file_name(r.model_file) << ", runs "
-    << file_name(r.runs_dir) << " (calibration";
-  for (const auto& n : r.calibration_runs) o << " " << html(n);
-  o << "; validation";
-  for (const auto& n : r.validation_runs) o << " " << html(n);
-  o << "), catalogue " << file_name(r.catalogue_file) << "; " << r.simulations << " simulations in "
-    << sig(r.seconds, 2) << " s.</p>\n";
-  o << "<h2>Verdict</h2>\n<p id=\"verdict\">";
-  if (r.verdict.empty()) o << "No candidate effect is needed or helps significantly.";
-  for (std::size_t i = 0; i < r.verdict_groups.size(); ++i) {
-    o << (i ? "; then " : "") << "<b>" << html(r.verdict_groups[i][0]) << "</b>";
-    if (r.verdict_groups[i].size() > 1) {
-      o << " (indistinguishable from";
-      for (std::size_t j = 1; j < r.verdict_groups[i].size(); ++j) o << " " << html(r.verdict_groups[i][j]);
-      o << ")";
-    }
-  }
-  o << "</p>\n<p>Validation gap (RMS of residual / noise; 1 = within noise): before <b>"
-    << gap(r.validation_before.total.rms) << "</b>, after <b>" << gap(r.validation_after.total.rms) << "</b>.</p>\n";
-  for (const auto& c : r.sensors)
-    if (!c.best.empty()) o << "<p class=\"sensor\">To tell them apart: " << html(sensor_sentence(c)) << ".</p>\n";
-  o << unexplained_html(r.unexplained, html);
-
+// The validation gap by phase and signal: bars, table, shares, windows.
+void gap_section(std::ostream& o, const DiagnosisReport& r) {
   o << "<h2>Gap by phase and signal (validation runs)</h2>\n"
     << "<p class=\"legend\"><span style=\"color:#d62728\">&#9632; unpatched model</span>"
        "<span style=\"color:#1f77b4\">&#9632; with the verdict's effects</span></p>\n"
@@ -436,6 +404,10 @@ void write_report_html(const DiagnosisReport& r, const std::string& path) {
       << "</td><td>" << fixed(r.windows[i].t0, 3) << "</td><td>" << fixed(r.windows[i].t1, 3) << "</td><td>"
       << gap(r.windows[i].rms) << "</td></tr>\n";
   o << "</table></details>\n";
+}
+
+// Every candidate: rank, status, fitted values, gaps, significance, group.
+void ranking_section(std::ostream& o, const DiagnosisReport& r) {
   o << "<h2>Ranking of candidate effects</h2>\n<table id=\"ranking\"><tr><th>rank</th><th>effect</th><th>status</th>"
        "<th>fitted parameters</th><th>gap before</th><th>gap after</th><th>&Delta;BIC (eff.)</th><th>p</th>"
        "<th>significant</th><th>indistinguishable from</th></tr>\n";
@@ -459,7 +431,46 @@ void write_report_html(const DiagnosisReport& r, const std::string& path) {
     for (const auto& g : e.group) o << html(g) << " ";
     o << "</td></tr>\n";
   }
-  o << "</table>\n<h2>Measured against simulated (validation runs)</h2>\n<p class=\"legend\">"
+  o << "</table>\n";
+}
+
+}  // namespace
+
+void write_report_html(const DiagnosisReport& r, const std::string& path) {
+  std::ostringstream o;
+  o << "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>pneumo diagnosis</title>\n"
+       "<style>body{font-family:sans-serif;max-width:1140px;margin:1em auto;padding:0 10px;line-height:1.35}"
+       "table{border-collapse:collapse;max-width:100%}td,th{border:1px solid #ccc;padding:2px 6px;text-align:right;"
+       "vertical-align:top;white-space:nowrap}th,td.w{white-space:normal}th{background:#eee}td.l{text-align:left}tr.present{background:#e8f4e8}"
+       ".legend span{margin-right:1.2em}code{overflow-wrap:anywhere}svg{max-width:100%;height:auto}"
+       ".traces{display:grid;grid-template-columns:repeat(auto-fill,minmax(520px,1fr));gap:6px}"
+       "p.note{color:#555;font-size:90%}#ranking td{white-space:normal}</style></head><body>\n";
+  o << "<h1>Sim-to-real gap diagnosis</h1>\n<p>Model " << file_name(r.model_file) << ", runs "
+    << file_name(r.runs_dir) << " (calibration";
+  for (const auto& n : r.calibration_runs) o << " " << html(n);
+  o << "; validation";
+  for (const auto& n : r.validation_runs) o << " " << html(n);
+  o << "), catalogue " << file_name(r.catalogue_file) << "; " << r.simulations << " simulations in "
+    << sig(r.seconds, 2) << " s.</p>\n";
+  o << "<h2>Verdict</h2>\n<p id=\"verdict\">";
+  if (r.verdict.empty()) o << "No candidate effect is needed or helps significantly.";
+  for (std::size_t i = 0; i < r.verdict_groups.size(); ++i) {
+    o << (i ? "; then " : "") << "<b>" << html(r.verdict_groups[i][0]) << "</b>";
+    if (r.verdict_groups[i].size() > 1) {
+      o << " (indistinguishable from";
+      for (std::size_t j = 1; j < r.verdict_groups[i].size(); ++j) o << " " << html(r.verdict_groups[i][j]);
+      o << ")";
+    }
+  }
+  o << "</p>\n<p>Validation gap (RMS of residual / noise; 1 = within noise): before <b>"
+    << gap(r.validation_before.total.rms) << "</b>, after <b>" << gap(r.validation_after.total.rms) << "</b>.</p>\n";
+  for (const auto& c : r.sensors)
+    if (!c.best.empty()) o << "<p class=\"sensor\">To tell them apart: " << html(sensor_sentence(c)) << ".</p>\n";
+  o << unexplained_html(r.unexplained, html);
+
+  gap_section(o, r);
+  ranking_section(o, r);
+  o << "<h2>Measured against simulated (validation runs)</h2>\n<p class=\"legend\">"
        "<span style=\"color:#999\">&#9644; measured</span><span style=\"color:#d62728\">&#9644; unpatched model</span>"
        "<span style=\"color:#1f77b4\">&#9644; model with the verdict's effects</span>shading: phases";
   for (std::size_t p = 0; p < r.phase_names.size(); ++p)
