@@ -86,9 +86,17 @@ class MetricReader {
     MetricDecl m;
     m.name = name_;
     m.where = location_of(nl_.file, key_);
+    std::string kind;
+    auto keys = keys_of(body, kind);
+    read_kind(kind, keys[kind], keys, m);
+    read_modifiers(keys, m);
+    return m;
+  }
+
+  // The metric's keys, checked: one kind (max, min, ...) and known modifiers.
+  std::map<std::string, YAML::Node> keys_of(const YAML::Node& body, std::string& kind) const {
     if (!body.IsMap()) fail(body, "must be a mapping, e.g. {max: p_cap} or {event: cylinder.cap_impact}");
     std::map<std::string, YAML::Node> keys;
-    std::string kind;
     for (auto it = body.begin(); it != body.end(); ++it) {
       const std::string k = text(it->first, "a key");
       const bool is_kind = std::find(kKinds.begin(), kKinds.end(), k) != kKinds.end();
@@ -100,7 +108,12 @@ class MetricReader {
       keys[k] = it->second;
     }
     if (kind.empty()) fail(body, "says what to compute with one of max, min, value, final, of, event, integral, expr, audit");
-    const YAML::Node v = keys[kind];
+    return keys;
+  }
+
+  // What the kind's value names: an output, an event, an integrand, an expression.
+  void read_kind(const std::string& kind, const YAML::Node& v, std::map<std::string, YAML::Node>& keys,
+                 MetricDecl& m) const {
     using K = MetricDecl::Kind;
     if (kind == "max" || kind == "min" || kind == "value" || kind == "final" || kind == "of") m.output = output(v);
     if (kind == "max") m.kind = K::max;
@@ -151,6 +164,11 @@ class MetricReader {
     } else if (keys.count("unit")) {
       fail(keys["unit"], "unit is declared only for expressions; the others take their output's unit");
     }
+  }
+
+  // n, from/to, at, crosses and direction, each only where it means something.
+  void read_modifiers(std::map<std::string, YAML::Node>& keys, MetricDecl& m) const {
+    using K = MetricDecl::Kind;
     if (keys.count("n")) {
       if (m.kind != K::crossing && m.kind != K::event_time) fail(keys["n"], "n (which occurrence) is for 'of' and 'event'");
       const int n = positive_int(keys["n"], text(keys["n"], "n"), "n");
@@ -168,7 +186,6 @@ class MetricReader {
     }
     if (keys.count("crosses") && m.kind != K::crossing) fail(keys["crosses"], "crosses goes with {of: OUTPUT}");
     if (keys.count("direction") && m.kind != K::crossing) fail(keys["direction"], "direction goes with {of: OUTPUT}");
-    return m;
   }
 
  private:
