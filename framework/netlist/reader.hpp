@@ -66,8 +66,7 @@ class Reader {
 
   std::string scalar_text(const YAML::Node& n, const std::string& component, const std::string& parameter,
                           const std::string& what) const {
-    if (!n.IsScalar()) fail(n, component, parameter, what + " must be a single value, not a list or mapping");
-    return n.Scalar();
+    return scalar_text(value(n), component, parameter, what);
   }
 
   // A number or a quantity with unit; `expected` is checked if the text has a unit.
