@@ -236,7 +236,7 @@ class Diagnosis {
       std::sort(v.begin(), v.end());
       rep_.noise.emplace_back(name, v[v.size() / 2]);
     }
-    for (const Probe& p : elaborate(eng_.base(), eng_.registry()).probes) rep_.signal_units.emplace_back(p.name, p.unit);
+    for (const Probe& p : eng_.base_probes()) rep_.signal_units.emplace_back(p.name, p.unit);
     log(fmt("diagnose: %g runs, ", eng_.runs.size()) + std::to_string(cat_.effects.size()) + " candidate effects, " +
         std::to_string(opt_.threads) + " threads");
     eng_.compute_phases(cat_.phases);

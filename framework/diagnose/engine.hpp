@@ -53,11 +53,12 @@ class Engine {
     ss << in.rdbuf();
     model_text_ = ss.str();
     base_netlist_ = parse_netlist(model_text_, model_file);
-    (void)elaborate(base_netlist_, registry);  // input errors now
+    base_probes_ = elaborate(base_netlist_, registry).probes;  // input errors now
     model_yaml_ = YAML::Load(model_text_);
   }
 
   const Netlist& base() const { return base_netlist_; }
+  const std::vector<Probe>& base_probes() const { return base_probes_; }
   const YAML::Node& yaml() const { return model_yaml_; }
   std::vector<MeasuredRun> runs;
   std::vector<std::string> phase_names;
@@ -387,6 +388,7 @@ class Engine {
   const Registry& registry_;
   DiagnoseOptions options_;
   Netlist base_netlist_;
+  std::vector<Probe> base_probes_;
   YAML::Node model_yaml_;
 };
 
