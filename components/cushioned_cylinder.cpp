@@ -2,15 +2,17 @@
 // end and optionally at the rod end (seed paper 000, fig. 1;
 // ../shared/rigs/cushion-rig.yaml).
 //
-// x = 0 fully extended, x = stroke at the cap. The cap side is split into
+// x = 0 fully extended, x = stroke at the cap. The cap side is a
+// CylinderSide (components/cylinder_parts.hpp) at travel stroke - x, split into
 //   EC: the cushion annulus around the plug, V_EC = V0_EC + (A_B - A_CP)(stroke - x)
 //   ch: the plug column plus outflow channel, V_ch = V0_ch + A_CP (stroke - x)
 // joined by the bore opening (open in the main stroke, closing linearly over
 // a short ramp before the plug engages - never a jump), the needle cushion
 // throttle (C from the opening z in revolutions, b linear in C) and a check
 // valve for the return stroke. Port B is the channel's outlet, port A the
-// rod-side chamber. Each gas volume has its own mass and energy balance;
-// heat ports to the walls are optional (adiabatic if unconnected).
+// rod-side chamber's (a CylinderSide at travel x). Each gas volume has its
+// own mass and energy balance; heat ports to the walls are optional
+// (adiabatic if unconnected).
 //
 // Force on the rod flange in +x (eq. 1-3 in one expression; the cushioning
 // terms vanish smoothly in the main stroke because p_EC = p_ch there):
@@ -24,8 +26,8 @@
 // End stops: elastic, force = max(0, k pen + d pen_rate), never pulling.
 //
 // Rod-end cushioning (present when `rod_plug_diameter` is given; the
-// instance then has the extra chamber, port and roots - instance_info): the
-// rod side splits the same way into the rod cushion annulus ECr,
+// instance then has the extra chamber, port and roots): the rod side splits
+// the same way into the rod cushion annulus ECr,
 //   V_ECr = V0_ECr + (A_B - A_CPr) x,
 // and the rod-side channel behind port A, V_A = V0_A + (A_CPr - A_R) x, with
 // its own bore opening (closing over a ramp before x = rod_cushion_length),
@@ -53,6 +55,7 @@
 // F_stop v (<= 0 when dissipating; P_stop also stores E_stop), U_gas.
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <stdexcept>
 #include <type_traits>
@@ -105,216 +108,57 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
             .positive(),
         P::scalar("dead_volume_cushion", "m3", "cushion annulus volume at x = stroke").positive(),
         P::scalar("dead_volume_channel", "m3", "outflow channel volume at x = stroke").positive(),
-        P::scalar("bore_opening_C", "m3/(s*Pa)", "conductance cushion volume <-> channel while the plug is out")
-            .positive(),
-        P::scalar("bore_opening_b", "1", "critical pressure ratio of the bore opening", 0.5).range(0, 0.99),
-        P::scalar("bore_opening_ramp", "m", "travel over which the bore opening closes", 0.0005).positive(),
-        P::table("cushion_C_of_z", {"rev", "m3/(s*Pa)"}, "cushion throttle C over opening z, piecewise linear"),
-        P::scalar("cushion_b0", "1", "b of the cushion throttle at C = 0 (b = b0 + slope C/C_max)", 0.3)
-            .range(0, 0.99),
-        P::scalar("cushion_b_slope", "1", "slope of b over C/C_max", 0.0).range(-1, 1),
-        P::scalar("z_EC", "rev", "cushion throttle opening, revolutions").non_negative(),
-        P::scalar("check_C", "m3/(s*Pa)", "conductance of the return-stroke check valve", 2e-9).non_negative(),
-        P::scalar("check_b", "1", "critical pressure ratio of the check valve", 0.3).range(0, 0.99),
-        P::scalar("check_cracking", "Pa", "cracking pressure difference of the check valve", 2e4).non_negative(),
-        P::scalar("check_ramp", "Pa", "pressure rise from cracking to fully open", 2e4).positive(),
-        // Rod-end cushioning: present when rod_plug_diameter is given. The
-        // throttle/valve parameters default to their cap-end values.
-        P::scalar("rod_plug_diameter", "m", "rod-end cushion sleeve diameter (> rod); enables rod-end cushioning")
-            .positive()
-            .optional(),
-        P::scalar("rod_cushion_length", "m", "rod-end cushioning length (engages at x = rod_cushion_length)")
-            .positive()
-            .optional(),
-        P::scalar("rod_dead_volume_cushion", "m3", "rod cushion annulus volume at x = 0").positive().optional(),
-        P::scalar("rod_bore_opening_C", "m3/(s*Pa)", "rod end: bore opening conductance (default bore_opening_C)")
-            .positive()
-            .optional(),
-        P::scalar("rod_bore_opening_b", "1", "rod end: bore opening b (default bore_opening_b)")
-            .range(0, 0.99)
-            .optional(),
-        P::scalar("rod_bore_opening_ramp", "m", "rod end: bore opening ramp (default bore_opening_ramp)")
-            .positive()
-            .optional(),
-        P::table("rod_cushion_C_of_z", {"rev", "m3/(s*Pa)"}, "rod end: throttle C(z) (default cushion_C_of_z)",
-                 false),
-        P::scalar("rod_cushion_b0", "1", "rod end: b0 (default cushion_b0)").range(0, 0.99).optional(),
-        P::scalar("rod_cushion_b_slope", "1", "rod end: b slope (default cushion_b_slope)").range(-1, 1).optional(),
-        P::scalar("z_EC_rod", "rev", "rod end: throttle opening (default z_EC)").non_negative().optional(),
-        P::scalar("rod_check_C", "m3/(s*Pa)", "rod end: check valve C (default check_C)").non_negative().optional(),
-        P::scalar("rod_check_b", "1", "rod end: check valve b (default check_b)").range(0, 0.99).optional(),
-        P::scalar("rod_check_cracking", "Pa", "rod end: cracking pressure (default check_cracking)")
-            .non_negative()
-            .optional(),
-        P::scalar("rod_check_ramp", "Pa", "rod end: check valve ramp (default check_ramp)").positive().optional(),
-        P::scalar("stop_stiffness", "N/m", "end stop stiffness", 1e7).positive(),
-        P::scalar("stop_damping", "N*s/m", "end stop damping", 3000.0).non_negative(),
-        P::text("cushion_taps", {"no", "yes"},
-                "yes: ports EC (and EC_rod) tap the cushion volumes (sensors, leakage throttles); closed when "
-                "unconnected, but each adds an algebraic pressure to the step-size control, so they are off by "
-                "default",
-                "no"),
-        P::scalar("wall_alpha", "W/(m2*K)",
-                  "gas-to-wall heat transfer coefficient; 0: heat ports at gas temperature (external convection)", 0.0)
-            .non_negative(),
     };
+    for (auto* list : {cap_cushion_parameters, rod_cushion_parameters, wall_parameters})
+      for (auto& s : list()) i.parameters.push_back(std::move(s));
     for (auto& f : FrictionLaw::parameters(true)) i.parameters.push_back(std::move(f));
-    const std::vector<ParameterSpec> initial = {
-        P::scalar("x0", "m", "initial position; default: at rest against the stop at x = 0 at force equilibrium",
-                  kNaN),
-        P::scalar("p0_A", "Pa", "initial rod-side pressure (with rod cushioning also ECr), absolute", 101325.0)
-            .positive(),
-        P::scalar("p0_cap", "Pa", "initial cap-side pressure (cushion volume and channel), absolute", 101325.0)
-            .positive(),
-        P::scalar("T0", "K", "initial gas temperature", 293.15).positive(),
-    };
-    i.parameters.insert(i.parameters.end(), initial.begin(), initial.end());
-    i.ports = {{"A", Domain::pneumatic, Causality::acausal, "rod-side chamber port (closed if unconnected)", true},
-               {"B", Domain::pneumatic, Causality::acausal, "cap-side outlet (outflow channel; closed if unconnected)",
-                true},
-               {"flange", Domain::translational, Causality::acausal, "rod end; position = x"},
-               {"heat_A", Domain::thermal, Causality::acausal, "wall of the rod-side chamber (ECr with rod cushioning)",
-                true},
-               {"heat_cap", Domain::thermal, Causality::acausal, "wall of the cushion volume", true},
-               {"EC", Domain::pneumatic, Causality::acausal, "tapping into the cushion volume EC (closed if unconnected)",
-                true},
-               {"EC_rod", Domain::pneumatic, Causality::acausal,
-                "tapping into the rod cushion volume (rod cushioning only; closed if unconnected)", true}};
-    i.variables = {{"m_A", "kg", "gas mass, rod side"},        {"U_A", "J", "internal energy, rod side"},
-                   {"m_EC", "kg", "gas mass, cushion volume"},  {"U_EC", "J", "internal energy, cushion volume"},
-                   {"m_ch", "kg", "gas mass, channel"},         {"U_ch", "J", "internal energy, channel"},
-                   {"m_EC_rod", "kg", "gas mass, rod cushion volume"},
-                   {"U_EC_rod", "J", "internal energy, rod cushion volume"},
-                   {"z", "m", "LuGre bristle deflection", 1e-5}};
-    i.observables = {{"x", "m", "piston position (0 extended, stroke at the cap)"},
-                     {"v", "m/s", "piston velocity"},
-                     {"p_A", "Pa", "rod-side pressure, absolute"},
-                     {"p_EC", "Pa", "cushion volume pressure, absolute"},
-                     {"p_ch", "Pa", "channel pressure, absolute"},
-                     {"T_A", "K", "rod-side gas temperature"},
-                     {"T_EC", "K", "cushion volume gas temperature"},
-                     {"T_ch", "K", "channel gas temperature"},
-                     {"F_friction", "N", "friction force on the piston (+x)"},
-                     {"F_stop", "N", "end stop force on the piston (+x)"},
-                     {"bore_open", "1", "bore opening fraction"},
-                     {"m_flow_cushion", "kg/s", "flow cushion volume -> channel (bore, throttle, check valve)"},
-                     {"z", "m", "LuGre bristle deflection (0 for other friction models)"},
-                     {"F_pressure", "N", "pressure force on the piston (+x), ambient on the rod included"},
-                     {"H_A", "W", "enthalpy flow into the gas at port A"},
-                     {"H_B", "W", "enthalpy flow into the gas at port B"},
-                     {"H_EC", "W", "enthalpy flow into the gas at the tapping port EC"},
-                     {"P_pdV_A", "W", "p dV/dt of the rod-side chamber (port A's volume)"},
-                     {"P_pdV_EC", "W", "p dV/dt of the cushion volume"},
-                     {"P_pdV_ch", "W", "p dV/dt of the channel"},
-                     {"P_pdV", "W", "sum of p dV/dt over all chambers: power from the gas to the piston"},
-                     {"Q_A", "W", "heat flow into the gas through heat_A"},
-                     {"Q_cap", "W", "heat flow into the gas through heat_cap"},
-                     {"H_cushion", "W", "enthalpy flow cushion volume -> channel"},
-                     {"P_friction", "W", "friction power F_friction v (<= 0)"},
-                     {"P_stop", "W", "end stop power F_stop v"},
-                     {"E_stop", "J", "elastic energy stored in the end stops, k pen^2 / 2"},
-                     {"U_gas", "J", "internal energy of the gas in all chambers"},
-                     {"p_EC_rod", "Pa", "rod cushion volume pressure, absolute"},
-                     {"T_EC_rod", "K", "rod cushion volume gas temperature"},
-                     {"bore_open_rod", "1", "rod-end bore opening fraction"},
-                     {"m_flow_cushion_rod", "kg/s", "flow rod cushion volume -> rod-side channel"},
-                     {"H_EC_rod", "W", "enthalpy flow into the gas at the tapping port EC_rod"},
-                     {"P_pdV_EC_rod", "W", "p dV/dt of the rod cushion volume"},
-                     {"H_cushion_rod", "W", "enthalpy flow rod cushion volume -> rod-side channel"}};
-    i.equations = {"mass balance A",       "energy balance A",    "gas law A",
-                   "outflow temperature A", "mass balance EC",     "energy balance EC",
-                   "mass balance ch",      "energy balance ch",   "gas law ch",
-                   "outflow temperature B", "force balance",       "wall heat A",         "wall heat cap",
-                   "tap EC pressure",      "tap EC temperature",  "mass balance ECr",    "energy balance ECr",
-                   "tap EC_rod pressure", "tap EC_rod temperature", "bristle dynamics"};
-    i.roots = 6;
+    for (auto& s : initial_parameters()) i.parameters.push_back(std::move(s));
+    add_parts(i, true, true, true);
     return i;
   }
 
-  // Drops what this instance lacks: rod cushioning (port EC_rod, the ECr
-  // chamber, its observables and roots) and the LuGre state.
+  // The parts this instance has: taps, rod cushioning, the LuGre state.
   static ComponentInfo instance_info(ComponentInfo i, const ParameterValues& p) {
-    const bool rod = p.has("rod_plug_diameter");
-    const bool lugre = p.text("friction_model") == "lugre";
-    auto erase_names = [](auto& list, const std::vector<std::string>& names) {
-      std::erase_if(list, [&](const auto& item) {
-        return std::find(names.begin(), names.end(), item.name) != names.end();
-      });
-    };
-    auto erase_strings = [](std::vector<std::string>& list, const std::vector<std::string>& names) {
-      std::erase_if(list, [&](const std::string& s) { return std::find(names.begin(), names.end(), s) != names.end(); });
-    };
-    if (p.text("cushion_taps") != "yes") {
-      erase_names(i.ports, {"EC", "EC_rod"});
-      erase_strings(i.equations,
-                    {"tap EC pressure", "tap EC temperature", "tap EC_rod pressure", "tap EC_rod temperature"});
-    }
-    if (!rod) {
-      erase_names(i.ports, {"EC_rod"});
-      erase_names(i.variables, {"m_EC_rod", "U_EC_rod"});
-      erase_names(i.observables, {"p_EC_rod", "T_EC_rod", "bore_open_rod", "m_flow_cushion_rod", "H_EC_rod",
-                                  "P_pdV_EC_rod", "H_cushion_rod"});
-      erase_strings(i.equations,
-                    {"mass balance ECr", "energy balance ECr", "tap EC_rod pressure",
-                     "tap EC_rod temperature"});
-      i.roots = 4;
-    }
-    if (!lugre) {
-      erase_names(i.variables, {"z"});
-      erase_strings(i.equations, {"bristle dynamics"});
-    }
+    add_parts(i, p.text("cushion_taps") == "yes", p.has("rod_plug_diameter"), p.text("friction_model") == "lugre");
     return i;
   }
 
-  explicit CushionedCylinder(const Construction& c) : ComponentT(c), friction_(FrictionLaw::from(c.params)) {
+  explicit CushionedCylinder(const Construction& c)
+      : ComponentT(c),
+        A_B_(circle_area(c.params["bore"])),
+        A_R_(circle_area(c.params["rod"])),
+        stroke_(c.params["stroke"]),
+        cap_(A_B_, c.params["dead_volume_channel"], kPi * c.params["bore"]),
+        rod_side_(A_B_ - A_R_, c.params["dead_volume_rod_side"], kPi * (c.params["bore"] + c.params["rod"])),
+        stops_{c.params["stop_stiffness"], c.params["stop_damping"]},
+        wall_alpha_(c.params["wall_alpha"]),
+        friction_(FrictionLaw::from(c.params)),
+        x0_(c.params["x0"]),
+        p0_A_(c.params["p0_A"]),
+        p0_cap_(c.params["p0_cap"]),
+        T0_(c.params["T0"]),
+        taps_(c.params.text("cushion_taps") == "yes") {
     const auto& p = c.params;
-    A_B_ = kPi * p["bore"] * p["bore"] / 4;
-    A_R_ = kPi * p["rod"] * p["rod"] / 4;
-    A_A_ = A_B_ - A_R_;
-    A_CP_ = kPi * p["plug_diameter"] * p["plug_diameter"] / 4;
-    bore_ = p["bore"];
-    rod_d_ = p["rod"];
     if (p["rod"] >= p["bore"]) throw ParameterError("rod", "rod diameter must be smaller than the bore");
     if (p["plug_diameter"] >= p["bore"])
       throw ParameterError("plug_diameter", "plug diameter must be smaller than the bore");
-    stroke_ = p["stroke"];
-    L_ = p["cushion_length"];
-    if (L_ >= stroke_) throw ParameterError("cushion_length", "cushion length must be shorter than the stroke");
-    V0_A_ = p["dead_volume_rod_side"];
-    V0_EC_ = p["dead_volume_cushion"];
-    V0_ch_ = p["dead_volume_channel"];
-    cap_ = read_cushion(p, "");
-    stops_ = EndStops{p["stop_stiffness"], p["stop_damping"]};
-    wall_alpha_ = p["wall_alpha"];
-    friction_main_ = friction_.main;
-    friction_cushion_ = friction_.cushion;
-    friction_scale_ = friction_.scale;
-    v_reg_ = friction_.v_reg;
-    v_eps_ = friction_.v_eps;
-    x0_ = p["x0"];
-    p0_A_ = p["p0_A"];
-    p0_cap_ = p["p0_cap"];
-    T0_ = p["T0"];
-    rod_ = p.has("rod_plug_diameter");
-    taps_ = p.text("cushion_taps") == "yes";
-    A_colr_ = A_A_;
-    if (rod_) {
-      const double d = p["rod_plug_diameter"];
-      if (!(d > p["rod"] && d < p["bore"]))
-        throw ParameterError("rod_plug_diameter", "the rod-end sleeve diameter must lie between rod and bore");
-      for (const char* name : {"rod_cushion_length", "rod_dead_volume_cushion"})
-        if (!p.has(name))
-          throw ParameterError(name, std::string("rod-end cushioning (rod_plug_diameter given) needs ") + name);
-      A_CPr_ = kPi * d * d / 4;
-      A_colr_ = A_CPr_ - A_R_;
-      L_r_ = p["rod_cushion_length"];
-      V0_ECr_ = p["rod_dead_volume_cushion"];
-      rodc_ = read_cushion(p, "rod_");
-      if (L_ + cap_.ramp + L_r_ + rodc_.ramp >= stroke_)
-        throw ParameterError("rod_cushion_length",
-                             "the cushioning zones (with their bore-opening ramps) at both ends overlap");
+    if (p["cushion_length"] >= stroke_)
+      throw ParameterError("cushion_length", "cushion length must be shorter than the stroke");
+    cap_.cushion({p["cushion_length"], circle_area(p["plug_diameter"]), p["dead_volume_cushion"], read_cushion(p, "")});
+    if (p.has("rod_plug_diameter")) add_rod_cushioning(p);
+    if (taps_) {
+      cap_.tap(kTapEC);
+      rod_side_.tap(kTapECr);  // none without rod cushioning
     }
-    z_var_ = rod_ ? 8 : 6;
+    cap_.set_variables(kMch, kMEC);
+    rod_side_.set_variables(kMA, kMECr);
+    z_var_ = rod_side_.cushioned() ? 8 : 6;
+    // Each part's rows where add_parts() names them.
+    cap_.place_rows(row("mass balance ch"), row("wall heat cap"), row("mass balance EC"), row("tap EC pressure"));
+    rod_side_.place_rows(row("mass balance A"), row("wall heat A"), row("mass balance ECr"),
+                         row("tap EC_rod pressure"));
+    force_row_ = row("force balance");
+    lugre_row_ = row("bristle dynamics");
     if (2 + static_cast<int>(info().variables.size()) > kMemoKey)
       throw std::logic_error("cushioned_cylinder: the state memo's key is too short for its variables");
   }
@@ -322,10 +166,10 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
   // Everything derived from the local variables, for equations and outputs.
   template <class T>
   struct State {
-    T x, v, p_A, p_EC, p_ch, V_A, V_EC, V_ch, open, m_x, H_x, F_fric, F_stop, z;
-    T T_A, T_EC, T_ch;                          // gas temperatures U / (m c_v)
-    T p_ECr, V_ECr, open_r, m_xr, H_xr, T_ECr;  // rod cushioning only
-    T F_pressure;
+    T x, v, z;
+    CylinderSide::Gas<T> cap;  // port B's channel ch, the cushion annulus EC at the piston
+    CylinderSide::Gas<T> rod;  // port A's chamber (channel with rod cushioning), ECr at the piston
+    T F_pressure, F_fric, F_stop;
   };
 
   // Everything derived from the local variables. It reads only the
@@ -333,9 +177,10 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
   // port pressures: p_A too comes from U_A / V_A, which the gas-law row
   // makes the port's pressure), so the framework can solve the ports'
   // pressures and the flange force from it in one pass. For double it is
-  // memoised on those inputs: one residual call evaluates the cylinder
-  // twice at the same state (the explicitly solved unknowns first, then
-  // IDA's rows), and outputs observe it at a point just evaluated.
+  // memoised on those inputs (the contract's memoisation,
+  // framework/model/component.hpp): one residual call evaluates the
+  // cylinder twice at the same state (the explicitly solved unknowns first,
+  // then IDA's rows), and outputs observe it at a point just evaluated.
   template <class T>
   std::conditional_t<std::is_same_v<T, double>, const State<double>&, State<T>> state(const Eval<T>& e) const {
     if constexpr (std::is_same_v<T, double>) {
@@ -354,30 +199,15 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
     }
   }
 
-  // The position, velocity and the chambers' volumes, pressures and
-  // temperatures: all that the gas observables need.
+  // The position, velocity and the chambers' pressures and temperatures:
+  // all that the gas observables need.
   template <class T>
   void gas_state(const Eval<T>& e, State<T>& s) const {
-    const GasModel& gas = e.gas();
     const auto fl = e.flange(kFlange);
     s.x = fl.s;
     s.v = fl.v;
-    s.V_A = V0_A_ + A_colr_ * s.x;
-    s.p_A = chamber_pressure(e.var(kUA), s.V_A, gas);
-    s.V_EC = V0_EC_ + (A_B_ - A_CP_) * (stroke_ - s.x);
-    s.V_ch = V0_ch_ + A_CP_ * (stroke_ - s.x);
-    s.T_A = chamber_temperature(e.var(kMA), e.var(kUA), gas);
-    s.T_EC = chamber_temperature(e.var(kMEC), e.var(kUEC), gas);
-    s.T_ch = chamber_temperature(e.var(kMch), e.var(kUch), gas);
-    s.p_EC = chamber_pressure(e.var(kUEC), s.V_EC, gas);
-    s.p_ch = chamber_pressure(e.var(kUch), s.V_ch, gas);
-    if (rod_) {
-      s.T_ECr = chamber_temperature(e.var(kMECr), e.var(kUECr), gas);
-      s.V_ECr = V0_ECr_ + (A_B_ - A_CPr_) * s.x;
-      s.p_ECr = chamber_pressure(e.var(kUECr), s.V_ECr, gas);
-    } else {
-      s.p_ECr = s.V_ECr = s.T_ECr = 0.0 * s.x;
-    }
+    s.cap = cap_.chambers(e, T(stroke_ - s.x));
+    s.rod = rod_side_.chambers(e, s.x);
   }
   // Observables read off gas_state() alone.
   static bool gas_observable(int k) {
@@ -387,157 +217,55 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
   template <class T>
   State<T> compute_state(const Eval<T>& e) const {
     const GasModel& gas = e.gas();
+    const auto fl = e.flange(kFlange);
     State<T> s;
-    gas_state(e, s);
-    const T& T_EC = s.T_EC;
-    const T& T_ch = s.T_ch;
-    const T gap = stroke_ - L_ - s.x;
-    s.m_x = cushion_flow(cap_, gap, s.p_EC, s.p_ch, T_EC, T_ch, s.x, gas, s.open);  // EC -> ch
-    s.H_x = enthalpy_inflow(s.m_x, T_EC, T_ch, gas);
-    const T zero = 0.0 * s.x;
-    s.z = friction_.has_state() ? e.var(z_var_) : zero;
-    if (rod_) {
-      const T& T_ECr = s.T_ECr;
-      const T gap_r = s.x - L_r_;
-      s.m_xr = cushion_flow(rodc_, gap_r, s.p_ECr, s.p_A, T_ECr, s.T_A, s.x, gas, s.open_r);  // ECr -> A
-      s.H_xr = enthalpy_inflow(s.m_xr, T_ECr, s.T_A, gas);
-    } else {
-      s.m_xr = s.H_xr = zero;
-      s.open_r = zero + 1.0;
-    }
-    // Friction.
-    if (friction_.model == FrictionModel::preset) {
-      const T p_rod = rod_ ? s.p_ECr : s.p_A;  // the rod-side pressure at the piston
-      // Main-stroke and cushioning-zone sets blended by the openings. A set
-      // whose weight is 0 (the opening clamped at 0 or 1, so its derivative
-      // is 0 too) is not evaluated, except for the structural pattern.
-      constexpr bool structural = std::is_same_v<T, Pattern>;
-      const double open = value(s.open), open_r = value(s.open_r);
-      const T F_main = structural || (open > 0.0 && open_r > 0.0)
-                           ? friction_force(friction_main_, s.v, p_rod, s.p_EC, s.p_EC, gas.p_ambient, v_reg_, v_eps_)
-                           : zero;
-      const T F_cush = structural || open < 1.0 ? friction_force(friction_cushion_, s.v, p_rod, s.p_EC, s.p_EC,
-                                                                 gas.p_ambient, v_reg_, v_eps_)
-                                                : zero;
-      if (!rod_) {
-        s.F_fric = friction_scale_ * (s.open * F_main + (1.0 - s.open) * F_cush);
-      } else {
-        const T F_cush_r = structural || open_r < 1.0 ? friction_force(friction_cushion_, s.v, p_rod, s.p_EC, s.p_ECr,
-                                                                       gas.p_ambient, v_reg_, v_eps_)
-                                                      : zero;
-        s.F_fric = friction_scale_ *
-                   (s.open * s.open_r * F_main + (1.0 - s.open) * F_cush + (1.0 - s.open_r) * F_cush_r);
-      }
-    } else {
-      s.F_fric = friction_.force(friction_main_, s.v, s.z, zero);
-    }
+    s.x = fl.s;
+    s.v = fl.v;
+    // The cap side's travel left before its plug engages, (stroke - L) - x:
+    // exactly minus the cushion-entry root, so the bore closes at the root.
+    s.cap = cap_.gas(e, T(stroke_ - s.x), T(stroke_ - cap_.cushion_length() - s.x));
+    s.rod = rod_side_.gas(e, s.x);
+    s.z = friction_.has_state() ? e.var(z_var_) : T(0.0 * s.x);
+    s.F_fric = friction(s, gas.p_ambient);
     s.F_stop = stops_.force(s.x, s.v, stroke_);
-    if (!rod_)
-      s.F_pressure = s.p_A * A_A_ + gas.p_ambient * A_R_ - s.p_EC * (A_B_ - A_CP_) - s.p_ch * A_CP_;
-    else
-      s.F_pressure = s.p_A * A_colr_ + s.p_ECr * (A_B_ - A_CPr_) + gas.p_ambient * A_R_ - s.p_EC * (A_B_ - A_CP_) -
-                     s.p_ch * A_CP_;
+    s.F_pressure = rod_side_.force(s.rod) + gas.p_ambient * A_R_ - cap_.annulus_force(s.cap) - cap_.port_force(s.cap);
     return s;
   }
 
-  // Wall areas of the rod-side and cap-side chambers (wall_alpha > 0).
+  // Friction on the piston (+x). The presets blend the main-stroke set and
+  // the cushioning-zone set (at each cushioned end) by the bore openings; a
+  // set whose weight is 0 (the opening clamped at 0 or 1, so its derivative
+  // is 0 too) is not evaluated, except for the structural pattern.
   template <class T>
-  T wall_area_rod(const T& x) const {
-    const double V0 = V0_A_ + (rod_ ? V0_ECr_ : 0.0);
-    return chamber_wall_area(A_A_, kPi * (bore_ + rod_d_), x, V0);
-  }
-  template <class T>
-  T wall_area_cap(const T& x) const {
-    return chamber_wall_area(A_B_, kPi * bore_, T(stroke_ - x), V0_EC_ + V0_ch_);
+  T friction(const State<T>& s, double p_ambient) const {
+    const T zero = 0.0 * s.x;
+    if (friction_.model != FrictionModel::preset) return friction_.force(friction_.main, s.v, s.z, zero);
+    const T& p_rod = s.rod.p_piston;
+    const T& p_EC = s.cap.p_piston;
+    auto set = [&](const FrictionCoefficients& c, const T& p_cushion) {
+      return friction_force(c, s.v, p_rod, p_EC, p_cushion, p_ambient, friction_.v_reg, friction_.v_eps);
+    };
+    constexpr bool structural = std::is_same_v<T, Pattern>;
+    const double open = value(s.cap.open), open_r = value(s.rod.open);
+    const T F_main = structural || (open > 0.0 && open_r > 0.0) ? set(friction_.main, p_EC) : zero;
+    const T F_cush = structural || open < 1.0 ? set(friction_.cushion, p_EC) : zero;
+    if (!rod_side_.cushioned()) return friction_.scale * (s.cap.open * F_main + (1.0 - s.cap.open) * F_cush);
+    const T F_cush_r = structural || open_r < 1.0 ? set(friction_.cushion, s.rod.p_piston) : zero;
+    return friction_.scale *
+           (s.cap.open * s.rod.open * F_main + (1.0 - s.cap.open) * F_cush + (1.0 - s.rod.open) * F_cush_r);
   }
 
+  // Rows: the sides' (each where the constructor placed it), the force
+  // balance, LuGre's z.
   template <class T>
   void equations(const Eval<T>& e, T* r) const {
-    const GasModel& gas = e.gas();
-    const auto A = e.gas_port(kA);
-    const auto B = e.gas_port(kB);
-
-    const auto fl = e.flange(kFlange);
-    const auto hA = e.heat_port(kHeatA);
-    const auto hC = e.heat_port(kHeatCap);
-    // T > 0 <=> U > 0 for m > 0; checked before state() divides by m.
-    for (int k : {kMA, kUA, kMEC, kUEC, kMch, kUch}) e.reject_unless_positive(e.var(k));
-    if (rod_) {
-      e.reject_unless_positive(e.var(kMECr));
-      e.reject_unless_positive(e.var(kUECr));
-    }
-    const auto& s = state(e);  // the memo itself for double
-    // Rod-side chamber A (volume grows with x); with rod cushioning the
-    // rod-side channel, fed from ECr, adiabatic.
-    // Port outflows carry the port's T_out, the value the connected side
-    // reads as its T_in, so that the energy crossing a port balances exactly
-    // (U / (m c_v) equals T_out only to the Newton tolerance).
-    const T H_A = enthalpy_inflow(A.m_flow, A.T_in, A.T_out, gas);
-    if (!rod_) {
-      r[0] = e.der(kMA) - A.m_flow;
-      r[1] = e.der(kUA) - H_A + A.p * A_A_ * s.v - hA.Q;
-    } else {
-      r[0] = e.der(kMA) - A.m_flow - s.m_xr;
-      r[1] = e.der(kUA) - H_A - s.H_xr + A.p * A_colr_ * s.v;
-    }
-    r[2] = A.p - (gas.kappa - 1.0) * e.var(kUA) / s.V_A;  // solved for p (scaling)
-    // With wall_alpha = 0 the heat ports equal the gas temperatures; the
-    // other port temperatures of the same gas are then written as their
-    // aliases (not as T_out - U / (m c_v)) so that alias elimination folds
-    // them into one unknown per chamber.
-    const bool walls_at_gas_T = !(wall_alpha_ > 0);
-    r[3] = A.T_out - (walls_at_gas_T && !rod_ ? hA.T : s.T_A);
-    // Cushion annulus EC (volume shrinks with x), tapped by port EC.
-    if (!taps_) {
-      r[4] = e.der(kMEC) + s.m_x;
-      r[5] = e.der(kUEC) + s.H_x - s.p_EC * (A_B_ - A_CP_) * s.v - hC.Q;
-    } else {
-      const auto tap = e.gas_port(kTapEC);
-      const T H_tap = enthalpy_inflow(tap.m_flow, tap.T_in, tap.T_out, gas);
-      r[4] = e.der(kMEC) + s.m_x - tap.m_flow;
-      r[5] = e.der(kUEC) + s.H_x - H_tap - s.p_EC * (A_B_ - A_CP_) * s.v - hC.Q;
-    }
-    // Channel ch: inflow from EC, outflow through port B.
-    const T H_B = enthalpy_inflow(B.m_flow, B.T_in, B.T_out, gas);
-    r[6] = e.der(kMch) - s.m_x - B.m_flow;
-    r[7] = e.der(kUch) - s.H_x - H_B - s.p_ch * A_CP_ * s.v;
-    r[8] = B.p - (gas.kappa - 1.0) * e.var(kUch) / s.V_ch;
-    r[9] = B.T_out - s.T_ch;
-    // Force balance: the flange pulls on the cylinder with f = -F.
+    const auto& s = state(e);
+    cap_.equations(e, e.gas_port(kB), e.heat_port(kHeatCap), s.cap, T(stroke_ - s.x), T(-s.v), wall_alpha_, r);
+    rod_side_.equations(e, e.gas_port(kA), e.heat_port(kHeatA), s.rod, s.x, s.v, wall_alpha_, r);
+    // The flange pulls on the cylinder with f = -F.
     const T F = s.F_pressure + s.F_fric + s.F_stop;
-    r[10] = fl.f + F;
-    // Walls: at the gas temperature, or exchanging heat with the gas.
-    const T& T_gas_A = rod_ ? s.T_ECr : s.T_A;
-    if (wall_alpha_ > 0) {
-      r[11] = hA.Q - wall_alpha_ * wall_area_rod(s.x) * (hA.T - T_gas_A);
-      r[12] = hC.Q - wall_alpha_ * wall_area_cap(s.x) * (hC.T - s.T_EC);
-    } else {
-      r[11] = hA.T - T_gas_A;
-      r[12] = hC.T - s.T_EC;
-    }
-    int row = 13;
-    if (taps_) {
-      const auto tap = e.gas_port(kTapEC);
-      r[row++] = tap.p - s.p_EC;
-      r[row++] = tap.T_out - (walls_at_gas_T ? hC.T : s.T_EC);
-    }
-    if (rod_) {
-      // Rod cushion annulus ECr (volume grows with x), tapped by EC_rod.
-      T m_tap = 0.0 * s.x, H_tap = 0.0 * s.x;
-      if (taps_) {
-        const auto tapr = e.gas_port(kTapECr);
-        m_tap = tapr.m_flow;
-        H_tap = enthalpy_inflow(tapr.m_flow, tapr.T_in, tapr.T_out, gas);
-      }
-      r[row++] = e.der(kMECr) + s.m_xr - m_tap;
-      r[row++] = e.der(kUECr) + s.H_xr - H_tap + s.p_ECr * (A_B_ - A_CPr_) * s.v - hA.Q;
-      if (taps_) {
-        const auto tapr = e.gas_port(kTapECr);
-        r[row++] = tapr.p - s.p_ECr;
-        r[row++] = tapr.T_out - (walls_at_gas_T ? hA.T : s.T_ECr);
-      }
-    }
-    if (friction_.has_state()) r[row++] = e.der(z_var_) - friction_.lugre_zdot(s.v, e.var(z_var_));
+    r[force_row_] = e.flange(kFlange).f + F;
+    if (friction_.has_state()) r[lugre_row_] = e.der(z_var_) - friction_.lugre_zdot(s.v, e.var(z_var_));
   }
 
   double observe(int k, const Eval<double>& e) const override { return observe(k, state(e), e); }
@@ -554,64 +282,67 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
 
   // Observable k from the state computed once for all observables asked.
   double observe(int k, const State<double>& s, const Eval<double>& e) const {
-    const GasModel& gas = e.gas();
     auto inflow = [&](int port) {
       const auto g = e.gas_port(port);
-      return enthalpy_inflow(g.m_flow, g.T_in, g.T_out, gas);
+      return enthalpy_inflow(g.m_flow, g.T_in, g.T_out, e.gas());
     };
-    const double pdV_A = s.p_A * A_colr_ * s.v;
-    const double pdV_EC = -s.p_EC * (A_B_ - A_CP_) * s.v;
-    const double pdV_ch = -s.p_ch * A_CP_ * s.v;
-    const double pdV_ECr = rod_ ? s.p_ECr * (A_B_ - A_CPr_) * s.v : 0.0;
     switch (k) {
       case kX: return s.x;
       case kV: return s.v;
-      case kPA: return s.p_A;
-      case kPEC: return s.p_EC;
-      case kPch: return s.p_ch;
-      case kTAo: return s.T_A;
-      case kTECo: return s.T_EC;
-      case kTcho: return s.T_ch;
+      case kPA: return s.rod.p;
+      case kPEC: return s.cap.p_piston;
+      case kPch: return s.cap.p;
+      case kTAo: return s.rod.T_gas;
+      case kTECo: return s.cap.T_piston;
+      case kTcho: return s.cap.T_gas;
       case kFfric: return s.F_fric;
       case kFstop: return s.F_stop;
-      case kOpen: return s.open;
-      case kCushionFlow: return s.m_x;
+      case kOpen: return s.cap.open;
+      case kCushionFlow: return s.cap.m_x;
       case kZ: return s.z;
       case kFpressure: return s.F_pressure;
       case kHA: return inflow(kA);
       case kHB: return inflow(kB);
       case kHEC: return taps_ ? inflow(kTapEC) : 0.0;
-      case kPdVA: return pdV_A;
-      case kPdVEC: return pdV_EC;
-      case kPdVch: return pdV_ch;
-      case kPdV: return pdV_A + pdV_EC + pdV_ch + pdV_ECr;
       case kQA: return e.heat_port(kHeatA).Q;
       case kQcap: return e.heat_port(kHeatCap).Q;
-      case kHcushion: return s.H_x;
+      case kHcushion: return s.cap.H_x;
       case kPfric: return s.F_fric * s.v;
       case kPstop: return s.F_stop * s.v;
       case kEstop: return stops_.energy(s.x, stroke_);
-      case kUgas: return e.var(kUA) + e.var(kUEC) + e.var(kUch) + (rod_ ? e.var(kUECr) : 0.0);
-      case kPECr: return s.p_ECr;
-      case kTECro: return s.T_ECr;
-      case kOpenR: return s.open_r;
-      case kCushionFlowR: return s.m_xr;
-      case kHECr: return taps_ ? inflow(kTapECr) : 0.0;
+      case kUgas: return rod_side_.internal_energy(e) + cap_.internal_energy(e);
+      case kPECr: return s.rod.p_piston;
+      case kTECro: return s.rod.T_piston;
+      case kOpenR: return s.rod.open;
+      case kCushionFlowR: return s.rod.m_x;
+      case kHECr: return taps_ && rod_side_.cushioned() ? inflow(kTapECr) : 0.0;
+      case kHcushionR: return s.rod.H_x;
+    }
+    return observe_work(k, s);
+  }
+  // p dV/dt of each chamber and their sum (the cap side moves at -v).
+  double observe_work(int k, const State<double>& s) const {
+    const double pdV_A = rod_side_.port_p_dV(s.rod, s.v), pdV_ECr = rod_side_.annulus_p_dV(s.rod, s.v);
+    const double pdV_ch = cap_.port_p_dV(s.cap, -s.v), pdV_EC = cap_.annulus_p_dV(s.cap, -s.v);
+    switch (k) {
+      case kPdVA: return pdV_A;
+      case kPdVEC: return pdV_EC;
+      case kPdVch: return pdV_ch;
       case kPdVECr: return pdV_ECr;
-      case kHcushionR: return s.H_xr;
+      case kPdV: return pdV_A + pdV_EC + pdV_ch + pdV_ECr;
     }
     return 0.0;
   }
 
   void roots(const Eval<double>& e, double* g) const override {
     const double x = e.flange(kFlange).s;
-    g[kRampStart] = x - (stroke_ - L_ - cap_.ramp);
-    g[kCushionEntry] = x - (stroke_ - L_);
+    g[kRampStart] = x - (stroke_ - cap_.cushion_length() - cap_.ramp());
+    g[kCushionEntry] = x - (stroke_ - cap_.cushion_length());
     g[kStopRod] = x;
     g[kStopCap] = x - stroke_;
-    if (rod_) {
-      g[kRodRampStart] = x - (L_r_ + rodc_.ramp);
-      g[kRodCushionEntry] = x - L_r_;
+    if (rod_side_.cushioned()) {
+      g[kRodRampStart] = x - (rod_side_.cushion_length() + rod_side_.ramp());
+      g[kRodCushionEntry] = x - rod_side_.cushion_length();
     }
   }
 
@@ -662,7 +393,7 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
     n.drive_description = "work of the rod-side gas and ambient on the piston";
     n.drive_changes = {{"x", gas.p_ambient * A_R_}};
     n.drive_integrals = {{"P_pdV_A", 1.0}};
-    if (rod_) n.drive_integrals.push_back({"P_pdV_EC_rod", 1.0});
+    if (rod_side_.cushioned()) n.drive_integrals.push_back({"P_pdV_EC_rod", 1.0});
     n.U_cushion = "U_EC";
     n.Q_wall = "Q_cap";
     n.P_pdV_channel = "P_pdV_ch";
@@ -677,40 +408,201 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
     if (std::isnan(x)) {
       // At rest against the rod-end stop: the stop carries the net pressure
       // force (friction is zero at v = 0).
-      const double F = p0_A_ * A_A_ + gas.p_ambient * A_R_ - p0_cap_ * A_B_;
+      const double F = p0_A_ * (A_B_ - A_R_) + gas.p_ambient * A_R_ - p0_cap_ * A_B_;
       x = F < 0 ? F / stops_.k : 0.0;
     }
     sv.fix_position(kFlange, x);
-    const double V_A = V0_A_ + A_colr_ * x;
-    const double V_EC = V0_EC_ + (A_B_ - A_CP_) * (stroke_ - x);
-    const double V_ch = V0_ch_ + A_CP_ * (stroke_ - x);
-    auto gas_state = [&](int m, int U, double p, double V) {
-      const double mass = p * V / (gas.R * T0_);
-      sv.fix_var(m, mass);
-      sv.fix_var(U, mass * gas.cv() * T0_);
-    };
-    gas_state(kMA, kUA, p0_A_, V_A);
-    gas_state(kMEC, kUEC, p0_cap_, V_EC);
-    gas_state(kMch, kUch, p0_cap_, V_ch);
-    sv.guess_pressure(kA, p0_A_);
-    sv.guess_pressure(kB, p0_cap_);
-    if (taps_) sv.guess_pressure(kTapEC, p0_cap_);
-    sv.guess_temperature(kA, T0_);
-    sv.guess_temperature(kB, T0_);
-    if (taps_) sv.guess_temperature(kTapEC, T0_);
-    sv.guess_temperature(kHeatA, T0_);
-    sv.guess_temperature(kHeatCap, T0_);
-    if (rod_) {
-      gas_state(kMECr, kUECr, p0_A_, V0_ECr_ + (A_B_ - A_CPr_) * x);
-      if (taps_) {
-        sv.guess_pressure(kTapECr, p0_A_);
-        sv.guess_temperature(kTapECr, T0_);
-      }
-    }
+    rod_side_.start(sv, gas, kA, kHeatA, p0_A_, T0_, x);
+    cap_.start(sv, gas, kB, kHeatCap, p0_cap_, T0_, stroke_ - x);
     if (friction_.has_state()) sv.fix_var(z_var_, 0.0);
   }
 
  private:
+  // The cap end's bore opening, needle throttle and check valve.
+  static std::vector<ParameterSpec> cap_cushion_parameters() {
+    using P = ParameterSpec;
+    return {
+        P::scalar("bore_opening_C", "m3/(s*Pa)", "conductance cushion volume <-> channel while the plug is out")
+            .positive(),
+        P::scalar("bore_opening_b", "1", "critical pressure ratio of the bore opening", 0.5).range(0, 0.99),
+        P::scalar("bore_opening_ramp", "m", "travel over which the bore opening closes", 0.0005).positive(),
+        P::table("cushion_C_of_z", {"rev", "m3/(s*Pa)"}, "cushion throttle C over opening z, piecewise linear"),
+        P::scalar("cushion_b0", "1", "b of the cushion throttle at C = 0 (b = b0 + slope C/C_max)", 0.3)
+            .range(0, 0.99),
+        P::scalar("cushion_b_slope", "1", "slope of b over C/C_max", 0.0).range(-1, 1),
+        P::scalar("z_EC", "rev", "cushion throttle opening, revolutions").non_negative(),
+        P::scalar("check_C", "m3/(s*Pa)", "conductance of the return-stroke check valve", 2e-9).non_negative(),
+        P::scalar("check_b", "1", "critical pressure ratio of the check valve", 0.3).range(0, 0.99),
+        P::scalar("check_cracking", "Pa", "cracking pressure difference of the check valve", 2e4).non_negative(),
+        P::scalar("check_ramp", "Pa", "pressure rise from cracking to fully open", 2e4).positive(),
+    };
+  }
+  // Rod-end cushioning: present when rod_plug_diameter is given. The
+  // throttle/valve parameters default to their cap-end values.
+  static std::vector<ParameterSpec> rod_cushion_parameters() {
+    using P = ParameterSpec;
+    return {
+        P::scalar("rod_plug_diameter", "m", "rod-end cushion sleeve diameter (> rod); enables rod-end cushioning")
+            .positive()
+            .optional(),
+        P::scalar("rod_cushion_length", "m", "rod-end cushioning length (engages at x = rod_cushion_length)")
+            .positive()
+            .optional(),
+        P::scalar("rod_dead_volume_cushion", "m3", "rod cushion annulus volume at x = 0").positive().optional(),
+        P::scalar("rod_bore_opening_C", "m3/(s*Pa)", "rod end: bore opening conductance (default bore_opening_C)")
+            .positive()
+            .optional(),
+        P::scalar("rod_bore_opening_b", "1", "rod end: bore opening b (default bore_opening_b)")
+            .range(0, 0.99)
+            .optional(),
+        P::scalar("rod_bore_opening_ramp", "m", "rod end: bore opening ramp (default bore_opening_ramp)")
+            .positive()
+            .optional(),
+        P::table("rod_cushion_C_of_z", {"rev", "m3/(s*Pa)"}, "rod end: throttle C(z) (default cushion_C_of_z)",
+                 false),
+        P::scalar("rod_cushion_b0", "1", "rod end: b0 (default cushion_b0)").range(0, 0.99).optional(),
+        P::scalar("rod_cushion_b_slope", "1", "rod end: b slope (default cushion_b_slope)").range(-1, 1).optional(),
+        P::scalar("z_EC_rod", "rev", "rod end: throttle opening (default z_EC)").non_negative().optional(),
+        P::scalar("rod_check_C", "m3/(s*Pa)", "rod end: check valve C (default check_C)").non_negative().optional(),
+        P::scalar("rod_check_b", "1", "rod end: check valve b (default check_b)").range(0, 0.99).optional(),
+        P::scalar("rod_check_cracking", "Pa", "rod end: cracking pressure (default check_cracking)")
+            .non_negative()
+            .optional(),
+        P::scalar("rod_check_ramp", "Pa", "rod end: check valve ramp (default check_ramp)").positive().optional(),
+    };
+  }
+  // End stops, cushion taps, wall heat.
+  static std::vector<ParameterSpec> wall_parameters() {
+    using P = ParameterSpec;
+    return {
+        P::scalar("stop_stiffness", "N/m", "end stop stiffness", 1e7).positive(),
+        P::scalar("stop_damping", "N*s/m", "end stop damping", 3000.0).non_negative(),
+        P::text("cushion_taps", {"no", "yes"},
+                "yes: ports EC (and EC_rod) tap the cushion volumes (sensors, leakage throttles); closed when "
+                "unconnected, but each adds an algebraic pressure to the step-size control, so they are off by "
+                "default",
+                "no"),
+        P::scalar("wall_alpha", "W/(m2*K)",
+                  "gas-to-wall heat transfer coefficient; 0: heat ports at gas temperature (external convection)", 0.0)
+            .non_negative(),
+    };
+  }
+  static std::vector<ParameterSpec> initial_parameters() {
+    using P = ParameterSpec;
+    return {
+        P::scalar("x0", "m", "initial position; default: at rest against the stop at x = 0 at force equilibrium",
+                  kNaN),
+        P::scalar("p0_A", "Pa", "initial rod-side pressure (with rod cushioning also ECr), absolute", 101325.0)
+            .positive(),
+        P::scalar("p0_cap", "Pa", "initial cap-side pressure (cushion volume and channel), absolute", 101325.0)
+            .positive(),
+        P::scalar("T0", "K", "initial gas temperature", 293.15).positive(),
+    };
+  }
+
+  // The ports, variables, observables, rows and roots every instance has.
+  static InfoPart cylinder_part() {
+    InfoPart c;
+    c.ports = {{"A", Domain::pneumatic, Causality::acausal, "rod-side chamber port (closed if unconnected)", true},
+               {"B", Domain::pneumatic, Causality::acausal, "cap-side outlet (outflow channel; closed if unconnected)",
+                true},
+               {"flange", Domain::translational, Causality::acausal, "rod end; position = x"},
+               {"heat_A", Domain::thermal, Causality::acausal, "wall of the rod-side chamber (ECr with rod cushioning)",
+                true},
+               {"heat_cap", Domain::thermal, Causality::acausal, "wall of the cushion volume", true}};
+    c.variables = {{"m_A", "kg", "gas mass, rod side"},       {"U_A", "J", "internal energy, rod side"},
+                   {"m_EC", "kg", "gas mass, cushion volume"}, {"U_EC", "J", "internal energy, cushion volume"},
+                   {"m_ch", "kg", "gas mass, channel"},        {"U_ch", "J", "internal energy, channel"}};
+    c.observables = {{"x", "m", "piston position (0 extended, stroke at the cap)"},
+                     {"v", "m/s", "piston velocity"},
+                     {"p_A", "Pa", "rod-side pressure, absolute"},
+                     {"p_EC", "Pa", "cushion volume pressure, absolute"},
+                     {"p_ch", "Pa", "channel pressure, absolute"},
+                     {"T_A", "K", "rod-side gas temperature"},
+                     {"T_EC", "K", "cushion volume gas temperature"},
+                     {"T_ch", "K", "channel gas temperature"},
+                     {"F_friction", "N", "friction force on the piston (+x)"},
+                     {"F_stop", "N", "end stop force on the piston (+x)"},
+                     {"bore_open", "1", "bore opening fraction"},
+                     {"m_flow_cushion", "kg/s", "flow cushion volume -> channel (bore, throttle, check valve)"},
+                     {"z", "m", "LuGre bristle deflection (0 for other friction models)"},
+                     {"F_pressure", "N", "pressure force on the piston (+x), ambient on the rod included"},
+                     {"H_A", "W", "enthalpy flow into the gas at port A"},
+                     {"H_B", "W", "enthalpy flow into the gas at port B"},
+                     {"H_EC", "W", "enthalpy flow into the gas at the tapping port EC"},
+                     {"P_pdV_A", "W", "p dV/dt of the rod-side chamber (port A's volume)"},
+                     {"P_pdV_EC", "W", "p dV/dt of the cushion volume"},
+                     {"P_pdV_ch", "W", "p dV/dt of the channel"},
+                     {"P_pdV", "W", "sum of p dV/dt over all chambers: power from the gas to the piston"},
+                     {"Q_A", "W", "heat flow into the gas through heat_A"},
+                     {"Q_cap", "W", "heat flow into the gas through heat_cap"},
+                     {"H_cushion", "W", "enthalpy flow cushion volume -> channel"},
+                     {"P_friction", "W", "friction power F_friction v (<= 0)"},
+                     {"P_stop", "W", "end stop power F_stop v"},
+                     {"E_stop", "J", "elastic energy stored in the end stops, k pen^2 / 2"},
+                     {"U_gas", "J", "internal energy of the gas in all chambers"}};
+    using S = CylinderSide;
+    for (const auto& rows : {S::chamber_equation_names("A", "A"), S::annulus_equation_names("EC"),
+                             S::chamber_equation_names("ch", "B"),
+                             {"force balance", S::wall_equation_name("A"), S::wall_equation_name("cap")}})
+      c.equations.insert(c.equations.end(), rows.begin(), rows.end());
+    c.roots = 4;
+    return c;
+  }
+  // The rod cushion annulus ECr: its state, observables, rows and roots.
+  static InfoPart rod_cushion_part() {
+    InfoPart r = CylinderSide::annulus_part("EC_rod", "ECr", "rod cushion volume");
+    r.observables = {{"p_EC_rod", "Pa", "rod cushion volume pressure, absolute"},
+                     {"T_EC_rod", "K", "rod cushion volume gas temperature"},
+                     {"bore_open_rod", "1", "rod-end bore opening fraction"},
+                     {"m_flow_cushion_rod", "kg/s", "flow rod cushion volume -> rod-side channel"},
+                     {"H_EC_rod", "W", "enthalpy flow into the gas at the tapping port EC_rod"},
+                     {"P_pdV_EC_rod", "W", "p dV/dt of the rod cushion volume"},
+                     {"H_cushion_rod", "W", "enthalpy flow rod cushion volume -> rod-side channel"}};
+    r.roots = 2;
+    return r;
+  }
+  // The instance's parts in the order of its ports, variables, observables
+  // and rows; the constructor places each side's rows where they are named.
+  static void add_parts(ComponentInfo& i, bool taps, bool rod, bool lugre) {
+    using S = CylinderSide;
+    clear_parts(i);
+    add_part(i, cylinder_part());
+    if (taps)
+      add_part(i, {.ports = {{"EC", Domain::pneumatic, Causality::acausal,
+                              "tapping into the cushion volume EC (closed if unconnected)", true}},
+                   .equations = S::tap_equation_names("EC")});
+    if (rod) add_part(i, rod_cushion_part());
+    if (rod && taps)
+      add_part(i, {.ports = {{"EC_rod", Domain::pneumatic, Causality::acausal,
+                              "tapping into the rod cushion volume (rod cushioning only; closed if unconnected)",
+                              true}},
+                   .equations = S::tap_equation_names("EC_rod")});
+    if (lugre) add_part(i, lugre_part());
+  }
+
+  // The first of the rows named `name`, -1 if the instance has none.
+  int row(const std::string& name) const {
+    const auto& names = info().equations;
+    const auto it = std::find(names.begin(), names.end(), name);
+    return it == names.end() ? -1 : static_cast<int>(it - names.begin());
+  }
+
+  // The rod end's sleeve, annulus and paths (rod_plug_diameter given).
+  void add_rod_cushioning(const ParameterValues& p) {
+    const double d = p["rod_plug_diameter"];
+    if (!(d > p["rod"] && d < p["bore"]))
+      throw ParameterError("rod_plug_diameter", "the rod-end sleeve diameter must lie between rod and bore");
+    for (const char* name : {"rod_cushion_length", "rod_dead_volume_cushion"})
+      if (!p.has(name))
+        throw ParameterError(name, std::string("rod-end cushioning (rod_plug_diameter given) needs ") + name);
+    rod_side_.cushion(
+        {p["rod_cushion_length"], circle_area(d) - A_R_, p["rod_dead_volume_cushion"], read_cushion(p, "rod_")});
+    if (cap_.cushion_length() + cap_.ramp() + rod_side_.cushion_length() + rod_side_.ramp() >= stroke_)
+      throw ParameterError("rod_cushion_length",
+                           "the cushioning zones (with their bore-opening ramps) at both ends overlap");
+  }
+
   // The throttle/valve parameters of one end; the rod end's default to the
   // cap end's.
   static Cushion read_cushion(const ParameterValues& p, const std::string& prefix) {
@@ -727,8 +619,13 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
     const std::string z_name = prefix.empty() ? "z_EC" : (p.has("z_EC_rod") ? "z_EC_rod" : "z_EC");
     c.C_cushion = interpolate(t, p[z_name]);
     c.b_cushion = get("cushion_b0") + get("cushion_b_slope") * (C_max > 0 ? c.C_cushion / C_max : 0.0);
-    if (!(c.b_cushion >= 0 && c.b_cushion < 0.999))
-      throw ParameterError(prefix + "cushion_b_slope", "b of the cushion throttle leaves [0, 0.999) at this opening");
+    // The flow law's subsonic branch needs b below its laminar ratio.
+    if (!(c.b_cushion >= 0 && c.b_cushion < kCushionLaminarRatio)) {
+      char bound[32];
+      std::snprintf(bound, sizeof bound, "%g", kCushionLaminarRatio);
+      throw ParameterError(prefix + "cushion_b_slope",
+                           "b of the cushion throttle leaves [0, " + std::string(bound) + ") at this opening");
+    }
     c.C_check = get("check_C");
     c.b_check = get("check_b");
     c.crack = get("check_cracking");
@@ -736,17 +633,14 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
     return c;
   }
 
-  double A_B_, A_R_, A_A_, A_CP_, bore_, rod_d_, stroke_, L_, V0_A_, V0_EC_, V0_ch_;
-  Cushion cap_{}, rodc_{};
-  EndStops stops_{};
+  double A_B_, A_R_, stroke_;
+  CylinderSide cap_, rod_side_;
+  EndStops stops_;
   double wall_alpha_;
   FrictionLaw friction_;
-  FrictionCoefficients friction_main_, friction_cushion_;
-  double friction_scale_, v_reg_, v_eps_;
   double x0_, p0_A_, p0_cap_, T0_;
-  bool rod_ = false, taps_ = false;
-  double A_CPr_ = 0, A_colr_ = 0, L_r_ = 0, V0_ECr_ = 0;
-  int z_var_ = 6;
+  bool taps_;
+  int z_var_ = 6, force_row_ = 0, lugre_row_ = -1;
   // state<double>() memo: its inputs (s, v, internal variables) and result.
   static constexpr int kMemoKey = 2 + 9;
   mutable bool memo_valid_ = false;

@@ -75,15 +75,6 @@ class Cylinder final : public ComponentT<Cylinder> {
                {"flange", Domain::translational, Causality::acausal, "rod end; position = x (0 retracted)"},
                {"heat_cap", Domain::thermal, Causality::acausal, "wall of the cap-side chamber", true},
                {"heat_rod", Domain::thermal, Causality::acausal, "wall of the rod-side chamber", true}};
-    i.variables = {{"m_cap", "kg", "gas mass, cap side (channel with cap cushioning)"},
-                   {"U_cap", "J", "internal energy, cap side"},
-                   {"m_cap_cushion", "kg", "gas mass, cap cushion annulus"},
-                   {"U_cap_cushion", "J", "internal energy, cap cushion annulus"},
-                   {"m_rod", "kg", "gas mass, rod side (channel with rod cushioning)"},
-                   {"U_rod", "J", "internal energy, rod side"},
-                   {"m_rod_cushion", "kg", "gas mass, rod cushion annulus"},
-                   {"U_rod_cushion", "J", "internal energy, rod cushion annulus"},
-                   {"z", "m", "LuGre bristle deflection", 1e-5}};
     i.observables = {{"x", "m", "piston position (0 retracted, stroke extended)"},
                      {"v", "m/s", "piston velocity (> 0 extending)"},
                      {"p_cap", "Pa", "cap-side pressure at the port, absolute"},
@@ -118,41 +109,34 @@ class Cylinder final : public ComponentT<Cylinder> {
                      {"H_rod_cushion", "W", "enthalpy flow rod cushion annulus -> channel (0 without)"},
                      {"P_pdV_cap_channel", "W", "p dV/dt of the cap-side channel gas (0 without cushioning)"},
                      {"P_pdV_rod_channel", "W", "p dV/dt of the rod-side channel gas (0 without cushioning)"}};
-    i.equations = {"mass balance cap",     "energy balance cap",     "gas law cap",
-                   "outflow temperature cap", "wall heat cap",       "mass balance cap cushion",
-                   "energy balance cap cushion", "mass balance rod", "energy balance rod",
-                   "gas law rod",          "outflow temperature rod", "wall heat rod",
-                   "mass balance rod cushion", "energy balance rod cushion", "force balance",
-                   "bristle dynamics"};
-    i.roots = 4;
+    add_parts(i, true, true, true);
     return i;
   }
 
-  // Drops what this instance lacks: an end's cushion chamber and root, the
-  // LuGre state.
+  // The parts this instance has: an end's cushion annulus, the LuGre state.
   static ComponentInfo instance_info(ComponentInfo i, const ParameterValues& p) {
-    auto erase = [](auto& list, const std::vector<std::string>& names) {
-      std::erase_if(list, [&](const auto& item) {
-        if constexpr (std::is_same_v<std::decay_t<decltype(item)>, std::string>)
-          return std::find(names.begin(), names.end(), item) != names.end();
-        else
-          return std::find(names.begin(), names.end(), item.name) != names.end();
-      });
-    };
-    i.roots = 2;
-    for (const std::string end : {"cap", "rod"}) {
-      if (CylinderSide::has_cushion(p, end)) {
-        ++i.roots;
-        continue;
-      }
-      erase(i.variables, {"m_" + end + "_cushion", "U_" + end + "_cushion"});
-      erase(i.equations, {"mass balance " + end + " cushion", "energy balance " + end + " cushion"});
-    }
-    if (p.text("friction_model") != "lugre") {
-      erase(i.variables, {"z"});
-      erase(i.equations, {"bristle dynamics"});
-    }
+    add_parts(i, CylinderSide::has_cushion(p, "cap"), CylinderSide::has_cushion(p, "rod"),
+              p.text("friction_model") == "lugre");
     return i;
+  }
+  // In the order of the rows: each side's (its annulus' with cushioning, a
+  // root each), the force balance, LuGre's z.
+  static void add_parts(ComponentInfo& i, bool cap_cushion, bool rod_cushion, bool lugre) {
+    // Every instance has describe()'s ports and observables, and the stops' roots.
+    InfoPart cylinder{.ports = i.ports, .observables = i.observables, .roots = 2};
+    clear_parts(i);
+    add_part(i, cylinder);
+    for (const auto& [end, cushioned] : {std::pair<std::string, bool>{"cap", cap_cushion}, {"rod", rod_cushion}}) {
+      add_part(i, {.variables = {{"m_" + end, "kg", "gas mass, " + end + " side (channel with " + end + " cushioning)"},
+                                 {"U_" + end, "J", "internal energy, " + end + " side"}},
+                   .equations = CylinderSide::equation_names(end, end, end)});
+      if (!cushioned) continue;
+      InfoPart annulus = CylinderSide::annulus_part(end + "_cushion", end + " cushion", end + " cushion annulus");
+      annulus.roots = 1;  // the cushion entry
+      add_part(i, annulus);
+    }
+    add_part(i, {.equations = {"force balance"}});
+    if (lugre) add_part(i, lugre_part());
   }
 
   explicit Cylinder(const Construction& c) : ComponentT(c), p_(c.params) {

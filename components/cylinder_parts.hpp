@@ -26,6 +26,11 @@ inline constexpr double kCylinderPi = 3.14159265358979323846;
 
 inline double circle_area(double d) { return kCylinderPi * d * d / 4; }
 
+// The cushion paths' pressure ratio above which their flow is continued
+// linearly in (1 - p2/p1) (iso6358_phi's r_lam): keeps the flow's slope
+// finite at zero pressure drop, as the stand-alone throttles' default does.
+inline constexpr double kCushionLaminarRatio = 0.999;
+
 template <class T>
 T chamber_pressure(const T& U, const T& V, const GasModel& gas) {
   return (gas.kappa - 1.0) * U / V;
@@ -41,6 +46,37 @@ T chamber_temperature(const T& m, const T& U, const GasModel& gas) {
 template <class T>
 T chamber_wall_area(double A, double perimeter, const T& d, double V0) {
   return 2.0 * A + perimeter * (d + V0 / A);
+}
+
+// A part's share of a component's description: its ports, internal
+// variables, observables, rows (equation names) and roots. A component made
+// of parts describes itself as the union of all of them, and an instance as
+// the union of the parts it has, each list in the parts' order.
+struct InfoPart {
+  std::vector<PortSpec> ports;
+  std::vector<VariableSpec> variables;
+  std::vector<ObservableSpec> observables;
+  std::vector<std::string> equations;
+  int roots = 0;
+};
+inline void add_part(ComponentInfo& i, const InfoPart& part) {
+  i.ports.insert(i.ports.end(), part.ports.begin(), part.ports.end());
+  i.variables.insert(i.variables.end(), part.variables.begin(), part.variables.end());
+  i.observables.insert(i.observables.end(), part.observables.begin(), part.observables.end());
+  i.equations.insert(i.equations.end(), part.equations.begin(), part.equations.end());
+  i.roots += part.roots;
+}
+// LuGre friction's bristle deflection z and its row (friction_model: lugre).
+inline InfoPart lugre_part() {
+  return {.variables = {{"z", "m", "LuGre bristle deflection", 1e-5}}, .equations = {"bristle dynamics"}};
+}
+// The lists of `i` emptied, before its parts are added.
+inline void clear_parts(ComponentInfo& i) {
+  i.ports.clear();
+  i.variables.clear();
+  i.observables.clear();
+  i.equations.clear();
+  i.roots = 0;
 }
 
 // Elastic end stops at x = 0 and x = stroke: force = max(0, k pen + d pen_rate),
@@ -86,14 +122,13 @@ T cushion_flow(const Cushion& c, const T& gap, const T& p_EC, const T& p_ch, con
   // and is not evaluated, except for the structural pattern.
   constexpr bool structural = std::is_same_v<T, Pattern>;
   const T zero = 0.0 * x;
-  const T m_bore = structural || value(open) > 0.0
-                       ? iso6358_mass_flow(p_EC, p_ch, T_EC, T_ch, T(c.C_bore * open), c.b_bore, 0.999, gas)
-                       : zero;
-  const T m_throttle = iso6358_mass_flow(p_EC, p_ch, T_EC, T_ch, T(c.C_cushion + 0.0 * x), c.b_cushion, 0.999, gas);
+  auto path = [&](const T& C, double b) {
+    return iso6358_mass_flow(p_EC, p_ch, T_EC, T_ch, C, b, kCushionLaminarRatio, gas);
+  };
+  const T m_bore = structural || value(open) > 0.0 ? path(T(c.C_bore * open), c.b_bore) : zero;
+  const T m_throttle = path(T(c.C_cushion + 0.0 * x), c.b_cushion);
   const T check_open = min(max(T((p_ch - p_EC - c.crack) / c.check_ramp), T(0.0)), T(1.0));
-  const T m_check = structural || value(check_open) > 0.0
-                        ? iso6358_mass_flow(p_EC, p_ch, T_EC, T_ch, T(c.C_check * check_open), c.b_check, 0.999, gas)
-                        : zero;
+  const T m_check = structural || value(check_open) > 0.0 ? path(T(c.C_check * check_open), c.b_check) : zero;
   return m_bore + m_throttle + m_check;
 }
 
@@ -123,6 +158,14 @@ class CylinderSide {
     T p_piston, T_piston;            // at the piston (annulus with cushioning)
     T m_x = T(0.0), H_x = T(0.0);    // cushion flow EC -> ch and its enthalpy
     T open = T(1.0);                 // bore opening fraction
+  };
+
+  // The cushioning of one end: engaged over the last `length` of travel,
+  // the plug's column area A_col (the annulus is A - A_col), the annulus'
+  // dead volume V0_EC and the paths joining annulus and channel.
+  struct Cushioning {
+    double length, A_col, V0_EC;
+    Cushion paths;
   };
 
   // Cushioning parameters of the end called `end` ("cap", "rod"); present
@@ -156,59 +199,126 @@ class CylinderSide {
   }
   static bool has_cushion(const ParameterValues& p, const std::string& end) { return p.has(end + "_cushion_length"); }
 
-  // A side of face area A (m2), dead volume V0 (m3), wall perimeter
-  // (m, for wall heat), rod area A_rod inside the plug (the rod side's
-  // sleeve column is A_plug - A_rod); cushioning read when present.
+  // The names of a side's rows: the chamber behind the port, the wall;
+  // with cushioning the annulus' and a tap's. equation_names() are the
+  // chamber's and the wall's in the default (contiguous) placement.
+  static std::vector<std::string> chamber_equation_names(const std::string& chamber, const std::string& port) {
+    return {"mass balance " + chamber, "energy balance " + chamber, "gas law " + chamber,
+            "outflow temperature " + port};
+  }
+  static std::string wall_equation_name(const std::string& wall) { return "wall heat " + wall; }
+  static std::vector<std::string> equation_names(const std::string& chamber, const std::string& port,
+                                                 const std::string& wall) {
+    auto names = chamber_equation_names(chamber, port);
+    names.push_back(wall_equation_name(wall));
+    return names;
+  }
+  static std::vector<std::string> annulus_equation_names(const std::string& annulus) {
+    return {"mass balance " + annulus, "energy balance " + annulus};
+  }
+  // A cushion annulus' state (m_<var>, U_<var>, of the annulus called
+  // `description`) and its rows.
+  static InfoPart annulus_part(const std::string& var, const std::string& rows, const std::string& description) {
+    return {.variables = {{"m_" + var, "kg", "gas mass, " + description},
+                          {"U_" + var, "J", "internal energy, " + description}},
+            .equations = annulus_equation_names(rows)};
+  }
+  static std::vector<std::string> tap_equation_names(const std::string& tap) {
+    return {"tap " + tap + " pressure", "tap " + tap + " temperature"};
+  }
+
+  // A side of face area A (m2), dead volume V0 (m3, the channel's with
+  // cushioning) and wall perimeter (m, for wall heat).
+  CylinderSide(double A, double V0, double perimeter) : A_(A), V0_(V0), perimeter_(perimeter) {}
+
+  // The same, with the cushioning read from the <end>_cushion_* parameters
+  // when present; A_rod is the rod area inside the plug (the rod side's
+  // sleeve column is A_plug - A_rod).
   CylinderSide(const ParameterValues& p, const std::string& end, double A, double V0, double perimeter, double A_rod,
                double stroke)
-      : A_(A), V0_(V0), perimeter_(perimeter) {
+      : CylinderSide(A, V0, perimeter) {
     if (!has_cushion(p, end)) return;
     const std::string e = end + "_";
     for (const char* name : {"plug_diameter", "cushion_C"})
       if (!p.has(e + name))
         throw ParameterError(e + name, end + "-end cushioning (" + e + "cushion_length given) needs " + e + name);
-    cushioned_ = true;
-    L_ = p[e + "cushion_length"];
     const double A_plug = circle_area(p[e + "plug_diameter"]);
     if (!(A_plug > A_rod && A_plug - A_rod < A))
       throw ParameterError(e + "plug_diameter", "the plug diameter must lie between the rod's and the bore's");
-    A_col_ = A_plug - A_rod;
-    V0_EC_ = p[e + "dead_volume_cushion"];
-    c_ = Cushion{p[e + "bore_opening_C"], p[e + "bore_opening_b"], p[e + "bore_opening_ramp"],
-                 p[e + "cushion_C"],      p[e + "cushion_b"],      p[e + "check_C"],
-                 p[e + "check_b"],        p[e + "check_cracking"], p[e + "check_ramp"]};
+    cushion({p[e + "cushion_length"], A_plug - A_rod, p[e + "dead_volume_cushion"],
+             Cushion{p[e + "bore_opening_C"], p[e + "bore_opening_b"], p[e + "bore_opening_ramp"], p[e + "cushion_C"],
+                     p[e + "cushion_b"], p[e + "check_C"], p[e + "check_b"], p[e + "check_cracking"],
+                     p[e + "check_ramp"]}});
     if (L_ + c_.ramp >= stroke)
-      throw ParameterError(e + "cushion_length", "the cushioning length (with its ramp) must be shorter than the stroke");
+      throw ParameterError(e + "cushion_length",
+                           "the cushioning length (with its ramp) must be shorter than the stroke");
   }
+
+  // Splits the side into the cushion annulus and the channel.
+  void cushion(const Cushioning& k) {
+    cushioned_ = true;
+    L_ = k.length;
+    A_col_ = k.A_col;
+    V0_EC_ = k.V0_EC;
+    c_ = k.paths;
+  }
+  // A tapping port into the annulus (with cushioning): its flow enters the
+  // annulus' balances; it adds the rows p = p_annulus and its T_out.
+  void tap(int port) { tap_ = cushioned_ ? port : -1; }
 
   bool cushioned() const { return cushioned_; }
   double cushion_length() const { return L_; }
+  double ramp() const { return c_.ramp; }
   int variables() const { return cushioned_ ? 4 : 2; }
   // The side's internal variables start at `first`: m, U (channel with
-  // cushioning), then m_EC, U_EC.
-  void set_first_variable(int first) { k_ = first; }
-  int rows() const { return cushioned_ ? 7 : 5; }
+  // cushioning), then m_EC, U_EC; or at `annulus` for the annulus'.
+  void set_first_variable(int first) { set_variables(first, first + 2); }
+  void set_variables(int channel, int annulus) {
+    k_ = channel;
+    k_EC_ = annulus;
+  }
+  int rows() const { return cushioned_ ? (tap_ >= 0 ? 9 : 7) : 5; }
+  // Where equations() writes its rows, from the pointer it is given: the
+  // chamber's four (mass, energy, gas law, outflow temperature), the
+  // wall's, the annulus' two and the tap's two. By default one block in
+  // that order; a component whose rows are named in another order places
+  // them (its parts' order).
+  void place_rows(int chamber, int wall, int annulus, int tap) { rows_ = {chamber, wall, annulus, tap}; }
 
+  // Pressures and temperatures at travel d from the side's end; the flow
+  // between annulus and channel is gas()'s.
   template <class T>
-  Gas<T> gas(const Eval<T>& e, const T& d) const {
+  Gas<T> chambers(const Eval<T>& e, const T& d) const {
     const GasModel& gas = e.gas();
     Gas<T> g;
     const T& m = e.var(k_);
     const T& U = e.var(k_ + 1);
     g.T_gas = chamber_temperature(m, U, gas);
+    g.m_x = g.H_x = 0.0 * d;
+    g.open = 0.0 * d + 1.0;
     if (!cushioned_) {
       g.p = chamber_pressure(U, T(V0_ + A_ * d), gas);
       g.p_piston = g.p;
       g.T_piston = g.T_gas;
-      g.m_x = g.H_x = 0.0 * d;
-      g.open = 0.0 * d + 1.0;
       return g;
     }
     g.p = chamber_pressure(U, T(V0_ + A_col_ * d), gas);
-    g.T_piston = chamber_temperature(e.var(k_ + 2), e.var(k_ + 3), gas);
-    g.p_piston = chamber_pressure(e.var(k_ + 3), T(V0_EC_ + (A_ - A_col_) * d), gas);
-    g.m_x = cushion_flow(c_, T(d - L_), g.p_piston, g.p, g.T_piston, g.T_gas, d, gas, g.open);
-    g.H_x = enthalpy_inflow(g.m_x, g.T_piston, g.T_gas, gas);
+    g.T_piston = chamber_temperature(e.var(k_EC_), e.var(k_EC_ + 1), gas);
+    g.p_piston = chamber_pressure(e.var(k_EC_ + 1), T(V0_EC_ + (A_ - A_col_) * d), gas);
+    return g;
+  }
+  // With `gap` the travel left before the plug engages (d - L; a caller
+  // may pass it as computed from its own coordinate).
+  template <class T>
+  Gas<T> gas(const Eval<T>& e, const T& d) const {
+    return gas(e, d, T(d - L_));
+  }
+  template <class T>
+  Gas<T> gas(const Eval<T>& e, const T& d, const T& gap) const {
+    Gas<T> g = chambers(e, d);
+    if (!cushioned_) return g;
+    g.m_x = cushion_flow(c_, gap, g.p_piston, g.p, g.T_piston, g.T_gas, d, e.gas(), g.open);
+    g.H_x = enthalpy_inflow(g.m_x, g.T_piston, g.T_gas, e.gas());
     return g;
   }
 
@@ -216,7 +326,17 @@ class CylinderSide {
   // this side's end (toward larger d).
   template <class T>
   T force(const Gas<T>& g) const {
-    return cushioned_ ? T(g.p_piston * (A_ - A_col_) + g.p * A_col_) : T(g.p * A_);
+    return cushioned_ ? T(annulus_force(g) + port_force(g)) : port_force(g);
+  }
+  // Its parts: of the gas behind the port (the channel's on the plug column
+  // with cushioning) and of the annulus' (0 without).
+  template <class T>
+  T port_force(const Gas<T>& g) const {
+    return g.p * (cushioned_ ? A_col_ : A_);
+  }
+  template <class T>
+  T annulus_force(const Gas<T>& g) const {
+    return cushioned_ ? T(g.p_piston * (A_ - A_col_)) : T(0.0 * g.p);
   }
   // p dV/dt of the side's gas (power to the piston) at dd/dt.
   template <class T>
@@ -225,33 +345,36 @@ class CylinderSide {
   }
 
   // The side's rows: balances, the port's pressure and outflow temperature,
-  // the wall heat row.
+  // the wall heat row; with cushioning the annulus' balances (and tap).
   template <class T>
   void equations(const Eval<T>& e, const GasPortView<T>& port, const HeatPortView<T>& heat, const Gas<T>& g,
                  const T& d, const T& d_dot, double wall_alpha, T* r) const {
     const GasModel& gas = e.gas();
-    for (int k = 0; k < variables(); ++k) e.reject_unless_positive(e.var(k_ + k));
+    e.reject_unless_positive(e.var(k_));
+    e.reject_unless_positive(e.var(k_ + 1));
     const T H_port = enthalpy_inflow(port.m_flow, port.T_in, port.T_out, gas);
     const bool walls_at_gas_T = !(wall_alpha > 0);
+    T* c = r + rows_.chamber;
     if (!cushioned_) {
-      r[0] = e.der(k_) - port.m_flow;
-      r[1] = e.der(k_ + 1) - H_port + g.p * A_ * d_dot - heat.Q;
-      r[2] = port.p - g.p;
+      c[0] = e.der(k_) - port.m_flow;
+      // p dV/dt with the port's pressure, which the gas-law row below makes
+      // U's: the form the cushion rig's solver figures are measured with.
+      c[1] = e.der(k_ + 1) - H_port + port.p * A_ * d_dot - heat.Q;
+      c[2] = port.p - g.p;
       // With the heat port at the gas temperature the port's T_out is its
       // alias, which alias elimination folds into one unknown.
-      r[3] = port.T_out - (walls_at_gas_T ? heat.T : g.T_gas);
+      c[3] = port.T_out - (walls_at_gas_T ? heat.T : g.T_gas);
     } else {
-      r[0] = e.der(k_) - g.m_x - port.m_flow;
-      r[1] = e.der(k_ + 1) - g.H_x - H_port + g.p * A_col_ * d_dot;
-      r[2] = port.p - g.p;
-      r[3] = port.T_out - g.T_gas;
-      r[5] = e.der(k_ + 2) + g.m_x;
-      r[6] = e.der(k_ + 3) + g.H_x + g.p_piston * (A_ - A_col_) * d_dot - heat.Q;
+      c[0] = e.der(k_) - g.m_x - port.m_flow;
+      c[1] = e.der(k_ + 1) - g.H_x - H_port + g.p * A_col_ * d_dot;
+      c[2] = port.p - g.p;
+      c[3] = port.T_out - g.T_gas;
+      annulus_equations(e, heat, g, d_dot, walls_at_gas_T, r);
     }
     if (wall_alpha > 0)
-      r[4] = heat.Q - wall_alpha * chamber_wall_area(A_, perimeter_, d, V0_ + V0_EC_) * (heat.T - g.T_piston);
+      r[rows_.wall] = heat.Q - wall_alpha * chamber_wall_area(A_, perimeter_, d, V0_ + V0_EC_) * (heat.T - g.T_piston);
     else
-      r[4] = heat.T - g.T_piston;
+      r[rows_.wall] = heat.T - g.T_piston;
   }
 
   void start(StartValues& sv, const GasModel& gas, int port, int heat, double p0, double T0, double d) const {
@@ -261,10 +384,11 @@ class CylinderSide {
       sv.fix_var(k + 1, mass * gas.cv() * T0);
     };
     fill(k_, V0_ + (cushioned_ ? A_col_ : A_) * d);
-    if (cushioned_) fill(k_ + 2, V0_EC_ + (A_ - A_col_) * d);
-    if (port >= 0) {
-      sv.guess_pressure(port, p0);
-      sv.guess_temperature(port, T0);
+    if (cushioned_) fill(k_EC_, V0_EC_ + (A_ - A_col_) * d);
+    for (int gas_port : {port, tap_}) {
+      if (gas_port < 0) continue;
+      sv.guess_pressure(gas_port, p0);
+      sv.guess_temperature(gas_port, T0);
     }
     sv.guess_temperature(heat, T0);
   }
@@ -272,18 +396,47 @@ class CylinderSide {
   // Internal energy of the side's gas, and of its cushion annulus alone
   // (0 without cushioning).
   double internal_energy(const Eval<double>& e) const {
-    return e.var(k_ + 1) + (cushioned_ ? e.var(k_ + 3) : 0.0);
+    return e.var(k_ + 1) + cushion_internal_energy(e);
   }
-  double cushion_internal_energy(const Eval<double>& e) const { return cushioned_ ? e.var(k_ + 3) : 0.0; }
+  double cushion_internal_energy(const Eval<double>& e) const { return cushioned_ ? e.var(k_EC_ + 1) : 0.0; }
+  // p dV/dt of the gas behind the port alone (the channel with cushioning,
+  // else all of the side's gas) and of the annulus alone (0 without).
+  double port_p_dV(const Gas<double>& g, double d_dot) const { return port_force(g) * d_dot; }
+  double annulus_p_dV(const Gas<double>& g, double d_dot) const { return annulus_force(g) * d_dot; }
   // p dV/dt of the channel gas alone (the plug column; 0 without cushioning).
   double channel_p_dV(const Gas<double>& g, double d_dot) const { return cushioned_ ? g.p * A_col_ * d_dot : 0.0; }
 
  private:
+  // The annulus' balances: flow to the channel, the piston's work, the
+  // wall's heat and a tap's inflow; the tap's pressure and temperature.
+  template <class T>
+  void annulus_equations(const Eval<T>& e, const HeatPortView<T>& heat, const Gas<T>& g, const T& d_dot,
+                         bool walls_at_gas_T, T* rows) const {
+    e.reject_unless_positive(e.var(k_EC_));
+    e.reject_unless_positive(e.var(k_EC_ + 1));
+    const T p_dV = annulus_force(g) * d_dot;
+    T* r = rows + rows_.annulus;
+    if (tap_ < 0) {
+      r[0] = e.der(k_EC_) + g.m_x;
+      r[1] = e.der(k_EC_ + 1) + g.H_x + p_dV - heat.Q;
+      return;
+    }
+    const auto tap = e.gas_port(tap_);
+    const T H_tap = enthalpy_inflow(tap.m_flow, tap.T_in, tap.T_out, e.gas());
+    r[0] = e.der(k_EC_) + g.m_x - tap.m_flow;
+    r[1] = e.der(k_EC_ + 1) + g.H_x - H_tap + p_dV - heat.Q;
+    rows[rows_.tap] = tap.p - g.p_piston;
+    rows[rows_.tap + 1] = tap.T_out - (walls_at_gas_T ? heat.T : g.T_piston);
+  }
+
   double A_, V0_, perimeter_;
   bool cushioned_ = false;
   double L_ = 0, A_col_ = 0, V0_EC_ = 0;
   Cushion c_{};
-  int k_ = 0;
+  int k_ = 0, k_EC_ = 2, tap_ = -1;
+  struct RowPlaces {
+    int chamber, wall, annulus, tap;
+  } rows_{0, 4, 5, 7};
 };
 
 // What `cylinder` and `single_acting_cylinder` share besides their rows: the

@@ -46,48 +46,48 @@ class SingleActingCylinder final : public ComponentT<SingleActingCylinder> {
         P::scalar("dead_volume_rod", "m3", "spring chamber volume at x = stroke (closed chamber)", 1e-6).positive(),
     };
     for (auto& s : Piston::parameters("spring chamber (closed chamber)")) i.parameters.push_back(std::move(s));
-    i.ports = {{"cap", Domain::pneumatic, Causality::acausal, "cap-side port: pressure extends"},
-               {"flange", Domain::translational, Causality::acausal, "rod end; position = x (0 retracted)"},
-               {"heat_cap", Domain::thermal, Causality::acausal, "wall of the cap-side chamber", true},
-               {"rod", Domain::pneumatic, Causality::acausal, "spring chamber port (closed chamber; closed if unconnected)",
-                true},
-               {"heat_rod", Domain::thermal, Causality::acausal, "wall of the spring chamber (closed chamber)", true}};
-    i.variables = {{"m_cap", "kg", "gas mass, cap side"},
-                   {"U_cap", "J", "internal energy, cap side"},
-                   {"m_rod", "kg", "gas mass, spring chamber"},
-                   {"U_rod", "J", "internal energy, spring chamber"},
-                   {"z", "m", "LuGre bristle deflection", 1e-5}};
-    i.observables = {{"x", "m", "piston position (0 retracted, stroke extended)"},
-                     {"v", "m/s", "piston velocity (> 0 extending)"},
-                     {"p_cap", "Pa", "cap-side pressure, absolute"},
-                     {"T_cap", "K", "cap-side gas temperature"},
-                     {"F_spring", "N", "spring force on the piston (-x), F0 + k x"},
-                     {"F_pressure", "N", "pressure force on the piston (+x), spring chamber side included"},
-                     {"F_friction", "N", "friction force on the piston (+x)"},
-                     {"F_stop", "N", "end stop force on the piston (+x)"},
-                     {"p_rod", "Pa", "spring chamber pressure, absolute (ambient when vented)"},
-                     {"T_rod", "K", "spring chamber gas temperature (closed chamber)"}};
-    i.equations = {"mass balance cap", "energy balance cap", "gas law cap", "outflow temperature cap",
-                   "wall heat cap",    "force balance",      "mass balance rod", "energy balance rod",
-                   "gas law rod",      "outflow temperature rod", "wall heat rod", "bristle dynamics"};
-    i.roots = 2;
+    add_parts(i, true, true);
     return i;
   }
 
   // A vented spring chamber has no gas state and no ports; LuGre adds z.
   static ComponentInfo instance_info(ComponentInfo i, const ParameterValues& p) {
-    auto drop = [](auto& list, auto pred) { std::erase_if(list, pred); };
-    if (p.text("spring_chamber") == "vented") {
-      drop(i.ports, [](const PortSpec& s) { return s.name == "rod" || s.name == "heat_rod"; });
-      drop(i.variables, [](const VariableSpec& s) { return s.name == "m_rod" || s.name == "U_rod"; });
-      drop(i.equations, [](const std::string& s) { return s.ends_with(" rod"); });
-      drop(i.observables, [](const ObservableSpec& s) { return s.name == "T_rod"; });
-    }
-    if (p.text("friction_model") != "lugre") {
-      drop(i.variables, [](const VariableSpec& s) { return s.name == "z"; });
-      drop(i.equations, [](const std::string& s) { return s == "bristle dynamics"; });
-    }
+    add_parts(i, p.text("spring_chamber") == "closed", p.text("friction_model") == "lugre");
     return i;
+  }
+  // In the order of the rows: the cap side's and the force balance, the
+  // closed spring chamber's, LuGre's z.
+  static void add_parts(ComponentInfo& i, bool closed, bool lugre) {
+    using S = CylinderSide;
+    clear_parts(i);
+    InfoPart cap;
+    cap.ports = {{"cap", Domain::pneumatic, Causality::acausal, "cap-side port: pressure extends"},
+                 {"flange", Domain::translational, Causality::acausal, "rod end; position = x (0 retracted)"},
+                 {"heat_cap", Domain::thermal, Causality::acausal, "wall of the cap-side chamber", true}};
+    cap.variables = {{"m_cap", "kg", "gas mass, cap side"}, {"U_cap", "J", "internal energy, cap side"}};
+    cap.observables = {{"x", "m", "piston position (0 retracted, stroke extended)"},
+                       {"v", "m/s", "piston velocity (> 0 extending)"},
+                       {"p_cap", "Pa", "cap-side pressure, absolute"},
+                       {"T_cap", "K", "cap-side gas temperature"},
+                       {"F_spring", "N", "spring force on the piston (-x), F0 + k x"},
+                       {"F_pressure", "N", "pressure force on the piston (+x), spring chamber side included"},
+                       {"F_friction", "N", "friction force on the piston (+x)"},
+                       {"F_stop", "N", "end stop force on the piston (+x)"},
+                       {"p_rod", "Pa", "spring chamber pressure, absolute (ambient when vented)"}};
+    cap.equations = S::equation_names("cap", "cap", "cap");
+    cap.equations.push_back("force balance");
+    cap.roots = 2;
+    add_part(i, cap);
+    if (closed)
+      add_part(i, {.ports = {{"rod", Domain::pneumatic, Causality::acausal,
+                              "spring chamber port (closed chamber; closed if unconnected)", true},
+                             {"heat_rod", Domain::thermal, Causality::acausal,
+                              "wall of the spring chamber (closed chamber)", true}},
+                   .variables = {{"m_rod", "kg", "gas mass, spring chamber"},
+                                 {"U_rod", "J", "internal energy, spring chamber"}},
+                   .observables = {{"T_rod", "K", "spring chamber gas temperature (closed chamber)"}},
+                   .equations = S::equation_names("rod", "rod", "rod")});
+    if (lugre) add_part(i, lugre_part());
   }
 
   explicit SingleActingCylinder(const Construction& c)
