@@ -154,11 +154,11 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
     rod_side_.set_variables(kMA, kMECr);
     z_var_ = rod_side_.cushioned() ? 8 : 6;
     // Each part's rows where add_parts() names them.
-    cap_.place_rows(row("mass balance ch"), row("wall heat cap"), row("mass balance EC"), row("tap EC pressure"));
-    rod_side_.place_rows(row("mass balance A"), row("wall heat A"), row("mass balance ECr"),
-                         row("tap EC_rod pressure"));
+    cap_.place_rows(row("mass balance ch"), row("wall heat cap"), row("mass balance EC"), row_if("tap EC pressure"));
+    rod_side_.place_rows(row("mass balance A"), row("wall heat A"), row_if("mass balance ECr"),
+                         row_if("tap EC_rod pressure"));
     force_row_ = row("force balance");
-    lugre_row_ = row("bristle dynamics");
+    lugre_row_ = row_if("bristle dynamics");
     if (2 + static_cast<int>(info().variables.size()) > kMemoKey)
       throw std::logic_error("cushioned_cylinder: the state memo's key is too short for its variables");
   }
@@ -581,11 +581,16 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
     if (lugre) add_part(i, lugre_part());
   }
 
-  // The first of the rows named `name`, -1 if the instance has none.
-  int row(const std::string& name) const {
+  // The row named `name`; row_if: -1 if the instance has none.
+  int row_if(const std::string& name) const {
     const auto& names = info().equations;
     const auto it = std::find(names.begin(), names.end(), name);
     return it == names.end() ? -1 : static_cast<int>(it - names.begin());
+  }
+  int row(const std::string& name) const {
+    const int k = row_if(name);
+    if (k < 0) throw std::logic_error("cushioned_cylinder: no row named '" + name + "'");
+    return k;
   }
 
   // The rod end's sleeve, annulus and paths (rod_plug_diameter given).
