@@ -90,6 +90,11 @@ struct Effect {
   std::string recalibrates;  // a `recalibrate:` entry: the netlist parameter (NAME or COMPONENT.PARAMETER)
 
   int parameter_index(const std::string& n) const;
+  // Whether the effect changes the netlist (not only the measurement).
+  bool patches_netlist() const {
+    return !add_components.empty() || !replace_components.empty() || !set.empty() || !connect.empty() ||
+           !disconnect.empty();
+  }
 };
 
 // A phase of the runs in the gap report: it starts at `from` - "start", an
