@@ -168,8 +168,10 @@ std::set<std::pair<std::string, std::string>> port_set(const ConnectionDecl& c) 
 }
 
 // A top-level parameter set by an effect: an SI number (as a plain number
-// in the netlist, without unit), or a quantity read from the text.
+// in the netlist, without unit), or a quantity read from the text; written
+// where the catalogue sets it.
 void set_top_parameter(TopParameter& p, const ValueDecl& v, double p_ambient, const std::string& effect) {
+  p.where = v.where;
   if (v.si) {
     p.si_value = *v.si;
     p.dim = {};
