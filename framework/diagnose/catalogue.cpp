@@ -478,10 +478,10 @@ std::optional<InputError> read_patch(const Reader& r, const YAML::Node& body, Ef
       if (!refused) refused.emplace(ex);
     }
   };
-  for (auto [key, list] : {std::pair{"add_components", &e.add_components}, {"replace_components", &e.replace_components}})
-    if (body[key])
-      for (auto c = body[key].begin(); c != body[key].end(); ++c)
-        keep([&] { list->push_back(read_component(r, c->first.Scalar(), c->first, c->second)); });
+  for (const auto& patch : {std::pair{"add_components", &e.add_components}, {"replace_components", &e.replace_components}})
+    if (body[patch.first])
+      for (auto c = body[patch.first].begin(); c != body[patch.first].end(); ++c)
+        keep([&] { patch.second->push_back(read_component(r, c->first.Scalar(), c->first, c->second)); });
   if (body["connect"])
     for (const auto& c : body["connect"]) keep([&] { e.connect.push_back(read_connection(r, c)); });
   if (body["disconnect"])
