@@ -127,12 +127,11 @@ using Traces = std::vector<std::vector<double>>;  // per signal, on the sample g
 
 // The noiseless measured traces of one run: the model with the draws' patches
 // simulated at `op`, through the draws' sensors, sampled every kSample.
-Traces clean_run(const YAML::Node& model, const std::string& model_file, const std::vector<Draw>& truth,
-                 const OperatingPoint& op) {
+Traces clean_run(const Netlist& model, const std::vector<Draw>& truth, const OperatingPoint& op) {
   std::vector<EffectInstance> inst;
   for (const auto& d : truth)
     if (d.patch) inst.push_back({d.patch, d.values});
-  Netlist nl = parse_netlist(YAML::Dump(apply_effects(model, inst, nullptr)), model_file);
+  Netlist nl = apply_effects(model, inst, nullptr);
   apply_override(nl, "p_supply=" + std::to_string(op.p_supply));
   apply_override(nl, "m_load=" + std::to_string(op.m_load));
   apply_override(nl, "z_EC=" + std::to_string(op.z_EC));
@@ -157,14 +156,14 @@ Traces clean_run(const YAML::Node& model, const std::string& model_file, const s
 }
 
 // All runs of a case, `threads` at a time.
-std::vector<Traces> clean_runs(const YAML::Node& model, const std::string& model_file, const std::vector<Draw>& truth,
+std::vector<Traces> clean_runs(const Netlist& model, const std::vector<Draw>& truth,
                                const std::vector<OperatingPoint>& ops, int threads) {
   std::vector<Traces> out(ops.size());
   for (std::size_t k0 = 0; k0 < ops.size(); k0 += std::max(threads, 1)) {
     std::vector<std::future<Traces>> jobs;
     for (std::size_t k = k0; k < std::min(ops.size(), k0 + std::max(threads, 1)); ++k)
-      jobs.push_back(std::async(std::launch::async, clean_run, std::cref(model), std::cref(model_file),
-                                std::cref(truth), std::cref(ops[k])));
+      jobs.push_back(std::async(std::launch::async, clean_run, std::cref(model), std::cref(truth),
+                                std::cref(ops[k])));
     for (std::size_t j = 0; j < jobs.size(); ++j) out[k0 + j] = jobs[j].get();
   }
   return out;
@@ -212,7 +211,7 @@ void write_runs(const fs::path& dir, const std::vector<Traces>& clean, const std
 
 struct Setup {
   std::string source, model_file;
-  YAML::Node model;
+  Netlist model;
   Catalogue forms, candidates;
   int threads = 2;
   double noise_scale = 1.0, min_gap = 2.0, max_gap = 100.0;  // effects' own clean gaps, noise sd
@@ -297,8 +296,7 @@ class Generator {
     std::uniform_real_distribution<double> U(0.0, 1.0);
     std::vector<double> u;
     for (std::size_t j = 0; j < form.parameters.size(); ++j) u.push_back(U(rng_));
-    const bool patch = !form.add_components.IsNull() || !form.replace_components.IsNull() || !form.set.IsNull() ||
-                       !form.connect.IsNull() || !form.disconnect.IsNull();
+    const bool patch = form.patches_netlist();
     auto at = [&](double u0) {
       u[0] = u0;
       return Draw{form.name, patch ? &form : nullptr, values_at(form, u)};
@@ -306,7 +304,7 @@ class Generator {
     auto gap_at = [&](double u0) {
       ++*evaluations;
       try {
-        return clean_gap(clean_runs(s_.model, s_.model_file, {at(u0)}, ops, s_.threads), nominal, s_.noise_scale);
+        return clean_gap(clean_runs(s_.model, {at(u0)}, ops, s_.threads), nominal, s_.noise_scale);
       } catch (const std::exception&) {
         return double(INFINITY);
       }
@@ -352,7 +350,7 @@ Case generate_case(const Setup& s, Generator& g, const std::string& kind, const 
     c.evaluations = 0;
     std::vector<Traces> nominal;
     try {
-      nominal = clean_runs(s.model, s.model_file, {}, c.ops, s.threads);
+      nominal = clean_runs(s.model, {}, c.ops, s.threads);
     } catch (const std::exception&) {
       continue;  // the operating points themselves do not simulate
     }
@@ -375,7 +373,7 @@ Case generate_case(const Setup& s, Generator& g, const std::string& kind, const 
     }
     if (!ok) continue;
     try {
-      c.clean = c.truth.empty() ? nominal : clean_runs(s.model, s.model_file, c.truth, c.ops, s.threads);
+      c.clean = c.truth.empty() ? nominal : clean_runs(s.model, c.truth, c.ops, s.threads);
     } catch (const std::exception&) {
       continue;
     }
@@ -431,18 +429,17 @@ void check_forms(const Setup& s) {
 void print_form_ranges(const Setup& s, unsigned seed) {
   Generator g(s, seed);
   const auto ops = g.operating_points();
-  const auto nominal = clean_runs(s.model, s.model_file, {}, ops, s.threads);
+  const auto nominal = clean_runs(s.model, {}, ops, s.threads);
   for (const auto& f : s.forms.effects) {
     std::printf("%-40s", f.name.c_str());
     for (double u0 : {0.0, 1.0}) {
       std::vector<double> u(f.parameters.size(), 0.5);
       u[0] = u0;
-      const bool patch = !f.add_components.IsNull() || !f.replace_components.IsNull() || !f.set.IsNull() ||
-                         !f.connect.IsNull() || !f.disconnect.IsNull();
+      const bool patch = f.patches_netlist();
       try {
         const Draw d{f.name, patch ? &f : nullptr, Generator::values_at(f, u)};
         std::printf("  %s=%-10.3g gap %8.3g", f.parameters[0].name.c_str(), d.values[0],
-                    clean_gap(clean_runs(s.model, s.model_file, {d}, ops, s.threads), nominal, s.noise_scale));
+                    clean_gap(clean_runs(s.model, {d}, ops, s.threads), nominal, s.noise_scale));
       } catch (const std::exception& ex) {
         std::printf("  fails: %s", ex.what());
       }
@@ -603,11 +600,11 @@ int main(int argc, char** argv) {
     return 2;
   }
   s.model_file = s.source + "/netlists/cushion_rig.yaml";
-  s.model = YAML::LoadFile(s.model_file);
+  s.model = load_netlist(s.model_file);
   const std::string candidates_file = s.source + "/catalogues/cushion_rig.yaml";
-  s.candidates = load_catalogue(candidates_file, s.model, s.model_file, builtin_registry());
+  s.candidates = load_catalogue(candidates_file, s.model, builtin_registry());
   const std::string forms_file = s.source + (classic ? "/benchmarks/withheld_effects.yaml" : "/benchmarks/withheld_forms.yaml");
-  s.forms = load_catalogue(forms_file, s.model, s.model_file, builtin_registry());
+  s.forms = load_catalogue(forms_file, s.model, builtin_registry());
 
   std::vector<Case> cases;
   const auto g0 = std::chrono::steady_clock::now();
@@ -643,7 +640,7 @@ int main(int argc, char** argv) {
     fs::remove_all(dir);
     try {
       const std::vector<Traces> clean =
-          c.clean.empty() ? clean_runs(s.model, s.model_file, c.truth, c.ops, s.threads) : c.clean;
+          c.clean.empty() ? clean_runs(s.model, c.truth, c.ops, s.threads) : c.clean;
       write_runs(dir / "runs", clean, c.ops, c.seed, s.noise_scale);
     } catch (const std::exception& ex) {
       std::printf("%-36s    SKIPPED: generating the data failed: %s\n", c.name.c_str(), ex.what());

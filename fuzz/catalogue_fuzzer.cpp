@@ -9,11 +9,10 @@
 #include <fstream>
 #include <string>
 
-#include <yaml-cpp/yaml.h>
-
 #include "components/builtin.hpp"
 #include "framework/core/error.hpp"
 #include "framework/diagnose/catalogue.hpp"
+#include "framework/netlist/netlist.hpp"
 
 namespace {
 const std::string kModelFile = std::string(PNEUMO_SOURCE_DIR) + "/netlists/cushion_rig.yaml";
@@ -21,13 +20,13 @@ const std::string kScratch = "/tmp/pneumo_catalogue_fuzz_" + std::to_string(getp
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
-  static const YAML::Node model = YAML::LoadFile(kModelFile);
+  static const pneumo::Netlist model = pneumo::load_netlist(kModelFile);
   {
     std::ofstream out(kScratch, std::ios::binary | std::ios::trunc);
     out.write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(size));
   }
   try {
-    (void)pneumo::diagnose::load_catalogue(kScratch, model, kModelFile, pneumo::builtin_registry());
+    (void)pneumo::diagnose::load_catalogue(kScratch, model, pneumo::builtin_registry());
   } catch (const pneumo::InputError&) {
   } catch (const pneumo::StructureError&) {
   }

@@ -12,6 +12,8 @@
 #include <fstream>
 #include <random>
 
+#include <yaml-cpp/yaml.h>
+
 #include "components/builtin.hpp"
 #include "framework/diagnose/diagnose.hpp"
 #include "framework/diagnose/ranking.hpp"
@@ -281,7 +283,7 @@ TEST(DiagnoseRanking, RecalibrationCandidateIsTheNetlistsValueAndRefusesARunsOpe
   const YAML::Node model = YAML::LoadFile(kModel);
   // A valid entry: null and initial are the netlist's value, the range 0.25x-4x on a log scale.
   std::ofstream(dir / "c.yaml") << "recalibrate:\n  meter_out.C: {}\n";
-  const Catalogue cat = load_catalogue((dir / "c.yaml").string(), model, kModel, builtin_registry());
+  const Catalogue cat = load_catalogue((dir / "c.yaml").string(), load_netlist(kModel), builtin_registry());
   ASSERT_EQ(cat.effects.size(), 1u);
   const EffectParameter& p = cat.effects[0].parameters[0];
   const double C = 0.35e-3 / 1e5;  // 0.35 dm3/(s*bar) in m3/(s*Pa)

@@ -15,6 +15,8 @@
 #include <regex>
 #include <sstream>
 
+#include <yaml-cpp/yaml.h>
+
 #include "components/builtin.hpp"
 #include "framework/diagnose/diagnose.hpp"
 #include "framework/run/run.hpp"
@@ -323,11 +325,11 @@ TEST(Diagnose, BadMeasuredDataGetsClearErrors) {
 
 TEST(Diagnose, BadCatalogueNamesFileLineEffectAndParameter) {
   const fs::path dir = temp_dir("bad_catalogue");
-  const YAML::Node model = YAML::LoadFile(kModel);
+  const Netlist model = load_netlist(kModel);
   auto load = [&](const std::string& text) -> std::string {
     std::ofstream(dir / "c.yaml") << text;
     try {
-      load_catalogue((dir / "c.yaml").string(), model, kModel, builtin_registry());
+      load_catalogue((dir / "c.yaml").string(), model, builtin_registry());
     } catch (const InputError& e) {
       return e.what();
     }
@@ -362,7 +364,7 @@ TEST(Diagnose, BadCatalogueNamesFileLineEffectAndParameter) {
 
   // A patch needing a component type that is not registered is unavailable, not an error.
   std::ofstream(dir / "c.yaml") << "effects:\n  hose:\n    add_components: {h: {type: hose_not_yet, L: 1}}\n";
-  const Catalogue cat = load_catalogue((dir / "c.yaml").string(), model, kModel, builtin_registry());
+  const Catalogue cat = load_catalogue((dir / "c.yaml").string(), model, builtin_registry());
   ASSERT_EQ(cat.effects.size(), 1u);
   EXPECT_EQ(cat.effects[0].unavailable, "unavailable: type hose_not_yet not registered");
 
@@ -382,9 +384,8 @@ TEST(Diagnose, BadCatalogueNamesFileLineEffectAndParameter) {
 }
 
 TEST(Diagnose, ShippedCatalogueLoadsAgainstTheRig) {
-  const YAML::Node model = YAML::LoadFile(kModel);
-  const Catalogue cat =
-      load_catalogue(kSource + "/catalogues/cushion_rig.yaml", model, kModel, builtin_registry());
+  const Netlist model = load_netlist(kModel);
+  const Catalogue cat = load_catalogue(kSource + "/catalogues/cushion_rig.yaml", model, builtin_registry());
   for (const char* name : {"heat_transfer", "friction_pressure", "friction_cushion_zone", "leakage_cushion_seal",
                            "leakage_piston_seal", "sensor_lag_T", "sensor_lag_p", "valve_timing", "line_volume",
                            "supply_droop", "end_stop_elasticity", "lugre"})
@@ -398,7 +399,7 @@ TEST(Diagnose, ShippedCatalogueLoadsAgainstTheRig) {
   const Effect* leak = cat.find("leakage_piston_seal");
   ASSERT_NE(leak, nullptr);
   MeasurementModel mm;
-  Netlist patched = parse_netlist(YAML::Dump(apply_effects(model, {{leak, {0.0}}}, &mm)), kModel);
+  Netlist patched = apply_effects(model, {{leak, {0.0}}}, &mm);
   Netlist base = load_netlist(kModel);
   patched.simulation.t_end = base.simulation.t_end = 0.4;
   const auto a = run_simulation(patched, builtin_registry()), b = run_simulation(base, builtin_registry());
@@ -412,25 +413,34 @@ TEST(Diagnose, CushionZoneFrictionMovesFromTheMainLawToAnnexCpEC) {
   // the coefficients are Annex C pEC's (seed 000), at the null w = 0 the
   // main-stroke law (Annex B 5.14) holds in the cushioning zone too, so the
   // stroke is the unpatched model's.
-  const YAML::Node model = YAML::LoadFile(kModel);
-  const Catalogue cat =
-      load_catalogue(kSource + "/catalogues/cushion_rig.yaml", model, kModel, builtin_registry());
+  const Netlist model = load_netlist(kModel);
+  const Catalogue cat = load_catalogue(kSource + "/catalogues/cushion_rig.yaml", model, builtin_registry());
   const Effect* e = cat.find("friction_cushion_zone");
   ASSERT_NE(e, nullptr);
   ASSERT_EQ(e->parameters.size(), 1u);
   ASSERT_TRUE(e->parameters[0].null_value.has_value());
-  const YAML::Node at1 = apply_effects(model, {{e, {1.0}}}, nullptr)["components"]["cylinder"];
-  EXPECT_NEAR(at1["friction_cushion_b0"].as<double>(), 9.66, 1e-12);
-  EXPECT_NEAR(at1["friction_cushion_FS0"].as<double>(), 8.8, 1e-12);
-  EXPECT_NEAR(at1["friction_cushion_vS"].as<double>(), 2.96e-3, 1e-15);
-  EXPECT_NEAR(at1["friction_cushion_a"].as<double>(), 1.0, 1e-12);
-  const std::string kv1 = at1["friction_cushion_kv1"].as<std::string>();
+  const Netlist w1 = apply_effects(model, {{e, {1.0}}}, nullptr);
+  const auto cylinder = std::find_if(w1.components.begin(), w1.components.end(),
+                                     [](const ComponentDecl& c) { return c.name == "cylinder"; });
+  ASSERT_NE(cylinder, w1.components.end());
+  auto at1 = [&](const std::string& name) {
+    for (const auto& [n, v] : cylinder->parameters)
+      if (n == name) return v;
+    ADD_FAILURE() << name << " not set";
+    return ValueDecl{};
+  };
+  // A value that is exactly ${...} is the SI number; one with a unit stays text, the number written in.
+  EXPECT_NEAR(at1("friction_cushion_b0").si.value_or(NAN), 9.66, 1e-12);
+  EXPECT_NEAR(at1("friction_cushion_FS0").si.value_or(NAN), 8.8, 1e-12);
+  EXPECT_NEAR(at1("friction_cushion_vS").si.value_or(NAN), 2.96e-3, 1e-15);
+  EXPECT_NEAR(at1("friction_cushion_a").si.value_or(NAN), 1.0, 1e-12);
+  const std::string kv1 = at1("friction_cushion_kv1").text;
   EXPECT_NEAR(std::stod(kv1), 19.61, 1e-12);
   EXPECT_NE(kv1.find(" N/bar"), std::string::npos) << kv1;
 
-  Netlist patched = parse_netlist(YAML::Dump(apply_effects(model, {{e, {*e->parameters[0].null_value}}}, nullptr)), kModel);
+  Netlist patched = apply_effects(model, {{e, {*e->parameters[0].null_value}}}, nullptr);
   Netlist base = load_netlist(kModel);
-  Netlist stronger = parse_netlist(YAML::Dump(apply_effects(model, {{e, {1.0}}}, nullptr)), kModel);
+  Netlist stronger = w1;
   for (Netlist* n : {&patched, &base, &stronger}) n->simulation.t_end = 0.6;
   const auto a = run_simulation(patched, builtin_registry()), b = run_simulation(base, builtin_registry()),
              c = run_simulation(stronger, builtin_registry());

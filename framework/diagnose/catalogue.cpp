@@ -12,6 +12,7 @@
 
 #include "framework/core/expression.hpp"
 #include "framework/netlist/netlist.hpp"
+#include "framework/netlist/reader.hpp"
 #include "framework/netlist/yaml_location.hpp"
 
 namespace pneumo::diagnose {
@@ -30,7 +31,7 @@ const Effect* Catalogue::find(const std::string& name) const {
 
 namespace {
 
-bool has_key(const YAML::Node& map, const std::string& key) { return map.IsMap() && map[key]; }
+using netlist_detail::Reader;
 
 std::string format_number(double v) {
   char buf[64];
@@ -51,44 +52,78 @@ double evaluate(const std::string& text, const Effect& effect, const std::vector
   });
 }
 
-// Replace every ${...} in every scalar of `node` (a fresh clone) by its value.
-void substitute(YAML::Node node, const Effect& effect, const std::vector<double>& values) {
-  if (node.IsScalar()) {
-    std::string s = node.Scalar();
-    std::size_t pos;
-    bool changed = false;
-    while ((pos = s.find("${")) != std::string::npos) {
-      const std::size_t end = s.find('}', pos);
-      const std::string expr = end == std::string::npos ? s.substr(pos + 2) : s.substr(pos + 2, end - pos - 2);
-      double v = 0;
-      try {
-        if (end == std::string::npos) throw std::invalid_argument("missing '}'");
-        v = evaluate(expr, effect, &values);
-      } catch (const std::exception& ex) {
-        throw InputError(location_of(effect.where.file, node), "", expr,
-                         "effect '" + effect.name + "': '${" + expr + "}': " + ex.what());
-      }
-      s = s.substr(0, pos) + format_number(v) + s.substr(end + 1);
-      changed = true;
+// One ${...} in a text: [begin, end) spans it, `expr` is what it holds.
+struct Template {
+  std::size_t begin = 0, end = 0;
+  std::string expr;
+  bool closed = true;
+};
+
+std::vector<Template> templates_in(const std::string& s) {
+  std::vector<Template> out;
+  for (std::size_t pos = s.find("${"); pos != std::string::npos; pos = s.find("${", out.back().end)) {
+    const std::size_t close = s.find('}', pos);
+    if (close == std::string::npos) {
+      out.push_back({pos, s.size(), s.substr(pos + 2), false});
+      break;
     }
-    if (changed) node = s;
-    return;
+    out.push_back({pos, close + 1, s.substr(pos + 2, close - pos - 2), true});
   }
-  if (node.IsSequence())
-    for (std::size_t i = 0; i < node.size(); ++i) substitute(node[i], effect, values);
-  if (node.IsMap())
-    for (auto it = node.begin(); it != node.end(); ++it) substitute(it->second, effect, values);
+  return out;
 }
 
-std::set<std::string> port_set(const YAML::Node& list) {
-  std::set<std::string> s;
-  for (const auto& p : list) s.insert(p.as<std::string>());
-  return s;
+// A template's value (`values`, or the initial values when null); an error
+// names `where`, the effect and the expression.
+double template_value(const Template& t, const Effect& effect, const std::vector<double>* values,
+                      const SourceLocation& where) {
+  try {
+    if (!t.closed) throw std::invalid_argument("missing '}'");
+    return evaluate(t.expr, effect, values);
+  } catch (const std::exception& ex) {
+    throw InputError(where, "", t.expr, "effect '" + effect.name + "': '${" + t.expr + "}': " + ex.what());
+  }
+}
+
+// `v` with its ${...} replaced by their values. A value that is exactly one
+// ${expr} becomes its SI number (its text, the number written out, serves a
+// text parameter). A ${...} inside a longer text ("${w * 0.26} N/bar") is
+// written into the text with 17 digits, which read back to the same double,
+// so that the netlist reads the quantity with its unit. A value that is not
+// finite stays text: elaborating it fails, as a run that cannot be made.
+ValueDecl substitute(const ValueDecl& v, const Effect& effect, const std::vector<double>& values) {
+  ValueDecl out = v;
+  for (auto& item : out.items) item = substitute(item, effect, values);
+  if (v.shape != ValueDecl::Shape::scalar || v.si) return out;
+  const auto ts = templates_in(v.text);
+  if (ts.size() == 1 && ts[0].begin == 0 && ts[0].end == v.text.size()) {
+    const double x = template_value(ts[0], effect, &values, v.where);
+    out.text = format_number(x);
+    if (std::isfinite(x)) out.si = x;
+    return out;
+  }
+  out.text.clear();
+  std::size_t copied = 0;
+  for (const auto& t : ts) {
+    out.text += v.text.substr(copied, t.begin - copied) + format_number(template_value(t, effect, &values, v.where));
+    copied = t.end;
+  }
+  out.text += v.text.substr(copied);
+  return out;
+}
+
+ComponentDecl substitute(ComponentDecl c, const Effect& effect, const std::vector<double>& values) {
+  for (auto& [name, value] : c.parameters) value = substitute(value, effect, values);
+  return c;
+}
+
+[[noreturn]] void fail(const SourceLocation& where, const std::string& effect, const std::string& parameter,
+                       const std::string& msg) {
+  throw InputError(where, "", parameter, (effect.empty() ? "" : "effect '" + effect + "': ") + msg);
 }
 
 [[noreturn]] void fail(const std::string& file, const YAML::Node& n, const std::string& effect,
                        const std::string& parameter, const std::string& msg) {
-  throw InputError(location_of(file, n), "", parameter, (effect.empty() ? "" : "effect '" + effect + "': ") + msg);
+  fail(location_of(file, n), effect, parameter, msg);
 }
 
 double number(const std::string& file, const YAML::Node& n, const std::string& effect, const std::string& param,
@@ -101,21 +136,24 @@ double number(const std::string& file, const YAML::Node& n, const std::string& e
   }
 }
 
+// A measurement lag after substitution: an SI number.
+double lag_seconds(const ValueDecl& v, const std::string& effect, const std::string& output) {
+  if (v.si) return *v.si;
+  if (v.shape != ValueDecl::Shape::scalar) fail(v.where, effect, output, "'lag' must be an SI number");
+  try {
+    std::size_t used = 0;
+    const double x = std::stod(v.text, &used);
+    if (used == v.text.size()) return x;
+  } catch (const std::exception&) {
+  }
+  fail(v.where, effect, output, "'lag': '" + v.text + "' is not a number (SI values)");
+}
+
 // Every ${...} in the patch must name the effect's parameters (or be an
 // expression of them that parses).
 void check_references(const std::string& file, const YAML::Node& node, const Effect& effect) {
   if (node.IsScalar()) {
-    const std::string& s = node.Scalar();
-    for (std::size_t pos = s.find("${"); pos != std::string::npos; pos = s.find("${", pos + 2)) {
-      const std::size_t end = s.find('}', pos);
-      const std::string expr = end == std::string::npos ? s.substr(pos + 2) : s.substr(pos + 2, end - pos - 2);
-      try {
-        if (end == std::string::npos) throw std::invalid_argument("missing '}'");
-        (void)evaluate(expr, effect, nullptr);
-      } catch (const std::exception& ex) {
-        fail(file, node, effect.name, expr, "'${" + expr + "}': " + ex.what());
-      }
-    }
+    for (const auto& t : templates_in(node.Scalar())) (void)template_value(t, effect, nullptr, location_of(file, node));
   } else if (node.IsSequence()) {
     for (const auto& c : node) check_references(file, c, effect);
   } else if (node.IsMap()) {
@@ -123,93 +161,121 @@ void check_references(const std::string& file, const YAML::Node& node, const Eff
   }
 }
 
+std::set<std::pair<std::string, std::string>> port_set(const ConnectionDecl& c) {
+  std::set<std::pair<std::string, std::string>> s;
+  for (const auto& p : c.ports) s.emplace(p.component, p.port);
+  return s;
+}
+
+// A top-level parameter set by an effect: an SI number (as a plain number
+// in the netlist, without unit), or a quantity read from the text; written
+// where the catalogue sets it.
+void set_top_parameter(TopParameter& p, const ValueDecl& v, double p_ambient, const std::string& effect) {
+  p.where = v.where;
+  if (v.si) {
+    p.si_value = *v.si;
+    p.dim = {};
+    p.had_unit = false;
+    return;
+  }
+  if (v.shape != ValueDecl::Shape::scalar) fail(v.where, effect, p.name, "set: a top-level parameter is a single value");
+  try {
+    const auto q = units::parse_quantity(v.text, p_ambient);
+    p.si_value = q.si_value;
+    p.dim = q.dim;
+    p.had_unit = q.had_unit;
+  } catch (const units::ParseError& err) {
+    fail(v.where, effect, p.name, "set: cannot read '" + v.text + "': " + err.what());
+  }
+}
+
+// A component parameter set by an effect: replaced where the netlist writes
+// it, or added; either way it now points at the catalogue's line.
+void set_component_parameter(ComponentDecl& c, const std::string& param, const SourceLocation& key, ValueDecl v) {
+  if (param == "type") {
+    c.type = v.text;
+    c.type_where = v.where;
+    return;
+  }
+  const bool keyed = c.parameter_where.size() == c.parameters.size();
+  for (std::size_t i = 0; i < c.parameters.size(); ++i)
+    if (c.parameters[i].first == param) {
+      c.parameters[i].second = std::move(v);
+      if (keyed) c.parameter_where[i] = key;
+      return;
+    }
+  c.parameters.emplace_back(param, std::move(v));
+  if (keyed) c.parameter_where.push_back(key);
+}
+
+ComponentDecl* component_named(Netlist& nl, const std::string& name) {
+  for (auto& c : nl.components)
+    if (c.name == name) return &c;
+  return nullptr;
+}
+
+void apply_set(Netlist& out, const SetPatch& s, const Effect& e, const std::vector<double>& values) {
+  const auto dot = s.target.find('.');
+  if (dot == std::string::npos)
+    fail(s.where, e.name, s.target, "set: key must be COMPONENT.PARAMETER or parameters.NAME");
+  const std::string comp = s.target.substr(0, dot), param = s.target.substr(dot + 1);
+  if (comp == "parameters") {
+    auto it = std::find_if(out.parameters.begin(), out.parameters.end(),
+                           [&](const TopParameter& p) { return p.name == param; });
+    if (it == out.parameters.end())
+      fail(s.where, e.name, param, "set: the model has no top-level parameter '" + param + "'");
+    set_top_parameter(*it, substitute(s.value, e, values), out.gas.p_ambient, e.name);
+    return;
+  }
+  ComponentDecl* c = component_named(out, comp);
+  if (!c) fail(s.where, e.name, param, "set: the model has no component '" + comp + "'");
+  set_component_parameter(*c, param, s.where, substitute(s.value, e, values));
+}
+
+void apply_effect(Netlist& out, const EffectInstance& inst, MeasurementModel* measurement) {
+  const Effect& e = *inst.effect;
+  for (const auto& d : e.disconnect) {
+    const auto want = port_set(d);
+    const auto it = std::find_if(out.connections.begin(), out.connections.end(),
+                                 [&](const ConnectionDecl& c) { return port_set(c) == want; });
+    if (it == out.connections.end())
+      fail(d.where, e.name, "", "disconnect: the model has no connection with exactly these ports");
+    out.connections.erase(it);
+  }
+  for (const auto& c : e.add_components) {
+    if (component_named(out, c.name))
+      fail(c.where, e.name, "", "add_components: the model already has a component '" + c.name + "'");
+    out.components.push_back(substitute(c, e, inst.values));
+  }
+  for (const auto& c : e.replace_components) {
+    ComponentDecl* old = component_named(out, c.name);
+    if (!old) fail(c.where, e.name, "", "replace_components: the model has no component '" + c.name + "'");
+    *old = substitute(c, e, inst.values);
+  }
+  for (const auto& s : e.set) apply_set(out, s, e, inst.values);
+  out.connections.insert(out.connections.end(), e.connect.begin(), e.connect.end());
+  if (measurement)
+    for (const auto& m : e.measure)
+      measurement->lag[m.output] = lag_seconds(substitute(m.lag, e, inst.values), e.name, m.output);
+}
+
 }  // namespace
 
-YAML::Node apply_effects(const YAML::Node& model, const std::vector<EffectInstance>& effects,
-                         MeasurementModel* measurement) {
-  YAML::Node out = YAML::Clone(model);
-  for (const auto& inst : effects) {
-    const Effect& e = *inst.effect;
-    const std::string& file = e.where.file;
-    auto sub = [&](const YAML::Node& n) {
-      YAML::Node c = YAML::Clone(n);
-      substitute(c, e, inst.values);
-      return c;
-    };
-    if (e.disconnect.IsSequence()) {
-      for (const auto& d : e.disconnect) {
-        const auto want = port_set(d);
-        YAML::Node kept(YAML::NodeType::Sequence);
-        bool found = false;
-        for (const auto& c : out["connections"]) {
-          if (!found && port_set(c) == want) {
-            found = true;
-            continue;
-          }
-          kept.push_back(c);
-        }
-        if (!found) fail(file, d, e.name, "", "disconnect: the model has no connection with exactly these ports");
-        out["connections"] = kept;
-      }
-    }
-    if (e.add_components.IsMap())
-      for (auto it = e.add_components.begin(); it != e.add_components.end(); ++it) {
-        const auto name = it->first.as<std::string>();
-        if (has_key(out["components"], name))
-          fail(file, it->first, e.name, "", "add_components: the model already has a component '" + name + "'");
-        out["components"][name] = sub(it->second);
-      }
-    if (e.replace_components.IsMap())
-      for (auto it = e.replace_components.begin(); it != e.replace_components.end(); ++it) {
-        const auto name = it->first.as<std::string>();
-        if (!has_key(out["components"], name))
-          fail(file, it->first, e.name, "", "replace_components: the model has no component '" + name + "'");
-        out["components"][name] = sub(it->second);
-      }
-    if (e.set.IsMap())
-      for (auto it = e.set.begin(); it != e.set.end(); ++it) {
-        const auto key = it->first.as<std::string>();
-        const auto dot = key.find('.');
-        if (dot == std::string::npos)
-          fail(file, it->first, e.name, key, "set: key must be COMPONENT.PARAMETER or parameters.NAME");
-        const std::string comp = key.substr(0, dot), param = key.substr(dot + 1);
-        if (comp == "parameters") {
-          if (!has_key(out["parameters"], param))
-            fail(file, it->first, e.name, param, "set: the model has no top-level parameter '" + param + "'");
-          out["parameters"][param] = sub(it->second);
-        } else {
-          if (!has_key(out["components"], comp))
-            fail(file, it->first, e.name, param, "set: the model has no component '" + comp + "'");
-          out["components"][comp][param] = sub(it->second);
-        }
-      }
-    if (e.connect.IsSequence()) {
-      if (!has_key(out, "connections")) out["connections"] = YAML::Node(YAML::NodeType::Sequence);
-      for (const auto& c : e.connect) out["connections"].push_back(YAML::Clone(c));
-    }
-    if (e.measure.IsMap() && measurement)
-      for (auto it = e.measure.begin(); it != e.measure.end(); ++it) {
-        const auto output = it->first.as<std::string>();
-        const YAML::Node m = sub(it->second);
-        if (m["lag"]) measurement->lag[output] = number(file, m["lag"], e.name, output, "lag");
-      }
-  }
+Netlist apply_effects(const Netlist& model, const std::vector<EffectInstance>& effects,
+                      MeasurementModel* measurement) {
+  Netlist out = model;
+  for (const auto& inst : effects) apply_effect(out, inst, measurement);
   return out;
 }
 
 bool effects_conflict(const Effect& a, const Effect& b) {
   auto keys = [](const Effect& e) {
     std::set<std::string> k;
-    if (e.set.IsMap())
-      for (auto it = e.set.begin(); it != e.set.end(); ++it) k.insert("set:" + it->first.as<std::string>());
-    if (e.replace_components.IsMap())
-      for (auto it = e.replace_components.begin(); it != e.replace_components.end(); ++it)
-        k.insert("replace:" + it->first.as<std::string>());
-    if (e.disconnect.IsSequence())
-      for (const auto& d : e.disconnect)
-        for (const auto& p : d) k.insert("disconnect:" + p.as<std::string>());
-    if (e.measure.IsMap())
-      for (auto it = e.measure.begin(); it != e.measure.end(); ++it) k.insert("measure:" + it->first.as<std::string>());
+    for (const auto& s : e.set) k.insert("set:" + s.target);
+    for (const auto& c : e.replace_components) k.insert("replace:" + c.name);
+    for (const auto& d : e.disconnect)
+      for (const auto& p : d.ports) k.insert("disconnect:" + p.component + "." + p.port);
+    for (const auto& m : e.measure) k.insert("measure:" + m.output);
     return k;
   };
   const auto ka = keys(a), kb = keys(b);
@@ -358,33 +424,83 @@ Effect recalibration(const std::string& path, const YAML::Node& key_node, const 
                       ? body["description"].as<std::string>()
                       : "re-calibrated model parameter " + e.name + " (netlist: " + format_number(v.value) + " " + v.unit + ")";
   e.recalibrates = e.name;
-  e.set[v.set_key] = "${" + ep.name + "}";
+  ValueDecl value;
+  value.text = "${" + ep.name + "}";
+  value.where = e.where;
+  e.set.push_back({v.set_key, e.where, value});
   e.parameters.push_back(ep);
   return e;
 }
 
+// A patch the netlist does not accept, reported at the effect's line.
+InputError does_not_apply(const Effect& e, const std::string& model_file, const InputError& ex) {
+  return InputError(e.where, ex.component(), ex.parameter(),
+                    "effect '" + e.name + "' does not apply to " + model_file + ": " + ex.message());
+}
+
 // The patch applied at the initial values and elaborated, so that errors
 // surface at load time with the catalogue's file:line.
-void check_applies(const Effect& e, const YAML::Node& model, const std::string& model_file, const Registry& registry) {
+void check_applies(const Effect& e, const Netlist& model, const Registry& registry) {
   std::vector<double> init;
   for (const auto& p : e.parameters) init.push_back(p.initial);
   MeasurementModel mm;
-  const YAML::Node patched = apply_effects(model, {EffectInstance{&e, init}}, &mm);
+  const Netlist patched = apply_effects(model, {EffectInstance{&e, init}}, &mm);
   try {
-    Netlist nl = parse_netlist(YAML::Dump(patched), model_file + " (patched by effect '" + e.name + "')");
-    (void)elaborate(nl, registry);
+    (void)elaborate(patched, registry);
   } catch (const InputError& ex) {
-    throw InputError(e.where, ex.component(), ex.parameter(),
-                     "effect '" + e.name + "' does not apply to " + model_file + ": " + ex.message());
+    throw does_not_apply(e, model.file, ex);
   }
+}
+
+// The ports of a `disconnect:` entry, split at their first dot like the
+// netlist's; one that is not COMPONENT.PORT matches no connection.
+ConnectionDecl ports_to_disconnect(const Reader& r, const YAML::Node& item) {
+  ConnectionDecl d;
+  d.where = r.at(item);
+  for (const auto& pn : item) {
+    const std::string s = r.scalar_text(pn, "", "", "a port reference");
+    const auto dot = s.find('.');
+    d.ports.push_back({s.substr(0, dot), dot == std::string::npos ? "" : s.substr(dot + 1), r.at(pn)});
+  }
+  return d;
+}
+
+// The effect's patch as typed declarations (its structure checked before).
+// A component or connection the netlist's reader refuses is a patch that
+// does not apply: that error is returned, for the caller to report if the
+// effect is available (an unavailable effect is never applied).
+std::optional<InputError> read_patch(const Reader& r, const YAML::Node& body, Effect& e) {
+  std::optional<InputError> refused;
+  auto keep = [&](auto read) {
+    try {
+      read();
+    } catch (const InputError& ex) {
+      if (!refused) refused.emplace(ex);
+    }
+  };
+  for (const auto& patch : {std::pair{"add_components", &e.add_components}, {"replace_components", &e.replace_components}})
+    if (body[patch.first])
+      for (auto c = body[patch.first].begin(); c != body[patch.first].end(); ++c)
+        keep([&] { patch.second->push_back(read_component(r, c->first.Scalar(), c->first, c->second)); });
+  if (body["connect"])
+    for (const auto& c : body["connect"]) keep([&] { e.connect.push_back(read_connection(r, c)); });
+  if (body["disconnect"])
+    for (const auto& d : body["disconnect"]) e.disconnect.push_back(ports_to_disconnect(r, d));
+  if (body["set"])
+    for (auto it = body["set"].begin(); it != body["set"].end(); ++it)
+      e.set.push_back({r.scalar_text(it->first, "", "", "a set: key"), r.at(it->first), r.value(it->second)});
+  if (body["measure"])
+    for (auto m = body["measure"].begin(); m != body["measure"].end(); ++m)
+      e.measure.push_back({m->first.Scalar(), r.value(m->second["lag"])});
+  return refused;
 }
 
 }  // namespace
 
-Catalogue load_catalogue(const std::string& path, const YAML::Node& model, const std::string& model_file,
-                         const Registry& registry) {
+Catalogue load_catalogue(const std::string& path, const Netlist& model, const Registry& registry) {
   Catalogue cat;
   cat.file = path;
+  const Reader reader(path);
   YAML::Node root;
   {
     std::ifstream in(path);
@@ -401,7 +517,7 @@ Catalogue load_catalogue(const std::string& path, const YAML::Node& model, const
   for (auto it = root.begin(); it != root.end(); ++it)
     if (const auto k = it->first.as<std::string>(); k != "effects" && k != "phases" && k != "recalibrate")
       fail(path, it->first, "", "", "unknown key '" + k + "' (valid: effects, recalibrate, phases)");
-  if (root["phases"]) cat.phases = read_phases(path, root["phases"], load_netlist(model_file));
+  if (root["phases"]) cat.phases = read_phases(path, root["phases"], model);
   static const std::set<std::string> kKeys = {"description",        "parameters", "requires", "add_components",
                                               "replace_components", "set",        "disconnect", "connect",
                                               "measure"};
@@ -467,16 +583,10 @@ Catalogue load_catalogue(const std::string& path, const YAML::Node& model, const
           if (!c.IsSequence() || c.size() < 2)
             fail(path, c, e.name, "", std::string("'") + key + "': each entry is a list of two or more ports");
       }
-    if (body["add_components"]) e.add_components = body["add_components"];
-    if (body["replace_components"]) e.replace_components = body["replace_components"];
-    if (body["set"]) e.set = body["set"];
-    if (body["disconnect"]) e.disconnect = body["disconnect"];
-    if (body["connect"]) e.connect = body["connect"];
-    if (body["measure"]) e.measure = body["measure"];
-    if (e.measure.IsMap())
-      for (auto m = e.measure.begin(); m != e.measure.end(); ++m) {
+    if (body["measure"])
+      for (auto m = body["measure"].begin(); m != body["measure"].end(); ++m) {
         const auto out = m->first.as<std::string>();
-        if (!model["outputs"][out])
+        if (std::none_of(model.outputs.begin(), model.outputs.end(), [&](const OutputDecl& o) { return o.name == out; }))
           fail(path, m->first, e.name, out, "measure: the model has no output '" + out + "'");
         if (!m->second.IsMap() || !m->second["lag"])
           fail(path, m->first, e.name, out, "measure: only {lag: SECONDS} is supported");
@@ -519,16 +629,19 @@ Catalogue load_catalogue(const std::string& path, const YAML::Node& model, const
     }
     for (const char* key : {"add_components", "replace_components", "set", "disconnect", "connect", "measure"})
       if (body[key]) check_references(path, body[key], e);
-    if (e.unavailable.empty()) check_applies(e, model, model_file, registry);
+    const std::optional<InputError> refused = read_patch(reader, body, e);
+    if (e.unavailable.empty()) {
+      if (refused) throw does_not_apply(e, model.file, *refused);
+      check_applies(e, model, registry);
+    }
     cat.effects.push_back(std::move(e));
   }
   if (const YAML::Node re = root["recalibrate"]) {
     if (!re.IsMap()) fail(path, re, "", "", "'recalibrate' must be a map {NAME | COMPONENT.PARAMETER: {lower, upper}}");
-    const Netlist nl = parse_netlist(YAML::Dump(model), model_file);
     for (auto it = re.begin(); it != re.end(); ++it) {
-      Effect e = recalibration(path, it->first, it->second, nl, registry);
+      Effect e = recalibration(path, it->first, it->second, model, registry);
       if (cat.find(e.name)) fail(path, it->first, e.name, "", "an effect of this name exists already");
-      check_applies(e, model, model_file, registry);
+      check_applies(e, model, registry);
       cat.effects.push_back(std::move(e));
     }
   }

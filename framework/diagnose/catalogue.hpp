@@ -1,5 +1,7 @@
-// Candidate effects for sim-to-real diagnosis: patches to a YAML netlist with
-// free parameters (see README "Diagnosing the sim-to-real gap").
+// Candidate effects for sim-to-real diagnosis: patches to a netlist with free
+// parameters (see README "Diagnosing the sim-to-real gap"). The catalogue
+// file is read once into typed declarations (components, values,
+// connections); applying an effect edits a Netlist, no YAML.
 //
 // A catalogue file:
 //   effects:
@@ -39,8 +41,6 @@
 // says so at the catalogue's line).
 #pragma once
 
-#include <yaml-cpp/yaml.h>
-
 #include <map>
 #include <optional>
 #include <string>
@@ -48,6 +48,7 @@
 
 #include "framework/core/error.hpp"
 #include "framework/model/registry.hpp"
+#include "framework/netlist/netlist.hpp"
 
 namespace pneumo::diagnose {
 
@@ -60,16 +61,40 @@ struct EffectParameter {
   SourceLocation where;
 };
 
+// `set: {TARGET: VALUE}`: TARGET is COMPONENT.PARAMETER or parameters.NAME
+// (checked when applied); VALUE may hold ${...} templates.
+struct SetPatch {
+  std::string target;
+  SourceLocation where;  // of the key
+  ValueDecl value;
+};
+
+// `measure: {OUTPUT: {lag: SECONDS}}`; the lag may be a ${...} template.
+struct MeasurePatch {
+  std::string output;
+  ValueDecl lag;
+};
+
 struct Effect {
   std::string name;
   std::string description;
   SourceLocation where;
   std::vector<EffectParameter> parameters;
-  YAML::Node add_components, replace_components, set, disconnect, connect, measure;
+  // The patch, with the catalogue's file:line on every declaration; values
+  // may hold ${...} templates until apply_effects() substitutes them.
+  std::vector<ComponentDecl> add_components, replace_components;
+  std::vector<SetPatch> set;
+  std::vector<ConnectionDecl> disconnect, connect;
+  std::vector<MeasurePatch> measure;
   std::string unavailable;  // non-empty: why the effect cannot be used with this registry
   std::string recalibrates;  // a `recalibrate:` entry: the netlist parameter (NAME or COMPONENT.PARAMETER)
 
   int parameter_index(const std::string& n) const;
+  // Whether the effect changes the netlist (not only the measurement).
+  bool patches_netlist() const {
+    return !add_components.empty() || !replace_components.empty() || !set.empty() || !connect.empty() ||
+           !disconnect.empty();
+  }
 };
 
 // A phase of the runs in the gap report: it starts at `from` - "start", an
@@ -100,14 +125,16 @@ struct MeasurementModel {
 };
 
 // Reads and checks a catalogue; each effect is applied at its initial values
-// to `model` and elaborated, so that a broken patch is reported at load time
-// with the catalogue's file:line, the effect and the parameter.
-Catalogue load_catalogue(const std::string& path, const YAML::Node& model, const std::string& model_file,
-                         const Registry& registry);
+// to `model` (its `file` names it in errors) and elaborated, so that a broken
+// patch is reported at load time with the catalogue's file:line, the effect
+// and the parameter.
+Catalogue load_catalogue(const std::string& path, const Netlist& model, const Registry& registry);
 
-// The model with the effects applied in order (later `set`s win).
-YAML::Node apply_effects(const YAML::Node& model, const std::vector<EffectInstance>& effects,
-                         MeasurementModel* measurement);
+// The model with the effects applied in order (later `set`s win). A value
+// that is exactly ${expr} becomes its SI number (ValueDecl::number); patched
+// declarations keep the catalogue's file:line.
+Netlist apply_effects(const Netlist& model, const std::vector<EffectInstance>& effects,
+                      MeasurementModel* measurement);
 
 // The parameter names two effects both `set`, replace or disconnect (a conflict for combining them).
 bool effects_conflict(const Effect& a, const Effect& b);

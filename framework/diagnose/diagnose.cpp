@@ -160,7 +160,7 @@ class Diagnosis {
             const Registry& registry, const DiagnoseOptions& opt)
       : opt_(opt), eng_(model_file, registry, opt) {
     eng_.runs = load_runs(runs_dir, eng_.base());
-    cat_ = load_catalogue(catalogue_file, eng_.yaml(), model_file, registry);
+    cat_ = load_catalogue(catalogue_file, eng_.base(), registry);
     refuse_recalibrating_operating_points();
     rep_.model_file = model_file;
     rep_.catalogue_file = catalogue_file;

@@ -18,8 +18,6 @@
 // How far: the validation gap before and after, per signal and phase.
 #pragma once
 
-#include <yaml-cpp/yaml.h>
-
 #include <array>
 #include <functional>
 #include <map>

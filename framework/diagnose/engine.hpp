@@ -39,27 +39,24 @@ struct Layout {
 };
 
 struct Model {  // a patched model ready to run
-  std::string text;
+  Netlist netlist;
   MeasurementModel measurement;
 };
 
 class Engine {
  public:
   Engine(const std::string& model_file, const Registry& registry, const DiagnoseOptions& options)
-      : model_file_(model_file), registry_(registry), options_(options) {
+      : registry_(registry), options_(options) {
     std::ifstream in(model_file);
     if (!in) throw InputError(SourceLocation{model_file, 0, 0}, "", "", "cannot open the model file");
     std::stringstream ss;
     ss << in.rdbuf();
-    model_text_ = ss.str();
-    base_netlist_ = parse_netlist(model_text_, model_file);
+    base_netlist_ = parse_netlist(ss.str(), model_file);
     base_probes_ = elaborate(base_netlist_, registry).probes;  // input errors now
-    model_yaml_ = YAML::Load(model_text_);
   }
 
   const Netlist& base() const { return base_netlist_; }
   const std::vector<Probe>& base_probes() const { return base_probes_; }
-  const YAML::Node& yaml() const { return model_yaml_; }
   std::vector<MeasuredRun> runs;
   std::vector<std::string> phase_names;
   std::vector<std::vector<int>> phases;            // per run, per sample
@@ -68,14 +65,14 @@ class Engine {
 
   Model model(const std::vector<EffectInstance>& effects) const {
     Model m;
-    m.text = effects.empty() ? model_text_ : YAML::Dump(apply_effects(model_yaml_, effects, &m.measurement));
+    m.netlist = apply_effects(base_netlist_, effects, &m.measurement);
     return m;
   }
 
   // The model at run `k`'s operating point over its measured span.
   Netlist netlist_of(const Model& m, int k) const {
     const MeasuredRun& run = runs[k];
-    Netlist nl = parse_netlist(m.text, model_file_);
+    Netlist nl = m.netlist;
     for (const auto& [name, value] : run.operating_point) apply_override(nl, name + "=" + value);
     nl.simulation.t_end = run.t.back() + 1e-9;
     const double dt = (run.t.back() - run.t.front()) / std::max<std::size_t>(1, run.t.size() - 1);
@@ -384,12 +381,10 @@ class Engine {
   const Registry& registry() const { return registry_; }
 
  private:
-  std::string model_file_, model_text_;
   const Registry& registry_;
   DiagnoseOptions options_;
   Netlist base_netlist_;
   std::vector<Probe> base_probes_;
-  YAML::Node model_yaml_;
 };
 
 }  // namespace pneumo::diagnose::engine

@@ -129,6 +129,56 @@ Unclosed find_unclosed(const std::string& text, std::size_t end) {
 
 }  // namespace
 
+namespace netlist_detail {
+
+// One component NAME: {type: ..., parameters}; the parameters stay as
+// written (ValueDecl) until elaborate() converts them against the
+// registry's specs.
+ComponentDecl read_component(const Reader& r, const std::string& name, const YAML::Node& key_node,
+                             const YAML::Node& value) {
+  if (!is_identifier(name)) r.fail(key_node, name, "", "component names must be identifiers (letters, digits, _)");
+  ComponentDecl c;
+  c.name = name;
+  c.where = r.at(key_node);
+  bool has_type = false;
+  if (!value.IsMap())
+    r.fail(value.IsNull() ? key_node : value, name, "",
+           "a component is a mapping with a 'type' and its parameters, e.g. " + name + ": {type: volume, V: 1 L}");
+  for (const auto& pe : r.mapping(value, "component '" + name + "'", name, Reader::Keys::parameters)) {
+    if (pe.key == "<<")
+      r.fail(pe.key_node, name, "",
+             "YAML merge keys (<<) are not supported in a component; write its type and parameters out");
+    if (pe.key == "type") {
+      c.type = r.scalar_text(pe.value, name, "type", "the type");
+      c.type_where = r.at(pe.value);
+      has_type = true;
+    } else {
+      c.parameters.emplace_back(pe.key, r.value(pe.value));
+      c.parameter_where.push_back(r.at(pe.key_node));
+    }
+  }
+  if (!has_type) r.fail(key_node, name, "type", "the component has no 'type' (run 'pneumo components' for the list)");
+  return c;
+}
+
+// One connection: a list of two or more component.port.
+ConnectionDecl read_connection(const Reader& r, const YAML::Node& item) {
+  if (!item.IsSequence() || item.size() < 2)
+    r.fail(item, "", "", "each connection is a list of two or more ports, e.g. [source.port, valve.a]");
+  ConnectionDecl conn;
+  conn.where = r.at(item);
+  for (const auto& pn : item) {
+    const std::string s = r.scalar_text(pn, "", "", "a port reference");
+    const auto dot = s.find('.');
+    if (dot == std::string::npos || dot == 0 || dot + 1 == s.size())
+      r.fail(pn, "", "", "port reference '" + s + "' must be component.port");
+    conn.ports.push_back({s.substr(0, dot), s.substr(dot + 1), r.at(pn)});
+  }
+  return conn;
+}
+
+}  // namespace netlist_detail
+
 namespace {
 
 // The `simulation:` section: every key a row of simulation_options(), read
@@ -259,57 +309,16 @@ void read_parameters(Reader& r, const YAML::Node& node, Netlist& nl) {
   }
 }
 
-// components: NAME: {type: ..., parameters}; the parameters stay YAML until
-// elaborate() converts them against the registry's specs.
+// components: NAME: {type: ..., parameters}.
 void read_components(Reader& r, const YAML::Node& node, Netlist& nl) {
-  for (const auto& e : r.mapping(node, "components", "", Reader::Keys::components)) {
-    if (!is_identifier(e.key))
-      r.fail(e.key_node, e.key, "", "component names must be identifiers (letters, digits, _)");
-    ComponentDecl c;
-    c.name = e.key;
-    c.where = r.at(e.key_node);
-    bool has_type = false;
-    if (!e.value.IsMap())
-      r.fail(e.value.IsNull() ? e.key_node : e.value, e.key, "",
-             "a component is a mapping with a 'type' and its parameters, e.g. " + e.key +
-                 ": {type: volume, V: 1 L}");
-    for (const auto& pe : r.mapping(e.value, "component '" + e.key + "'", e.key, Reader::Keys::parameters)) {
-      if (pe.key == "<<")
-        r.fail(pe.key_node, e.key, "",
-               "YAML merge keys (<<) are not supported in a component; write its type and parameters out");
-      if (pe.key == "type") {
-        c.type = r.scalar_text(pe.value, e.key, "type", "the type");
-        c.type_where = r.at(pe.value);
-        has_type = true;
-      } else {
-        c.parameters.emplace_back(pe.key, r.value(pe.value));
-        c.parameter_where.push_back(r.at(pe.key_node));
-      }
-    }
-    if (!has_type)
-      r.fail(e.key_node, e.key, "type", "the component has no 'type' (run 'pneumo components' for the list)");
-    nl.components.push_back(std::move(c));
-  }
+  for (const auto& e : r.mapping(node, "components", "", Reader::Keys::components))
+    nl.components.push_back(read_component(r, e.key, e.key_node, e.value));
 }
 
 // connections: lists of component.port.
 void read_connections(Reader& r, const YAML::Node& node, Netlist& nl) {
-  const auto& cs = node;
-  if (!cs.IsSequence()) r.fail(cs, "", "", "connections must be a list of lists of ports, e.g. - [a.port, b.port]");
-  for (const auto& item : cs) {
-    if (!item.IsSequence() || item.size() < 2)
-      r.fail(item, "", "", "each connection is a list of two or more ports, e.g. [source.port, valve.a]");
-    ConnectionDecl conn;
-    conn.where = r.at(item);
-    for (const auto& pn : item) {
-      const std::string s = r.scalar_text(pn, "", "", "a port reference");
-      const auto dot = s.find('.');
-      if (dot == std::string::npos || dot == 0 || dot + 1 == s.size())
-        r.fail(pn, "", "", "port reference '" + s + "' must be component.port");
-      conn.ports.push_back({s.substr(0, dot), s.substr(dot + 1), r.at(pn)});
-    }
-    nl.connections.push_back(std::move(conn));
-  }
+  if (!node.IsSequence()) r.fail(node, "", "", "connections must be a list of lists of ports, e.g. - [a.port, b.port]");
+  for (const auto& item : node) nl.connections.push_back(read_connection(r, item));
 }
 
 // outputs: name: comp.var, {var: comp.var, unit: U} or {integral: comp.var}.

@@ -1,6 +1,7 @@
-// The netlist readers' shared tools (framework/netlist only): "did you
-// mean" hints, identifiers, and Reader - YAML nodes and typed values read
-// with errors at their file:line naming the component and parameter.
+// The YAML readers' shared tools (framework/netlist and the effect
+// catalogue's reader): "did you mean" hints, identifiers, and Reader - YAML
+// nodes and typed values read with errors at their file:line naming the
+// component and parameter.
 #pragma once
 
 #include <algorithm>
@@ -127,5 +128,11 @@ class Reader {
   std::string file_;
 };
 
+// A component NAME: {type: TYPE, PARAMETER: VALUE, ...} and a connection
+// [a.port, b.port, ...], as the netlist writes them (an effect catalogue's
+// patches too).
+ComponentDecl read_component(const Reader& r, const std::string& name, const YAML::Node& key_node,
+                             const YAML::Node& value);
+ConnectionDecl read_connection(const Reader& r, const YAML::Node& item);
 
 }  // namespace pneumo::netlist_detail
