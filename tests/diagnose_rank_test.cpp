@@ -234,6 +234,26 @@ TEST(DiagnoseRanking, AWeakEffectClearlyAboveNoiseIsNamed) {
   EXPECT_EQ(f->rank, 1);
 }
 
+TEST(DiagnoseRanking, AWeakPressureDependentFrictionIsNamed) {
+  // Failure mode 2 of issue #19: friction growing with |p_A - p_B| (the
+  // Annex C pAB- slopes at a tenth, on the main-stroke law) - not the
+  // candidate's shape (growth with p_A + p_B in proportion to the main law) -
+  // weak, yet clearly above what the measurements resolve: it is named, and
+  // most of its gap goes.
+  const fs::path dir = scratch("weak_friction");
+  write_runs(dir / "runs", truth_with(R"({set: {cylinder.friction: custom, cylinder.friction_pressure: pAB-,
+    cylinder.friction_b0: 2.776, cylinder.friction_b1: "-0.44 N/bar", cylinder.friction_FS0: 25.05,
+    cylinder.friction_FS1: "1.178 N/bar", cylinder.friction_FC: 4.31, cylinder.friction_vS: 0.004033,
+    cylinder.friction_kv0: 128.7, cylinder.friction_kv1: "4.341 N/bar", cylinder.friction_a: 0.6843}})"),
+             kRuns, 24);
+  const auto r = run_diagnosis(dir, catalogue(dir, {"friction_pressure", "heat_transfer", "leakage_piston_seal",
+                                                    "end_stop_elasticity", "line_volume", "friction_cushion_zone"}));
+  EXPECT_GT(r.validation_before.total.rms, 2.0);  // clearly above noise (1) and its 10 % uncertainty
+  ASSERT_FALSE(r.verdict.empty());
+  EXPECT_EQ(r.verdict[0], "friction_pressure");
+  EXPECT_LT(r.validation_after.total.rms - 1, 0.3 * (r.validation_before.total.rms - 1));  // 70 % of the excess gone
+}
+
 TEST(DiagnoseRanking, TwoEffectsAtOnceAreBothFound) {
   // Wall heat transfer into finite wall heat capacities and a near-laminar
   // piston-seal leak (other forms than the candidates'): the leak dominates;

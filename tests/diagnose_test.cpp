@@ -408,18 +408,55 @@ TEST(Diagnose, ShippedCatalogueLoadsAgainstTheRig) {
   EXPECT_NEAR(a.table.rows.back()[cx], b.table.rows.back()[cx], 1e-7);
 }
 
+TEST(Diagnose, FrictionCandidateHoldsTheNetlistsLawAtItsNull) {
+  // The friction candidate writes the main-stroke law's coefficients (Annex
+  // B 5.14) as a custom eq. 8 law of level s growing at m per bar of p_A +
+  // p_B (gauge): at its null (s = 1, m = 0) the stroke is the unpatched
+  // model's, so a weak friction change is a small step from the netlist.
+  const Netlist model = load_netlist(kModel);
+  const Catalogue cat = load_catalogue(kSource + "/catalogues/cushion_rig.yaml", model, builtin_registry());
+  const Effect* e = cat.find("friction_pressure");
+  ASSERT_NE(e, nullptr);
+  ASSERT_EQ(e->parameters.size(), 2u);
+  std::vector<double> null_values;
+  for (const auto& p : e->parameters) {
+    ASSERT_TRUE(p.null_value.has_value()) << p.name;
+    null_values.push_back(*p.null_value);
+  }
+  Netlist at_null = apply_effects(model, {{e, null_values}}, nullptr);
+  Netlist base = model;
+  Netlist growing = apply_effects(model, {{e, {1.0, 0.1}}}, nullptr);
+  for (Netlist* n : {&at_null, &base, &growing}) n->simulation.t_end = 0.6;
+  const auto a = run_simulation(at_null, builtin_registry()), b = run_simulation(base, builtin_registry()),
+             c = run_simulation(growing, builtin_registry());
+  ASSERT_TRUE(a.solver.ok) << a.solver.message;
+  ASSERT_TRUE(b.solver.ok) << b.solver.message;
+  ASSERT_TRUE(c.solver.ok) << c.solver.message;
+  ASSERT_EQ(a.table.rows.size(), b.table.rows.size());
+  const int cx = a.table.column("x");
+  double max_null = 0, max_growing = 0;
+  for (std::size_t i = 0; i < a.table.rows.size(); ++i) {
+    max_null = std::max(max_null, std::abs(a.table.rows[i][cx] - b.table.rows[i][cx]));
+    if (i < c.table.rows.size()) max_growing = std::max(max_growing, std::abs(c.table.rows[i][cx] - b.table.rows[i][cx]));
+  }
+  EXPECT_LT(max_null, 1e-7);
+  EXPECT_GT(max_growing, 1e-4);  // 10 % more friction per bar slows the stroke
+}
+
 TEST(Diagnose, CushionZoneFrictionMovesFromTheMainLawToAnnexCpEC) {
-  // The free weight w is substituted into arithmetic expressions: at w = 1
-  // the coefficients are Annex C pEC's (seed 000), at the null w = 0 the
+  // The free weight w and level k are substituted into arithmetic
+  // expressions: at w = 1, k = 1 the coefficients are Annex C pEC's (seed
+  // 000), k scales the zone's whole law, and at the null (w = 0, k = 1) the
   // main-stroke law (Annex B 5.14) holds in the cushioning zone too, so the
   // stroke is the unpatched model's.
   const Netlist model = load_netlist(kModel);
   const Catalogue cat = load_catalogue(kSource + "/catalogues/cushion_rig.yaml", model, builtin_registry());
   const Effect* e = cat.find("friction_cushion_zone");
   ASSERT_NE(e, nullptr);
-  ASSERT_EQ(e->parameters.size(), 1u);
+  ASSERT_EQ(e->parameters.size(), 2u);
   ASSERT_TRUE(e->parameters[0].null_value.has_value());
-  const Netlist w1 = apply_effects(model, {{e, {1.0}}}, nullptr);
+  ASSERT_TRUE(e->parameters[1].null_value.has_value());
+  const Netlist w1 = apply_effects(model, {{e, {1.0, 1.0}}}, nullptr);
   const auto cylinder = std::find_if(w1.components.begin(), w1.components.end(),
                                      [](const ComponentDecl& c) { return c.name == "cylinder"; });
   ASSERT_NE(cylinder, w1.components.end());
@@ -437,8 +474,14 @@ TEST(Diagnose, CushionZoneFrictionMovesFromTheMainLawToAnnexCpEC) {
   const std::string kv1 = at1("friction_cushion_kv1").text;
   EXPECT_NEAR(std::stod(kv1), 19.61, 1e-12);
   EXPECT_NE(kv1.find(" N/bar"), std::string::npos) << kv1;
+  const Netlist k2 = apply_effects(model, {{e, {1.0, 2.0}}}, nullptr);
+  for (const auto& c : k2.components)
+    if (c.name == "cylinder")
+      for (const auto& [n, v] : c.parameters)
+        if (n == "friction_cushion_b0") EXPECT_NEAR(v.si.value_or(NAN), 2 * 9.66, 1e-12);
 
-  Netlist patched = apply_effects(model, {{e, {*e->parameters[0].null_value}}}, nullptr);
+  Netlist patched =
+      apply_effects(model, {{e, {*e->parameters[0].null_value, *e->parameters[1].null_value}}}, nullptr);
   Netlist base = load_netlist(kModel);
   Netlist stronger = w1;
   for (Netlist* n : {&patched, &base, &stronger}) n->simulation.t_end = 0.6;
