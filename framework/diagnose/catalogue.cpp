@@ -495,12 +495,8 @@ std::optional<InputError> read_patch(const Reader& r, const YAML::Node& body, Ef
   return refused;
 }
 
-}  // namespace
-
-Catalogue load_catalogue(const std::string& path, const Netlist& model, const Registry& registry) {
-  Catalogue cat;
-  cat.file = path;
-  const Reader reader(path);
+// The catalogue file's root node, its top-level keys checked.
+YAML::Node read_root(const std::string& path) {
   YAML::Node root;
   {
     std::ifstream in(path);
@@ -517,124 +513,156 @@ Catalogue load_catalogue(const std::string& path, const Netlist& model, const Re
   for (auto it = root.begin(); it != root.end(); ++it)
     if (const auto k = it->first.as<std::string>(); k != "effects" && k != "phases" && k != "recalibrate")
       fail(path, it->first, "", "", "unknown key '" + k + "' (valid: effects, recalibrate, phases)");
-  if (root["phases"]) cat.phases = read_phases(path, root["phases"], model);
+  return root;
+}
+
+// One entry of an effect's 'parameters:' map, with its bounds checked.
+EffectParameter read_effect_parameter(const std::string& path, const std::string& effect, const YAML::Node& key,
+                                      const YAML::Node& s) {
+  EffectParameter ep;
+  ep.name = key.as<std::string>();
+  ep.where = location_of(path, key);
+  if (!s.IsMap()) fail(path, key, effect, ep.name, "needs {initial, lower, upper, null, unit}");
+  // yaml-cpp parses the plain key `null` as a Null node, which s["null"]
+  // does not find: the entry is taken from the iteration.
+  std::optional<YAML::Node> null_node;
+  for (auto k = s.begin(); k != s.end(); ++k) {
+    const auto name = k->first.as<std::string>();
+    if (name == "null") null_node.emplace(k->second);
+    if (name != "initial" && name != "lower" && name != "upper" && name != "null" && name != "unit" &&
+        name != "scale")
+      fail(path, k->first, effect, ep.name, "unknown key '" + name + "' (initial, lower, upper, null, unit, scale)");
+  }
+  for (const char* req : {"initial", "lower", "upper"})
+    if (!s[req]) fail(path, key, effect, ep.name, std::string("missing '") + req + "'");
+  ep.initial = number(path, s["initial"], effect, ep.name, "initial");
+  ep.lower = number(path, s["lower"], effect, ep.name, "lower");
+  ep.upper = number(path, s["upper"], effect, ep.name, "upper");
+  if (null_node) ep.null_value = number(path, *null_node, effect, ep.name, "null");
+  if (s["unit"]) ep.unit = s["unit"].as<std::string>();
+  if (s["scale"]) {
+    const auto sc = s["scale"].as<std::string>();
+    if (sc != "log" && sc != "linear") fail(path, s["scale"], effect, ep.name, "scale must be 'linear' or 'log'");
+    ep.log_scale = sc == "log";
+  }
+  if (!(ep.lower < ep.upper)) fail(path, key, effect, ep.name, "lower must be below upper");
+  if (ep.initial < ep.lower || ep.initial > ep.upper)
+    fail(path, s["initial"], effect, ep.name, "initial lies outside [lower, upper]");
+  if (ep.null_value && (*ep.null_value < ep.lower || *ep.null_value > ep.upper))
+    fail(path, *null_node, effect, ep.name, "null lies outside [lower, upper]");
+  if (ep.log_scale && ep.lower <= 0) fail(path, s["lower"], effect, ep.name, "scale: log needs lower > 0");
+  return ep;
+}
+
+// The shape of an effect's patch keys (maps, lists of port lists, measured
+// outputs the model has), checked before any of them is read.
+void check_patch_shape(const std::string& path, const YAML::Node& body, const std::string& effect,
+                       const Netlist& model) {
+  for (const char* key : {"add_components", "replace_components", "set", "measure"})
+    if (body[key] && !body[key].IsMap()) fail(path, body[key], effect, "", std::string("'") + key + "' must be a map");
+  for (const char* key : {"disconnect", "connect"})
+    if (body[key]) {
+      if (!body[key].IsSequence()) fail(path, body[key], effect, "", std::string("'") + key + "' must be a list of lists");
+      for (const auto& c : body[key])
+        if (!c.IsSequence() || c.size() < 2)
+          fail(path, c, effect, "", std::string("'") + key + "': each entry is a list of two or more ports");
+    }
+  if (body["measure"])
+    for (auto m = body["measure"].begin(); m != body["measure"].end(); ++m) {
+      const auto out = m->first.as<std::string>();
+      if (std::none_of(model.outputs.begin(), model.outputs.end(), [&](const OutputDecl& o) { return o.name == out; }))
+        fail(path, m->first, effect, out, "measure: the model has no output '" + out + "'");
+      if (!m->second.IsMap() || !m->second["lag"])
+        fail(path, m->first, effect, out, "measure: only {lag: SECONDS} is supported");
+    }
+}
+
+// Availability: the component types, parameters and ports the patch relies
+// on. The first one missing marks the effect unavailable (not an error: a
+// catalogue may list effects for components this build lacks).
+void check_availability(const std::string& path, const YAML::Node& body, Effect& e, const Registry& registry) {
+  auto check_type = [&](const std::string& type) {
+    if (e.unavailable.empty() && !registry.find(type)) e.unavailable = "unavailable: type " + type + " not registered";
+  };
+  for (const char* key : {"add_components", "replace_components"})
+    if (body[key]) {
+      if (!body[key].IsMap())
+        fail(path, body[key], e.name, "", std::string(key) + " must be a map: NAME: {type: TYPE, PARAMETER: VALUE}");
+      for (auto c = body[key].begin(); c != body[key].end(); ++c) {
+        // Checked here, before any node is subscripted: a scalar would throw yaml-cpp's own error.
+        if (!c->second.IsMap() || (c->second["type"] && !c->second["type"].IsScalar()))
+          fail(path, c->first, e.name, "",
+               "component '" + c->first.Scalar() + "' in " + key + " must be a map {type: TYPE, PARAMETER: VALUE}");
+        if (c->second["type"]) check_type(c->second["type"].as<std::string>());
+      }
+    }
+  const auto& req = body["requires"];
+  if (!req) return;
+  if (req["types"])
+    for (const auto& t : req["types"]) check_type(t.as<std::string>());
+  for (const char* kind : {"parameters", "ports"})
+    if (req[kind])
+      for (const auto& q : req[kind]) {
+        const auto s = q.as<std::string>();
+        const auto dot = s.find('.');
+        if (dot == std::string::npos) fail(path, q, e.name, "", "requires: write TYPE.NAME");
+        const auto* entry = registry.find(s.substr(0, dot));
+        bool ok = entry != nullptr;
+        if (ok && std::string(kind) == "parameters") ok = entry->info->parameter(s.substr(dot + 1)) != nullptr;
+        if (ok && std::string(kind) == "ports") ok = entry->info->port_index(s.substr(dot + 1)) >= 0;
+        if (!ok && e.unavailable.empty())
+          e.unavailable = std::string("unavailable: ") + (kind[1] == 'a' ? "parameter " : "port ") + s + " not registered";
+      }
+}
+
+// One entry of 'effects:': its keys, parameters, patch shape and
+// availability checked, the patch read, and an available effect checked to
+// apply to the model.
+Effect read_effect(const std::string& path, const Reader& reader, const YAML::Node& key, const YAML::Node& body,
+                   const Netlist& model, const Registry& registry) {
   static const std::set<std::string> kKeys = {"description",        "parameters", "requires", "add_components",
                                               "replace_components", "set",        "disconnect", "connect",
                                               "measure"};
+  Effect e;
+  e.name = key.as<std::string>();
+  e.where = location_of(path, key);
+  if (!body.IsMap()) fail(path, key, e.name, "", "an effect must be a map (parameters, set, connect, ...)");
+  for (auto k = body.begin(); k != body.end(); ++k)
+    if (!kKeys.count(k->first.as<std::string>()))
+      fail(path, k->first, e.name, "",
+           "unknown key '" + k->first.as<std::string>() +
+               "' (valid: description, parameters, requires, add_components, replace_components, set, disconnect, "
+               "connect, measure)");
+  if (body["description"]) e.description = body["description"].as<std::string>();
+  if (body["parameters"]) {
+    if (!body["parameters"].IsMap()) fail(path, body["parameters"], e.name, "", "'parameters' must be a map");
+    for (auto p = body["parameters"].begin(); p != body["parameters"].end(); ++p)
+      e.parameters.push_back(read_effect_parameter(path, e.name, p->first, p->second));
+  }
+  check_patch_shape(path, body, e.name, model);
+  check_availability(path, body, e, registry);
+  for (const char* k : {"add_components", "replace_components", "set", "disconnect", "connect", "measure"})
+    if (body[k]) check_references(path, body[k], e);
+  const std::optional<InputError> refused = read_patch(reader, body, e);
+  if (e.unavailable.empty()) {
+    if (refused) throw does_not_apply(e, model.file, *refused);
+    check_applies(e, model, registry);
+  }
+  return e;
+}
+
+}  // namespace
+
+Catalogue load_catalogue(const std::string& path, const Netlist& model, const Registry& registry) {
+  Catalogue cat;
+  cat.file = path;
+  const Reader reader(path);
+  const YAML::Node root = read_root(path);
+  if (root["phases"]) cat.phases = read_phases(path, root["phases"], model);
   const YAML::Node effects = root["effects"] ? root["effects"] : YAML::Node(YAML::NodeType::Map);
   for (auto it = effects.begin(); it != effects.end(); ++it) {
-    Effect e;
-    e.name = it->first.as<std::string>();
-    e.where = location_of(path, it->first);
     const YAML::Node body = it->second;  // a copy: the iterator's pair is a temporary
-    if (!body.IsMap()) fail(path, it->first, e.name, "", "an effect must be a map (parameters, set, connect, ...)");
-    for (auto k = body.begin(); k != body.end(); ++k)
-      if (!kKeys.count(k->first.as<std::string>()))
-        fail(path, k->first, e.name, "",
-             "unknown key '" + k->first.as<std::string>() +
-                 "' (valid: description, parameters, requires, add_components, replace_components, set, disconnect, "
-                 "connect, measure)");
-    if (body["description"]) e.description = body["description"].as<std::string>();
-    if (body["parameters"]) {
-      if (!body["parameters"].IsMap()) fail(path, body["parameters"], e.name, "", "'parameters' must be a map");
-      for (auto p = body["parameters"].begin(); p != body["parameters"].end(); ++p) {
-        EffectParameter ep;
-        ep.name = p->first.as<std::string>();
-        ep.where = location_of(path, p->first);
-        const YAML::Node s = p->second;
-        if (!s.IsMap()) fail(path, p->first, e.name, ep.name, "needs {initial, lower, upper, null, unit}");
-        // yaml-cpp parses the plain key `null` as a Null node, which s["null"]
-        // does not find: the entry is taken from the iteration.
-        std::optional<YAML::Node> null_node;
-        for (auto k = s.begin(); k != s.end(); ++k) {
-          const auto key = k->first.as<std::string>();
-          if (key == "null") null_node.emplace(k->second);
-          if (key != "initial" && key != "lower" && key != "upper" && key != "null" && key != "unit" &&
-              key != "scale")
-            fail(path, k->first, e.name, ep.name, "unknown key '" + key + "' (initial, lower, upper, null, unit, scale)");
-        }
-        for (const char* req : {"initial", "lower", "upper"})
-          if (!s[req]) fail(path, p->first, e.name, ep.name, std::string("missing '") + req + "'");
-        ep.initial = number(path, s["initial"], e.name, ep.name, "initial");
-        ep.lower = number(path, s["lower"], e.name, ep.name, "lower");
-        ep.upper = number(path, s["upper"], e.name, ep.name, "upper");
-        if (null_node) ep.null_value = number(path, *null_node, e.name, ep.name, "null");
-        if (s["unit"]) ep.unit = s["unit"].as<std::string>();
-        if (s["scale"]) {
-          const auto sc = s["scale"].as<std::string>();
-          if (sc != "log" && sc != "linear") fail(path, s["scale"], e.name, ep.name, "scale must be 'linear' or 'log'");
-          ep.log_scale = sc == "log";
-        }
-        if (!(ep.lower < ep.upper)) fail(path, p->first, e.name, ep.name, "lower must be below upper");
-        if (ep.initial < ep.lower || ep.initial > ep.upper)
-          fail(path, s["initial"], e.name, ep.name, "initial lies outside [lower, upper]");
-        if (ep.null_value && (*ep.null_value < ep.lower || *ep.null_value > ep.upper))
-          fail(path, *null_node, e.name, ep.name, "null lies outside [lower, upper]");
-        if (ep.log_scale && ep.lower <= 0) fail(path, s["lower"], e.name, ep.name, "scale: log needs lower > 0");
-        e.parameters.push_back(ep);
-      }
-    }
-    for (const char* key : {"add_components", "replace_components", "set", "measure"})
-      if (body[key] && !body[key].IsMap()) fail(path, body[key], e.name, "", std::string("'") + key + "' must be a map");
-    for (const char* key : {"disconnect", "connect"})
-      if (body[key]) {
-        if (!body[key].IsSequence()) fail(path, body[key], e.name, "", std::string("'") + key + "' must be a list of lists");
-        for (const auto& c : body[key])
-          if (!c.IsSequence() || c.size() < 2)
-            fail(path, c, e.name, "", std::string("'") + key + "': each entry is a list of two or more ports");
-      }
-    if (body["measure"])
-      for (auto m = body["measure"].begin(); m != body["measure"].end(); ++m) {
-        const auto out = m->first.as<std::string>();
-        if (std::none_of(model.outputs.begin(), model.outputs.end(), [&](const OutputDecl& o) { return o.name == out; }))
-          fail(path, m->first, e.name, out, "measure: the model has no output '" + out + "'");
-        if (!m->second.IsMap() || !m->second["lag"])
-          fail(path, m->first, e.name, out, "measure: only {lag: SECONDS} is supported");
-      }
-
-    // Availability: component types, parameters and ports the patch relies on.
-    auto check_type = [&](const std::string& type) {
-      if (e.unavailable.empty() && !registry.find(type))
-        e.unavailable = "unavailable: type " + type + " not registered";
-    };
-    for (const char* key : {"add_components", "replace_components"})
-      if (body[key]) {
-        if (!body[key].IsMap())
-          fail(path, body[key], e.name, "", std::string(key) + " must be a map: NAME: {type: TYPE, PARAMETER: VALUE}");
-        for (auto c = body[key].begin(); c != body[key].end(); ++c) {
-          // Checked here, before any node is subscripted: a scalar would throw yaml-cpp's own error.
-          if (!c->second.IsMap() || (c->second["type"] && !c->second["type"].IsScalar()))
-            fail(path, c->first, e.name, "",
-                 "component '" + c->first.Scalar() + "' in " + key + " must be a map {type: TYPE, PARAMETER: VALUE}");
-          if (c->second["type"]) check_type(c->second["type"].as<std::string>());
-        }
-      }
-    if (const auto& req = body["requires"]) {
-      if (req["types"])
-        for (const auto& t : req["types"]) check_type(t.as<std::string>());
-      for (const char* kind : {"parameters", "ports"})
-        if (req[kind])
-        for (const auto& q : req[kind]) {
-          const auto s = q.as<std::string>();
-          const auto dot = s.find('.');
-          if (dot == std::string::npos) fail(path, q, e.name, "", "requires: write TYPE.NAME");
-          const auto* entry = registry.find(s.substr(0, dot));
-          bool ok = entry != nullptr;
-          if (ok && std::string(kind) == "parameters") ok = entry->info->parameter(s.substr(dot + 1)) != nullptr;
-          if (ok && std::string(kind) == "ports") ok = entry->info->port_index(s.substr(dot + 1)) >= 0;
-          if (!ok && e.unavailable.empty())
-            e.unavailable = std::string("unavailable: ") + (kind[1] == 'a' ? "parameter " : "port ") + s +
-                            " not registered";
-        }
-    }
-    for (const char* key : {"add_components", "replace_components", "set", "disconnect", "connect", "measure"})
-      if (body[key]) check_references(path, body[key], e);
-    const std::optional<InputError> refused = read_patch(reader, body, e);
-    if (e.unavailable.empty()) {
-      if (refused) throw does_not_apply(e, model.file, *refused);
-      check_applies(e, model, registry);
-    }
-    cat.effects.push_back(std::move(e));
+    cat.effects.push_back(read_effect(path, reader, it->first, body, model, registry));
   }
   if (const YAML::Node re = root["recalibrate"]) {
     if (!re.IsMap()) fail(path, re, "", "", "'recalibrate' must be a map {NAME | COMPONENT.PARAMETER: {lower, upper}}");

@@ -43,6 +43,59 @@ struct Model {  // a patched model ready to run
   MeasurementModel measurement;
 };
 
+// The fitted effects' parameters, each mapped onto u in [0, 1] between its
+// bounds (logarithmically for a log-scale parameter) so that one step size
+// and one damping suit them all.
+class ScaledParameters {
+ public:
+  explicit ScaledParameters(std::vector<EffectInstance> start) : start_(std::move(start)) {
+    for (int e = 0; e < static_cast<int>(start_.size()); ++e)
+      for (int i = 0; i < static_cast<int>(start_[e].effect->parameters.size()); ++i)
+        ps_.push_back({&start_[e].effect->parameters[i], e, i});
+  }
+  int size() const { return static_cast<int>(ps_.size()); }
+
+  Eigen::VectorXd start_point() const {
+    Eigen::VectorXd u(size());
+    for (int k = 0; k < size(); ++k) u[k] = to_u(*ps_[k].spec, start_[ps_[k].effect].values[ps_[k].index]);
+    return u;
+  }
+  std::vector<EffectInstance> instances(const Eigen::VectorXd& u) const {
+    auto inst = start_;
+    for (int k = 0; k < size(); ++k) inst[ps_[k].effect].values[ps_[k].index] = from_u(*ps_[k].spec, u[k]);
+    return inst;
+  }
+  // Indices of the last effect's parameters (the one a grid start explores).
+  std::vector<int> last_effect() const {
+    std::vector<int> last;
+    for (int k = 0; k < size(); ++k)
+      if (ps_[k].effect == static_cast<int>(start_.size()) - 1) last.push_back(k);
+    return last;
+  }
+
+ private:
+  struct P {
+    const EffectParameter* spec;
+    int effect, index;
+  };
+  static double to_u(const EffectParameter& s, double v) {
+    return s.log_scale ? std::log(v / s.lower) / std::log(s.upper / s.lower) : (v - s.lower) / (s.upper - s.lower);
+  }
+  static double from_u(const EffectParameter& s, double u) {
+    u = std::clamp(u, 0.0, 1.0);
+    return s.log_scale ? s.lower * std::pow(s.upper / s.lower, u) : s.lower + u * (s.upper - s.lower);
+  }
+  std::vector<EffectInstance> start_;
+  std::vector<P> ps_;
+};
+
+// The Levenberg-Marquardt iterate: point, its residuals and cost, damping.
+struct LmState {
+  Eigen::VectorXd u;
+  std::vector<double> r;
+  double cost = 0, lambda = 1e-2;
+};
+
 class Engine {
  public:
   Engine(const std::string& model_file, const Registry& registry, const DiagnoseOptions& options)
@@ -228,119 +281,18 @@ class Engine {
   // others held at their start values) picks the starting point.
   Fit fit(std::vector<EffectInstance> start, const Layout& cal, const std::vector<double>& r_start_hint,
           int max_iterations, bool grid_start = false) {
-    struct P {
-      const EffectParameter* spec;
-      int effect, index;
-    };
-    std::vector<P> ps;
-    for (int e = 0; e < static_cast<int>(start.size()); ++e)
-      for (int i = 0; i < static_cast<int>(start[e].effect->parameters.size()); ++i)
-        ps.push_back({&start[e].effect->parameters[i], e, i});
-    const int np = static_cast<int>(ps.size());
-    auto to_u = [&](const P& p, double v) {
-      const auto& s = *p.spec;
-      return s.log_scale ? std::log(v / s.lower) / std::log(s.upper / s.lower) : (v - s.lower) / (s.upper - s.lower);
-    };
-    auto from_u = [&](const P& p, double u) {
-      const auto& s = *p.spec;
-      u = std::clamp(u, 0.0, 1.0);
-      return s.log_scale ? s.lower * std::pow(s.upper / s.lower, u) : s.lower + u * (s.upper - s.lower);
-    };
-    auto instances = [&](const Eigen::VectorXd& u) {
-      auto inst = start;
-      for (int k = 0; k < np; ++k) inst[ps[k].effect].values[ps[k].index] = from_u(ps[k], u[k]);
-      return inst;
-    };
-    Eigen::VectorXd u(np);
-    for (int k = 0; k < np; ++k) u[k] = to_u(ps[k], start[ps[k].effect].values[ps[k].index]);
+    const ScaledParameters sp(std::move(start));
     Fit f;
-    std::vector<double> r = r_start_hint.empty() ? residuals({model(instances(u))}, cal)[0] : r_start_hint;
+    LmState s;
+    s.u = sp.start_point();
+    s.r = r_start_hint.empty() ? residuals({model(sp.instances(s.u))}, cal)[0] : r_start_hint;
     f.evaluations += 1;
-    std::vector<int> last;  // the last effect's parameters
-    for (int k = 0; k < np; ++k)
-      if (ps[k].effect == static_cast<int>(start.size()) - 1) last.push_back(k);
-    if (grid_start && (last.size() == 1 || last.size() == 2)) {
-      // A coarse grid of starting points (in scaled coordinates) against
-      // local minima: the best point, or the initial values, starts LM.
-      const std::vector<double> levels = last.size() == 1 ? std::vector<double>{0.05, 0.25, 0.5, 0.75, 0.95}
-                                                          : std::vector<double>{0.15, 0.5, 0.85};
-      std::vector<Eigen::VectorXd> points;
-      for (double a : levels) {
-        Eigen::VectorXd p = u;
-        p[last[0]] = a;
-        if (last.size() == 1) {
-          points.push_back(p);
-        } else {
-          for (double b : levels) {
-            p[last[1]] = b;
-            points.push_back(p);
-          }
-        }
-      }
-      std::vector<Model> models;
-      for (const auto& p : points) models.push_back(model(instances(p)));
-      const auto rs = residuals(models, cal);
-      f.evaluations += static_cast<int>(points.size());
-      double best = ssr_of(r.data(), r.size());
-      for (std::size_t k = 0; k < points.size(); ++k)
-        if (const double c = ssr_of(rs[k].data(), rs[k].size()); c < best) {
-          best = c;
-          u = points[k];
-          r = rs[k];
-        }
-    }
-    double cost = ssr_of(r.data(), r.size());
-    const double cost0 = cost;
-    double lambda = 1e-2;
-    const double h = 3e-3;
-    for (int it = 0; it < max_iterations && np > 0; ++it) {
-      std::vector<Model> probes;
-      std::vector<double> steps(np);
-      for (int k = 0; k < np; ++k) {
-        Eigen::VectorXd up = u;
-        steps[k] = u[k] + h <= 1.0 ? h : -h;
-        up[k] += steps[k];
-        probes.push_back(model(instances(up)));
-      }
-      const auto rp = residuals(probes, cal);
-      f.evaluations += np;
-      Eigen::MatrixXd J(r.size(), np);
-      for (int k = 0; k < np; ++k)
-        for (std::size_t i = 0; i < r.size(); ++i) J(i, k) = (rp[k][i] - r[i]) / steps[k];
-      const Eigen::Map<const Eigen::VectorXd> rv(r.data(), r.size());
-      const Eigen::MatrixXd A = J.transpose() * J;
-      const Eigen::VectorXd g = J.transpose() * rv;
-      if (it == 0) {  // screening: SSR removed by the unconstrained Gauss-Newton step
-        const Eigen::VectorXd d = A.ldlt().solve(-g);
-        f.screening = std::clamp(-(g.dot(d)) / std::max(cost0, 1e-300), 0.0, 1.0);
-        if (f.screening < screen_cutoff_) break;  // the caller decides; no full fit
-      }
-      bool accepted = false;
-      for (int tries = 0; tries < 6 && !accepted; ++tries) {
-        Eigen::MatrixXd M = A;
-        for (int k = 0; k < np; ++k) M(k, k) += lambda * std::max(A(k, k), 1e-12) + 1e-12;
-        const Eigen::VectorXd d = M.ldlt().solve(-g);
-        Eigen::VectorXd un = (u + d).cwiseMax(0.0).cwiseMin(1.0);
-        if ((un - u).norm() < 1e-7) break;
-        const auto rn = residuals({model(instances(un))}, cal)[0];
-        f.evaluations += 1;
-        const double cn = ssr_of(rn.data(), rn.size());
-        if (cn < cost) {
-          const double gain = (cost - cn) / cost;
-          u = un;
-          r = rn;
-          cost = cn;
-          lambda = std::max(lambda / 4, 1e-7);
-          accepted = true;
-          if (gain < 1e-4) it = max_iterations;  // converged
-        } else {
-          lambda *= 8;
-        }
-      }
-      if (!accepted) break;
-    }
-    f.effects = instances(u);
-    f.r_cal = r;
+    if (grid_start) start_from_grid(sp, cal, s, f);
+    s.cost = ssr_of(s.r.data(), s.r.size());
+    for (int it = 0; it < max_iterations && sp.size() > 0; ++it)
+      if (!lm_step(sp, cal, s, f, it == 0)) break;
+    f.effects = sp.instances(s.u);
+    f.r_cal = s.r;
     return f;
   }
   double screen_cutoff_ = -1;  // < 0: never stop at screening
@@ -381,6 +333,100 @@ class Engine {
   const Registry& registry() const { return registry_; }
 
  private:
+  // A coarse grid of starting points (in scaled coordinates) over the last
+  // effect's one or two parameters, against local minima: the best point,
+  // if better than the start, replaces it.
+  void start_from_grid(const ScaledParameters& sp, const Layout& cal, LmState& s, Fit& f) {
+    const std::vector<int> last = sp.last_effect();
+    if (last.size() != 1 && last.size() != 2) return;
+    const std::vector<double> levels = last.size() == 1 ? std::vector<double>{0.05, 0.25, 0.5, 0.75, 0.95}
+                                                        : std::vector<double>{0.15, 0.5, 0.85};
+    std::vector<Eigen::VectorXd> points;
+    for (double a : levels) {
+      Eigen::VectorXd p = s.u;
+      p[last[0]] = a;
+      if (last.size() == 1) {
+        points.push_back(p);
+      } else {
+        for (double b : levels) {
+          p[last[1]] = b;
+          points.push_back(p);
+        }
+      }
+    }
+    std::vector<Model> models;
+    for (const auto& p : points) models.push_back(model(sp.instances(p)));
+    const auto rs = residuals(models, cal);
+    f.evaluations += static_cast<int>(points.size());
+    double best = ssr_of(s.r.data(), s.r.size());
+    for (std::size_t k = 0; k < points.size(); ++k)
+      if (const double c = ssr_of(rs[k].data(), rs[k].size()); c < best) {
+        best = c;
+        s.u = points[k];
+        s.r = rs[k];
+      }
+  }
+
+  // Forward differences of the residuals in scaled coordinates; a step
+  // that would leave [0, 1] goes backwards instead.
+  Eigen::MatrixXd jacobian(const ScaledParameters& sp, const Layout& cal, const LmState& s, Fit& f) {
+    constexpr double h = 3e-3;
+    const int np = sp.size();
+    std::vector<Model> probes;
+    std::vector<double> steps(np);
+    for (int k = 0; k < np; ++k) {
+      Eigen::VectorXd up = s.u;
+      steps[k] = s.u[k] + h <= 1.0 ? h : -h;
+      up[k] += steps[k];
+      probes.push_back(model(sp.instances(up)));
+    }
+    const auto rp = residuals(probes, cal);
+    f.evaluations += np;
+    Eigen::MatrixXd J(s.r.size(), np);
+    for (int k = 0; k < np; ++k)
+      for (std::size_t i = 0; i < s.r.size(); ++i) J(i, k) = (rp[k][i] - s.r[i]) / steps[k];
+    return J;
+  }
+
+  // One Levenberg-Marquardt iteration: up to six damped steps, the first
+  // that lowers the cost is taken. On the first iteration the undamped
+  // Gauss-Newton step's predicted share of SSR removed is the screening
+  // figure, and below the cutoff no fit follows (the caller decides).
+  // Returns false when the fit stops: screened out, converged, or no step
+  // lowered the cost.
+  bool lm_step(const ScaledParameters& sp, const Layout& cal, LmState& s, Fit& f, bool first) {
+    const int np = sp.size();
+    const Eigen::MatrixXd J = jacobian(sp, cal, s, f);
+    const Eigen::Map<const Eigen::VectorXd> rv(s.r.data(), s.r.size());
+    const Eigen::MatrixXd A = J.transpose() * J;
+    const Eigen::VectorXd g = J.transpose() * rv;
+    if (first) {
+      const Eigen::VectorXd d = A.ldlt().solve(-g);
+      f.screening = std::clamp(-(g.dot(d)) / std::max(s.cost, 1e-300), 0.0, 1.0);
+      if (f.screening < screen_cutoff_) return false;
+    }
+    for (int tries = 0; tries < 6; ++tries) {
+      Eigen::MatrixXd M = A;
+      for (int k = 0; k < np; ++k) M(k, k) += s.lambda * std::max(A(k, k), 1e-12) + 1e-12;
+      const Eigen::VectorXd d = M.ldlt().solve(-g);
+      Eigen::VectorXd un = (s.u + d).cwiseMax(0.0).cwiseMin(1.0);
+      if ((un - s.u).norm() < 1e-7) return false;
+      const auto rn = residuals({model(sp.instances(un))}, cal)[0];
+      f.evaluations += 1;
+      const double cn = ssr_of(rn.data(), rn.size());
+      if (cn < s.cost) {
+        const double gain = (s.cost - cn) / s.cost;
+        s.u = un;
+        s.r = rn;
+        s.cost = cn;
+        s.lambda = std::max(s.lambda / 4, 1e-7);
+        return gain >= 1e-4;  // below: converged
+      }
+      s.lambda *= 8;
+    }
+    return false;
+  }
+
   const Registry& registry_;
   DiagnoseOptions options_;
   Netlist base_netlist_;
