@@ -404,7 +404,7 @@ class CylinderSide {
   double port_p_dV(const Gas<double>& g, double d_dot) const { return port_force(g) * d_dot; }
   double annulus_p_dV(const Gas<double>& g, double d_dot) const { return annulus_force(g) * d_dot; }
   // p dV/dt of the channel gas alone (the plug column; 0 without cushioning).
-  double channel_p_dV(const Gas<double>& g, double d_dot) const { return cushioned_ ? g.p * A_col_ * d_dot : 0.0; }
+  double channel_p_dV(const Gas<double>& g, double d_dot) const { return cushioned_ ? port_p_dV(g, d_dot) : 0.0; }
 
  private:
   // The annulus' balances: flow to the channel, the piston's work, the

@@ -23,6 +23,12 @@ int Effect::parameter_index(const std::string& n) const {
   return -1;
 }
 
+std::vector<double> Effect::initial_values() const {
+  std::vector<double> v;
+  for (const auto& p : parameters) v.push_back(p.initial);
+  return v;
+}
+
 const Effect* Catalogue::find(const std::string& name) const {
   for (const auto& e : effects)
     if (e.name == name) return &e;
@@ -441,10 +447,8 @@ InputError does_not_apply(const Effect& e, const std::string& model_file, const 
 // The patch applied at the initial values and elaborated, so that errors
 // surface at load time with the catalogue's file:line.
 void check_applies(const Effect& e, const Netlist& model, const Registry& registry) {
-  std::vector<double> init;
-  for (const auto& p : e.parameters) init.push_back(p.initial);
   MeasurementModel mm;
-  const Netlist patched = apply_effects(model, {EffectInstance{&e, init}}, &mm);
+  const Netlist patched = apply_effects(model, {EffectInstance{&e, e.initial_values()}}, &mm);
   try {
     (void)elaborate(patched, registry);
   } catch (const InputError& ex) {

@@ -90,6 +90,8 @@ struct Effect {
   std::string recalibrates;  // a `recalibrate:` entry: the netlist parameter (NAME or COMPONENT.PARAMETER)
 
   int parameter_index(const std::string& n) const;
+  // The parameters' initial values, in the catalogue's order.
+  std::vector<double> initial_values() const;
   // Whether the effect changes the netlist (not only the measurement).
   bool patches_netlist() const {
     return !add_components.empty() || !replace_components.empty() || !set.empty() || !connect.empty() ||

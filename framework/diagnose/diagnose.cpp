@@ -202,11 +202,6 @@ class Diagnosis {
   double elapsed() const { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start_).count(); }
   static double ssr(const std::vector<double>& r) { return ssr_of(r.data(), r.size()); }
   static double gap_of(const std::vector<double>& r) { return std::sqrt(ssr(r) / r.size()); }
-  static std::vector<double> initial_values(const Effect& e) {
-    std::vector<double> v;
-    for (const auto& p : e.parameters) v.push_back(p.initial);
-    return v;
-  }
   const Cand* cand_of(const std::string& n) const {
     for (const auto& c : cands_)
       if (c.e->name == n) return &c;
@@ -292,7 +287,7 @@ class Diagnosis {
         log("  " + e.name + ": " + e.unavailable);
         continue;
       }
-      std::vector<double> init = initial_values(e), null;
+      std::vector<double> init = e.initial_values(), null;
       for (const auto& p : e.parameters)
         if (p.null_value) null.push_back(*p.null_value);
       double gain = 0;
@@ -322,7 +317,7 @@ class Diagnosis {
         results_[k].screened_out = true;
         continue;
       }
-      auto f = eng_.fit({EffectInstance{&e, initial_values(e)}}, cal_, {}, opt_.max_iterations, true);
+      auto f = eng_.fit({EffectInstance{&e, e.initial_values()}}, cal_, {}, opt_.max_iterations, true);
       const auto r_val = eng_.residuals({eng_.model(f.effects)}, val_)[0];
       judge(results_[k], f, r_val);
       log(fmt("  fit %-2.0f/%-2.0f ", q + 1, std::min<double>(screened.size(), opt_.screen_keep)) + e.name +
@@ -434,11 +429,11 @@ class Diagnosis {
         for (const auto& n : g) skip = skip || n == e->name;
       if (skip) continue;
       auto start = chosen_;
-      start.push_back({e, initial_values(*e)});
+      start.push_back({e, e->initial_values()});
       const auto lin = eng_.fit(start, cal_, {}, 1);
       const double at_init = ssr(lin.r_cal);
       double gain = 1 - at_init * (1 - lin.screening) / c0;
-      EffectInstance from{e, initial_values(*e)};
+      EffectInstance from{e, e->initial_values()};
       if (const Cand* c = cand_of(e->name)) {
         start.back() = c->fit.effects[0];
         const double at_fit = ssr(eng_.residuals({eng_.model(start)}, cal_)[0]);
