@@ -321,6 +321,11 @@ TEST(Diagnose, BadMeasuredDataGetsClearErrors) {
   });
   EXPECT_NE(e.find("cal.csv:4:"), std::string::npos) << e;
   EXPECT_NE(e.find("time must increase"), std::string::npos) << e;
+
+  // A list where a name is expected: an input error at its line, not yaml-cpp's exception.
+  e = error_for("role_list", [](const fs::path& d) { replace_in(d / "val.yaml", "role: validation", "role: [validation]"); });
+  EXPECT_NE(e.find("val.yaml:2:"), std::string::npos) << e;
+  EXPECT_NE(e.find("'role' must be plain text"), std::string::npos) << e;
 }
 
 TEST(Diagnose, BadCatalogueNamesFileLineEffectAndParameter) {
@@ -381,6 +386,44 @@ TEST(Diagnose, BadCatalogueNamesFileLineEffectAndParameter) {
   EXPECT_NE(e.find("re-calibrate that parameter"), std::string::npos) << e;
   e = load("recalibrate:\n  m_load: {lower: 2x, upper: 3x}\n");
   EXPECT_NE(e.find("lies outside [lower, upper]"), std::string::npos) << e;
+}
+
+// A map or list where the catalogue expects a plain name or text (a key, a
+// type, a description, a phase, a scale): an InputError at that node's line,
+// never yaml-cpp's own exception (the first found by fuzz/catalogue_fuzzer
+// in CI: a top-level key that is a map).
+TEST(Diagnose, CatalogueNamesThatAreMapsOrListsGetLocatedErrors) {
+  const fs::path dir = temp_dir("catalogue_shapes");
+  const Netlist model = load_netlist(kModel);
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"effects: {}\n? {a: 1}\n: 2\n", "c.yaml:2:"},
+      {"effects:\n  ? [a, b]\n  : {set: {meter_out.C: 1e-9}}\n", "c.yaml:2:"},
+      {"effects:\n  leak:\n    ? {x: 1}\n    : 2\n", "c.yaml:3:"},
+      {"effects:\n  leak:\n    description: {x: 1}\n", "c.yaml:3:"},
+      {"effects:\n  leak:\n    parameters:\n      C: {initial: 1, lower: 0, upper: 2, unit: [m]}\n", "c.yaml:4:"},
+      {"effects:\n  leak:\n    parameters:\n      C: {initial: 1, lower: 0, upper: 2, scale: {a: 1}}\n",
+       "c.yaml:4:"},
+      {"effects:\n  leak:\n    parameters:\n      ? [C]\n      : {initial: 1, lower: 0, upper: 2}\n", "c.yaml:4:"},
+      {"effects:\n  leak:\n    requires: {types: [[orifice]]}\n", "c.yaml:3:"},
+      {"effects:\n  leak:\n    requires: {ports: [{a: 1}]}\n", "c.yaml:3:"},
+      {"effects:\n  leak:\n    measure:\n      ? [x]\n      : {lag: 0.01}\n", "c.yaml:4:"},
+      {"phases:\n  - {name: [a], from: start}\neffects: {}\n", "c.yaml:2:"},
+      {"phases:\n  - {name: a, from: {b: 1}}\neffects: {}\n", "c.yaml:2:"},
+      {"recalibrate:\n  ? [m_load]\n  : {}\n", "c.yaml:2:"},
+      {"recalibrate:\n  m_load: {scale: [log]}\n", "c.yaml:2:"},
+      {"recalibrate:\n  m_load: {description: {a: 1}}\n", "c.yaml:2:"},
+  };
+  for (const auto& [text, where] : cases) {
+    std::ofstream(dir / "c.yaml") << text;
+    std::string e;
+    try {
+      load_catalogue((dir / "c.yaml").string(), model, builtin_registry());
+    } catch (const InputError& ex) {
+      e = ex.what();
+    }
+    EXPECT_NE(e.find(where), std::string::npos) << text << " -> " << e;
+    EXPECT_EQ(e.find("unexpected YAML shape"), std::string::npos) << "not checked before reading: " << text;
+  }
 }
 
 TEST(Diagnose, ShippedCatalogueLoadsAgainstTheRig) {

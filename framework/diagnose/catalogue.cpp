@@ -142,6 +142,13 @@ double number(const std::string& file, const YAML::Node& n, const std::string& e
   }
 }
 
+// A name or text where the catalogue expects one (a key, a type, a
+// description): a map or list there is an error at its line.
+std::string name_text(const std::string& file, const YAML::Node& n, const std::string& effect,
+                      const std::string& param, const std::string& what) {
+  return plain_text(file, n, "", param, (effect.empty() ? "" : "effect '" + effect + "': ") + what);
+}
+
 // A measurement lag after substitution: an SI number.
 double lag_seconds(const ValueDecl& v, const std::string& effect, const std::string& output) {
   if (v.si) return *v.si;
@@ -299,7 +306,8 @@ std::vector<PhaseDecl> read_phases(const std::string& path, const YAML::Node& li
   for (const YAML::Node item : list) {
     if (!item.IsMap() || !item["name"] || !item["from"])
       fail(path, item, "", "", "a phase is {name: NAME, from: start | COMPONENT.TAG | METRIC}");
-    PhaseDecl ph{item["name"].as<std::string>(), item["from"].as<std::string>(), location_of(path, item)};
+    PhaseDecl ph{name_text(path, item["name"], "", "", "a phase's 'name'"),
+                 name_text(path, item["from"], "", "", "a phase's 'from'"), location_of(path, item)};
     const auto dot = ph.from.find('.');
     const bool is_metric = std::any_of(model.metrics.begin(), model.metrics.end(),
                                        [&](const MetricDecl& m) { return m.name == ph.from; });
@@ -326,7 +334,7 @@ struct NetlistValue {
 
 NetlistValue netlist_value(const std::string& path, const YAML::Node& key_node, const Netlist& nl,
                            const Registry& registry) {
-  const std::string key = key_node.as<std::string>();
+  const std::string key = name_text(path, key_node, "", "", "a 'recalibrate' entry's name");
   const auto dot = key.find('.');
   NetlistValue v;
   if (dot == std::string::npos) {
@@ -377,12 +385,12 @@ NetlistValue netlist_value(const std::string& path, const YAML::Node& key_node, 
 Effect recalibration(const std::string& path, const YAML::Node& key_node, const YAML::Node& body, const Netlist& nl,
                      const Registry& registry) {
   Effect e;
-  e.name = key_node.as<std::string>();
+  e.name = name_text(path, key_node, "", "", "a 'recalibrate' entry's name");
   e.where = location_of(path, key_node);
   if (body && !body.IsNull() && !body.IsMap())
     fail(path, key_node, e.name, "", "recalibrate: each entry is a map {lower, upper, scale, description} (or {})");
   for (auto k = body.begin(); body.IsMap() && k != body.end(); ++k) {
-    const auto key = k->first.as<std::string>();
+    const auto key = name_text(path, k->first, e.name, "", "a key");
     if (key != "lower" && key != "upper" && key != "scale" && key != "description")
       fail(path, k->first, e.name, "", "recalibrate: unknown key '" + key + "' (lower, upper, scale, description)");
   }
@@ -393,10 +401,10 @@ Effect recalibration(const std::string& path, const YAML::Node& key_node, const 
   ep.unit = v.unit;
   ep.initial = v.value;
   ep.null_value = v.value;
-  ep.log_scale = !(body.IsMap() && body["scale"]) || body["scale"].as<std::string>() == "log";
-  if (body.IsMap() && body["scale"] && body["scale"].as<std::string>() != "log" &&
-      body["scale"].as<std::string>() != "linear")
-    fail(path, body["scale"], e.name, ep.name, "scale must be 'linear' or 'log'");
+  const std::string scale =
+      body.IsMap() && body["scale"] ? name_text(path, body["scale"], e.name, ep.name, "'scale'") : "log";
+  if (scale != "log" && scale != "linear") fail(path, body["scale"], e.name, ep.name, "scale must be 'linear' or 'log'");
+  ep.log_scale = scale == "log";
   // A bound: an SI number, or a factor of the netlist's value ("0.5x").
   auto bound = [&](const char* which, double factor) {
     const YAML::Node b = body.IsMap() ? body[which] : YAML::Node();
@@ -427,7 +435,7 @@ Effect recalibration(const std::string& path, const YAML::Node& key_node, const 
          "the netlist's value " + format_number(ep.initial) + " lies outside [lower, upper]");
   if (ep.log_scale && ep.lower <= 0) fail(path, key_node, e.name, ep.name, "scale: log needs lower > 0");
   e.description = body.IsMap() && body["description"]
-                      ? body["description"].as<std::string>()
+                      ? name_text(path, body["description"], e.name, "", "'description'")
                       : "re-calibrated model parameter " + e.name + " (netlist: " + format_number(v.value) + " " + v.unit + ")";
   e.recalibrates = e.name;
   ValueDecl value;
@@ -515,7 +523,7 @@ YAML::Node read_root(const std::string& path) {
     throw InputError(SourceLocation{path, 1, 1}, "", "",
                      "a catalogue needs 'effects:', a map of effect name -> patch, or 'recalibrate:'");
   for (auto it = root.begin(); it != root.end(); ++it)
-    if (const auto k = it->first.as<std::string>(); k != "effects" && k != "phases" && k != "recalibrate")
+    if (const auto k = name_text(path, it->first, "", "", "a key"); k != "effects" && k != "phases" && k != "recalibrate")
       fail(path, it->first, "", "", "unknown key '" + k + "' (valid: effects, recalibrate, phases)");
   return root;
 }
@@ -524,14 +532,14 @@ YAML::Node read_root(const std::string& path) {
 EffectParameter read_effect_parameter(const std::string& path, const std::string& effect, const YAML::Node& key,
                                       const YAML::Node& s) {
   EffectParameter ep;
-  ep.name = key.as<std::string>();
+  ep.name = name_text(path, key, effect, "", "a parameter's name");
   ep.where = location_of(path, key);
   if (!s.IsMap()) fail(path, key, effect, ep.name, "needs {initial, lower, upper, null, unit}");
   // yaml-cpp parses the plain key `null` as a Null node, which s["null"]
   // does not find: the entry is taken from the iteration.
   std::optional<YAML::Node> null_node;
   for (auto k = s.begin(); k != s.end(); ++k) {
-    const auto name = k->first.as<std::string>();
+    const auto name = name_text(path, k->first, effect, ep.name, "a key");
     if (name == "null") null_node.emplace(k->second);
     if (name != "initial" && name != "lower" && name != "upper" && name != "null" && name != "unit" &&
         name != "scale")
@@ -543,9 +551,9 @@ EffectParameter read_effect_parameter(const std::string& path, const std::string
   ep.lower = number(path, s["lower"], effect, ep.name, "lower");
   ep.upper = number(path, s["upper"], effect, ep.name, "upper");
   if (null_node) ep.null_value = number(path, *null_node, effect, ep.name, "null");
-  if (s["unit"]) ep.unit = s["unit"].as<std::string>();
+  if (s["unit"]) ep.unit = name_text(path, s["unit"], effect, ep.name, "'unit'");
   if (s["scale"]) {
-    const auto sc = s["scale"].as<std::string>();
+    const auto sc = name_text(path, s["scale"], effect, ep.name, "'scale'");
     if (sc != "log" && sc != "linear") fail(path, s["scale"], effect, ep.name, "scale must be 'linear' or 'log'");
     ep.log_scale = sc == "log";
   }
@@ -573,7 +581,7 @@ void check_patch_shape(const std::string& path, const YAML::Node& body, const st
     }
   if (body["measure"])
     for (auto m = body["measure"].begin(); m != body["measure"].end(); ++m) {
-      const auto out = m->first.as<std::string>();
+      const auto out = name_text(path, m->first, effect, "", "a measured output's name");
       if (std::none_of(model.outputs.begin(), model.outputs.end(), [&](const OutputDecl& o) { return o.name == out; }))
         fail(path, m->first, effect, out, "measure: the model has no output '" + out + "'");
       if (!m->second.IsMap() || !m->second["lag"])
@@ -593,6 +601,7 @@ void check_availability(const std::string& path, const YAML::Node& body, Effect&
       if (!body[key].IsMap())
         fail(path, body[key], e.name, "", std::string(key) + " must be a map: NAME: {type: TYPE, PARAMETER: VALUE}");
       for (auto c = body[key].begin(); c != body[key].end(); ++c) {
+        (void)name_text(path, c->first, e.name, "", std::string("a component's name in ") + key);
         // Checked here, before any node is subscripted: a scalar would throw yaml-cpp's own error.
         if (!c->second.IsMap() || (c->second["type"] && !c->second["type"].IsScalar()))
           fail(path, c->first, e.name, "",
@@ -602,12 +611,16 @@ void check_availability(const std::string& path, const YAML::Node& body, Effect&
     }
   const auto& req = body["requires"];
   if (!req) return;
+  if (!req.IsMap()) fail(path, req, e.name, "", "'requires' must be a map {types, parameters, ports}");
+  for (const char* kind : {"types", "parameters", "ports"})
+    if (req[kind] && !req[kind].IsSequence())
+      fail(path, req[kind], e.name, "", std::string("requires: '") + kind + "' must be a list");
   if (req["types"])
-    for (const auto& t : req["types"]) check_type(t.as<std::string>());
+    for (const auto& t : req["types"]) check_type(name_text(path, t, e.name, "", "requires: a type"));
   for (const char* kind : {"parameters", "ports"})
     if (req[kind])
       for (const auto& q : req[kind]) {
-        const auto s = q.as<std::string>();
+        const auto s = name_text(path, q, e.name, "", std::string("requires: an entry of '") + kind + "'");
         const auto dot = s.find('.');
         if (dot == std::string::npos) fail(path, q, e.name, "", "requires: write TYPE.NAME");
         const auto* entry = registry.find(s.substr(0, dot));
@@ -628,16 +641,16 @@ Effect read_effect(const std::string& path, const Reader& reader, const YAML::No
                                               "replace_components", "set",        "disconnect", "connect",
                                               "measure"};
   Effect e;
-  e.name = key.as<std::string>();
+  e.name = name_text(path, key, "", "", "an effect's name");
   e.where = location_of(path, key);
   if (!body.IsMap()) fail(path, key, e.name, "", "an effect must be a map (parameters, set, connect, ...)");
   for (auto k = body.begin(); k != body.end(); ++k)
-    if (!kKeys.count(k->first.as<std::string>()))
+    if (const auto name = name_text(path, k->first, e.name, "", "a key"); !kKeys.count(name))
       fail(path, k->first, e.name, "",
-           "unknown key '" + k->first.as<std::string>() +
+           "unknown key '" + name +
                "' (valid: description, parameters, requires, add_components, replace_components, set, disconnect, "
                "connect, measure)");
-  if (body["description"]) e.description = body["description"].as<std::string>();
+  if (body["description"]) e.description = name_text(path, body["description"], e.name, "", "'description'");
   if (body["parameters"]) {
     if (!body["parameters"].IsMap()) fail(path, body["parameters"], e.name, "", "'parameters' must be a map");
     for (auto p = body["parameters"].begin(); p != body["parameters"].end(); ++p)
@@ -655,9 +668,7 @@ Effect read_effect(const std::string& path, const Reader& reader, const YAML::No
   return e;
 }
 
-}  // namespace
-
-Catalogue load_catalogue(const std::string& path, const Netlist& model, const Registry& registry) {
+Catalogue read_catalogue(const std::string& path, const Netlist& model, const Registry& registry) {
   Catalogue cat;
   cat.file = path;
   const Reader reader(path);
@@ -678,6 +689,19 @@ Catalogue load_catalogue(const std::string& path, const Netlist& model, const Re
     }
   }
   return cat;
+}
+
+}  // namespace
+
+Catalogue load_catalogue(const std::string& path, const Netlist& model, const Registry& registry) {
+  // The readers above check a node's shape before reading it; a shape they
+  // miss still ends as an input error at its line, not as yaml-cpp's exception.
+  try {
+    return read_catalogue(path, model, registry);
+  } catch (const YAML::Exception& ex) {
+    throw InputError(SourceLocation{path, ex.mark.line + 1, ex.mark.column + 1}, "", "",
+                     "unexpected YAML shape: " + ex.msg);
+  }
 }
 
 }  // namespace pneumo::diagnose

@@ -132,7 +132,7 @@ std::vector<MeasuredRun> load_runs(const std::string& dir, const Netlist& model)
     auto at = [&](const YAML::Node& n) { return location_of(path, n); };
     if (!y.IsMap()) throw InputError(SourceLocation{path, 1, 1}, "", "", "a run file is a map: data, role, operating_point");
     for (auto it = y.begin(); it != y.end(); ++it) {
-      const auto k = it->first.as<std::string>();
+      const auto k = plain_text(path, it->first, "", "", "a key");
       if (k != "data" && k != "role" && k != "operating_point" && k != "description")
         throw InputError(at(it->first), "", k, "unknown key '" + k + "' (data, role, operating_point, description)");
     }
@@ -140,7 +140,7 @@ std::vector<MeasuredRun> load_runs(const std::string& dir, const Netlist& model)
     run.name = f.stem().string();
     if (!y["data"]) throw InputError(SourceLocation{path, 1, 1}, "", "data", "missing 'data: NAME.csv'");
     if (!y["role"]) throw InputError(SourceLocation{path, 1, 1}, "", "role", "missing 'role: calibration|validation'");
-    const auto role = y["role"].as<std::string>();
+    const auto role = plain_text(path, y["role"], "", "role", "'role'");
     if (role == "calibration") run.role = Role::calibration;
     else if (role == "validation") run.role = Role::validation;
     else throw InputError(at(y["role"]), "", "role", "role must be 'calibration' or 'validation', not '" + role + "'");
@@ -148,7 +148,7 @@ std::vector<MeasuredRun> load_runs(const std::string& dir, const Netlist& model)
       const auto& op = y["operating_point"];
       if (!op.IsMap()) throw InputError(at(op), "", "operating_point", "operating_point maps parameter names to SI values");
       for (auto it = op.begin(); it != op.end(); ++it) {
-        const auto name = it->first.as<std::string>();
+        const auto name = plain_text(path, it->first, "", "", "a parameter's name");
         if (!model.parameter(name)) {
           std::string valid;
           for (const auto& p : model.parameters) valid += (valid.empty() ? "" : ", ") + p.name;
@@ -166,7 +166,7 @@ std::vector<MeasuredRun> load_runs(const std::string& dir, const Netlist& model)
         }
       }
     }
-    run.csv_file = (f.parent_path() / y["data"].as<std::string>()).string();
+    run.csv_file = (f.parent_path() / plain_text(path, y["data"], "", "data", "'data'")).string();
     read_csv_into(run, run.csv_file, model);
     runs.push_back(std::move(run));
   }

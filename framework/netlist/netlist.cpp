@@ -39,6 +39,15 @@ SourceLocation location_of(const std::string& file, const YAML::Node& node) {
   return w;
 }
 
+std::string plain_text(const std::string& file, const YAML::Node& node, const std::string& component,
+                       const std::string& parameter, const std::string& what) {
+  if (!node.IsDefined()) throw InputError(SourceLocation{file, 0, 0}, component, parameter, what + " is missing");
+  if (node.IsNull()) return "null";
+  if (!node.IsScalar())
+    throw InputError(location_of(file, node), component, parameter, what + " must be plain text, not a list or mapping");
+  return node.Scalar();
+}
+
 const TopParameter* Netlist::parameter(const std::string& name) const {
   for (const auto& p : parameters)
     if (p.name == name) return &p;

@@ -13,4 +13,11 @@ namespace pneumo {
 
 SourceLocation location_of(const std::string& file, const YAML::Node& node);
 
+// The text of a node where a plain name or text is expected (a key, a type,
+// a description). yaml-cpp's as<std::string>() throws its own exception on a
+// map or list; this throws an InputError at the node's line, saying `what`
+// was expected. A null node reads as "null", as yaml-cpp has it.
+std::string plain_text(const std::string& file, const YAML::Node& node, const std::string& component,
+                       const std::string& parameter, const std::string& what);
+
 }  // namespace pneumo
