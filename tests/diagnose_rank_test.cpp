@@ -275,6 +275,32 @@ TEST(DiagnoseRanking, TwoEffectsAtOnceAreBothFound) {
   EXPECT_LT(r.validation_after.total.rms, 2.0);
 }
 
+TEST(DiagnoseRanking, ASecondEffectNearItsNullOnAWideRangeIsStillAdded) {
+  // Friction growing with |p_A - p_B| (a third of the Annex C pAB- slopes,
+  // on the main-stroke law) and a weak wall heat transfer, 2-4 W/(m2*K) into
+  // walls of finite heat capacity: a hundredth of the candidate's 0-600
+  // range, so "close to the null in the parameter's range" must not decide
+  // whether the heat transfer is there - its own share of the fit does.
+  const fs::path dir = scratch("second_near_null");
+  write_runs(dir / "runs", truth_with(R"({set: {cylinder.friction: custom, cylinder.friction_pressure: pAB-,
+    cylinder.friction_b0: 2.776, cylinder.friction_b1: "-1.32 N/bar", cylinder.friction_FS0: 25.05,
+    cylinder.friction_FS1: "3.534 N/bar", cylinder.friction_FC: 4.31, cylinder.friction_vS: 0.004033,
+    cylinder.friction_kv0: 128.7, cylinder.friction_kv1: "13.02 N/bar", cylinder.friction_a: 0.6843},
+    components: {
+      t_conv_A: {type: heat_convection, alpha: 2, A: 8.0e-3}, t_conv_cap: {type: heat_convection, alpha: 4, A: 2.0e-3},
+      t_wall_A: {type: thermal_mass, C: 150, T0: 293.15}, t_wall_cap: {type: thermal_mass, C: 60, T0: 293.15}},
+    connections: [[cylinder.heat_A, t_conv_A.a], [t_conv_A.b, t_wall_A.port], [cylinder.heat_cap, t_conv_cap.a],
+      [t_conv_cap.b, t_wall_cap.port]]})"), kRuns, 25);
+  const auto r = run_diagnosis(dir, catalogue(dir, {"friction_pressure", "heat_transfer", "leakage_piston_seal",
+                                                    "end_stop_elasticity", "line_volume"}));
+  ASSERT_EQ(r.verdict.size(), 2u);
+  EXPECT_EQ(r.verdict[0], "friction_pressure");
+  EXPECT_EQ(r.verdict[1], "heat_transfer");
+  ASSERT_EQ(r.final_values.size(), 2u);
+  EXPECT_LT(r.final_values[1].second[0], 10.0) << "the heat transfer coefficient, W/(m2*K)";
+  EXPECT_LT(r.validation_after.total.rms - 1, 0.15 * (r.validation_before.total.rms - 1));  // 85 % of the excess gone
+}
+
 TEST(DiagnoseRanking, AWrongModelParameterIsFoundAsSuch) {
   // The load is 1.5 times the netlist's m_load (runs at other supply
   // pressures and cushion screws, the load not among their operating

@@ -29,6 +29,15 @@ std::vector<double> Effect::initial_values() const {
   return v;
 }
 
+std::vector<double> Effect::null_values() const {
+  std::vector<double> v;
+  for (const auto& p : parameters) {
+    if (!p.null_value) return {};
+    v.push_back(*p.null_value);
+  }
+  return v;
+}
+
 const Effect* Catalogue::find(const std::string& name) const {
   for (const auto& e : effects)
     if (e.name == name) return &e;

@@ -92,6 +92,9 @@ struct Effect {
   int parameter_index(const std::string& n) const;
   // The parameters' initial values, in the catalogue's order.
   std::vector<double> initial_values() const;
+  // The parameters' null values (where the effect vanishes); empty for a
+  // structural switch (a parameter without a null).
+  std::vector<double> null_values() const;
   // Whether the effect changes the netlist (not only the measurement).
   bool patches_netlist() const {
     return !add_components.empty() || !replace_components.empty() || !set.empty() || !connect.empty() ||

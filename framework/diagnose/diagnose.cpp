@@ -28,23 +28,6 @@ using namespace engine;
 
 namespace {
 
-// An effect fitted back to its null value has vanished: no claim. (False
-// for a structural switch, which has no null.)
-bool at_null(const EffectInstance& inst) {
-  bool vanished = true, has_null = false;
-  for (std::size_t i = 0; i < inst.values.size(); ++i) {
-    const auto& spec = inst.effect->parameters[i];
-    if (!spec.null_value) continue;
-    has_null = true;
-    auto u = [&](double v) {
-      return spec.log_scale ? std::log(v / spec.lower) / std::log(spec.upper / spec.lower)
-                            : (v - spec.lower) / (spec.upper - spec.lower);
-    };
-    vanished = vanished && std::abs(u(inst.values[i]) - u(*spec.null_value)) < 0.01;
-  }
-  return has_null && vanished;
-}
-
 // Significant windows: chi-square of each window (1/60 of the run) against
 // the noise level (under "model right" the normalised residuals are white
 // with unit variance).
@@ -287,9 +270,7 @@ class Diagnosis {
         log("  " + e.name + ": " + e.unavailable);
         continue;
       }
-      std::vector<double> init = e.initial_values(), null;
-      for (const auto& p : e.parameters)
-        if (p.null_value) null.push_back(*p.null_value);
+      const std::vector<double> init = e.initial_values(), null = e.null_values();
       double gain = 0;
       for (const auto* start : {&init, &null}) {
         if (start->size() != e.parameters.size() || (start == &null && null == init)) continue;
@@ -413,10 +394,12 @@ class Diagnosis {
   }
 
   // The remaining candidates re-screened against the gap left, each added to
-  // the current model: the linearised gain from its initial values with every
-  // parameter free, and the direct gain at its single fit (what one effect
-  // improves alone says little about what it adds to another). The best four,
-  // each with the start that did better.
+  // the current model: the linearised gain with every parameter free from its
+  // null (where the added effect is a small change of the current model) and
+  // from its initial values (a far start's step is judged on that start's own
+  // misfit), and the direct gain at its single fit (what one effect improves
+  // alone says little about what it adds to another). The best four, each
+  // with the start that did best.
   std::vector<EffectInstance> rescreen() {
     const double c0 = ssr(r_cal_cur_);
     std::vector<std::pair<double, EffectInstance>> gains;
@@ -428,17 +411,22 @@ class Diagnosis {
       for (const auto& g : rep_.verdict_groups)
         for (const auto& n : g) skip = skip || n == e->name;
       if (skip) continue;
-      auto start = chosen_;
-      start.push_back({e, e->initial_values()});
-      const auto lin = eng_.fit(start, cal_, {}, 1);
-      const double at_init = ssr(lin.r_cal);
-      double gain = 1 - at_init * (1 - lin.screening) / c0;
-      EffectInstance from{e, e->initial_values()};
+      std::vector<std::vector<double>> starts = {e->initial_values()};
+      if (const auto null = e->null_values(); !null.empty() && null != starts[0]) starts.push_back(null);
+      double gain = -INFINITY;
+      EffectInstance from{e, starts[0]};
+      for (const auto& values : starts) {
+        auto start = chosen_;
+        start.push_back({e, values});
+        const auto lin = eng_.fit(start, cal_, {}, 1);
+        const double g = 1 - ssr(lin.r_cal) * (1 - lin.screening) / c0;
+        if (g > gain) gain = g, from = EffectInstance{e, values};
+      }
       if (const Cand* c = cand_of(e->name)) {
-        start.back() = c->fit.effects[0];
+        auto start = chosen_;
+        start.push_back(c->fit.effects[0]);
         const double at_fit = ssr(eng_.residuals({eng_.model(start)}, cal_)[0]);
-        if (at_fit < at_init) from = c->fit.effects[0];
-        gain = std::max(gain, 1 - at_fit / c0);
+        if (1 - at_fit / c0 > gain) gain = 1 - at_fit / c0, from = c->fit.effects[0];
       }
       log("  re-screening " + e->name + fmt(" against the gap left: %.1f %%", 100 * gain));
       gains.push_back({gain, from});
@@ -463,10 +451,6 @@ class Diagnosis {
       start.push_back(add);
       log("  forward selection: " + rep_.verdict.back() + " + " + e->name + fmt("  [%.1f s]", elapsed()));
       auto f = eng_.fit(start, cal_, {}, opt_.max_iterations, true);
-      if (at_null(f.effects.back())) {
-        log("    " + e->name + " fitted back to its null value: not added");
-        continue;
-      }
       Step st{e, f, eng_.residuals({eng_.model(f.effects)}, val_)[0], {}};
       st.gap = eng_.gaps(st.r_val, val_);
       const auto s = eng_.significance(r_val_cur_, st.r_val, val_, static_cast<int>(e->parameters.size()));
@@ -475,7 +459,8 @@ class Diagnosis {
       log("    + " + e->name +
           fmt(": validation gap %.3g -> %.3g, dBIC %.3g", gap_cur.total.rms, st.gap.total.rms, s.delta_bic) +
           (practical ? ", removes enough of the gap of " + why : ", not practically significant"));
-      if (s.delta_bic > opt_.significance_bic && practical && (!bs || st.gap.total.rms < bs->gap.total.rms))
+      if (s.delta_bic > opt_.significance_bic && practical && (!bs || st.gap.total.rms < bs->gap.total.rms) &&
+          adds_its_own(st))
         bs = std::move(st);
     }
     if (!bs) return false;
@@ -484,6 +469,24 @@ class Diagnosis {
     r_cal_cur_ = bs->fit.r_cal;
     name_in_verdict(bs->e->name);
     return true;
+  }
+
+  // A joint fit may gain by re-fitting the chosen effects alone: the added
+  // effect is credited only if setting it back to its null (the others kept
+  // at their joint values) is significantly worse on the validation runs. Its
+  // parameters' distance from the null says nothing about that: a small heat
+  // transfer coefficient on a range up to 600 W/(m2*K) is not "no heat
+  // transfer". A structural switch (no null) has no such reference.
+  bool adds_its_own(const Step& st) {
+    const auto null = st.e->null_values();
+    if (null.empty()) return true;
+    auto without = st.fit.effects;
+    without.back().values = null;
+    const auto r_without = eng_.residuals({eng_.model(without)}, val_)[0];
+    const auto s = eng_.significance(r_without, st.r_val, val_, static_cast<int>(null.size()));
+    if (s.delta_bic <= opt_.significance_bic)
+      log(fmt("    its own share is not significant (dBIC %.3g against it at its null): not added", s.delta_bic));
+    return s.delta_bic > opt_.significance_bic;
   }
 
   // Decimated traces of every validation run, measured against before and after.
