@@ -10,6 +10,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <random>
 
 #include <yaml-cpp/yaml.h>
@@ -41,8 +42,10 @@ struct RunSpec {
 };
 
 // Measured runs of `truth` (a netlist YAML) at each run's operating point:
-// every 2 ms over 0.5 s, the four rig signals with white Gaussian noise.
-void write_runs(const fs::path& dir, const YAML::Node& truth, const std::vector<RunSpec>& runs, unsigned seed) {
+// every 2 ms over 0.5 s, the four rig signals with white Gaussian noise;
+// `lags` puts a first-order sensor (time constant, s) on named signals.
+void write_runs(const fs::path& dir, const YAML::Node& truth, const std::vector<RunSpec>& runs, unsigned seed,
+                const std::map<std::string, double>& lags = {}) {
   const std::vector<std::pair<std::string, double>> noise = {{"x", 2e-5}, {"p_A", 2e3}, {"p_EC", 2e3}, {"T_EC", 0.3}};
   std::mt19937 rng(seed);
   fs::create_directories(dir);
@@ -53,13 +56,22 @@ void write_runs(const fs::path& dir, const YAML::Node& truth, const std::vector<
     nl.simulation.output_interval = 2e-3;
     const RunResult res = run_simulation(nl, builtin_registry());
     ASSERT_TRUE(res.solver.ok) << res.solver.message;
+    std::map<std::string, double> sensed;  // the lagged sensors' states
     std::ofstream csv(dir / (run.name + ".csv"));
     csv.precision(10);
     csv << "t";
     for (const auto& [signal, sigma] : noise) csv << "," << signal;
-    for (const auto& row : res.table.rows) {
+    for (std::size_t i = 0; i < res.table.rows.size(); ++i) {
+      const auto& row = res.table.rows[i];
       csv << "\n" << row[0];
-      for (const auto& [signal, sigma] : noise) csv << "," << row[res.table.column(signal)] + sigma * std::normal_distribution<>()(rng);
+      for (const auto& [signal, sigma] : noise) {
+        double y = row[res.table.column(signal)];
+        if (const auto lag = lags.find(signal); lag != lags.end()) {  // implicit Euler of tau y' = u - y
+          const double dt = i == 0 ? 0 : row[0] - res.table.rows[i - 1][0];
+          y = sensed[signal] = i == 0 ? y : (lag->second * sensed[signal] + dt * y) / (lag->second + dt);
+        }
+        csv << "," << y + sigma * std::normal_distribution<>()(rng);
+      }
     }
     std::ofstream yml(dir / (run.name + ".yaml"));
     yml << "data: " << run.name << ".csv\nrole: " << run.role << "\noperating_point:";
@@ -299,6 +311,25 @@ TEST(DiagnoseRanking, ASecondEffectNearItsNullOnAWideRangeIsStillAdded) {
   ASSERT_EQ(r.final_values.size(), 2u);
   EXPECT_LT(r.final_values[1].second[0], 10.0) << "the heat transfer coefficient, W/(m2*K)";
   EXPECT_LT(r.validation_after.total.rms - 1, 0.15 * (r.validation_before.total.rms - 1));  // 85 % of the excess gone
+}
+
+TEST(DiagnoseRanking, ALagOnOnePressureTransducerIsFoundOnThatTransducer) {
+  // A 10 ms lag on the cushion-volume pressure sensor only (a long tube to
+  // the tapping), the model otherwise right: named as a sensor lag, on p_EC,
+  // with the chamber's transducer left (nearly) without one.
+  const fs::path dir = scratch("one_transducer_lag");
+  write_runs(dir / "runs", YAML::LoadFile(kModel), kRuns, 26, {{"p_EC", 0.010}});
+  const auto r = run_diagnosis(dir, catalogue(dir, {"sensor_lag_p", "sensor_lag_T", "line_volume", "valve_timing",
+                                                    "friction_cushion_zone", "leakage_cushion_seal"}));
+  ASSERT_FALSE(r.verdict.empty());
+  EXPECT_EQ(r.verdict[0], "sensor_lag_p");
+  const auto* f = result_of(r, "sensor_lag_p");
+  ASSERT_NE(f, nullptr);
+  ASSERT_EQ(f->parameter_names.size(), 3u);
+  EXPECT_EQ(f->parameter_names[1], "tau_EC");
+  EXPECT_NEAR(f->values[1], 0.010, 0.002);
+  EXPECT_LT(f->values[0], 0.002);  // tau_A
+  EXPECT_LT(r.validation_after.total.rms, 1.3);
 }
 
 TEST(DiagnoseRanking, AWrongModelParameterIsFoundAsSuch) {
