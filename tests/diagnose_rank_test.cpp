@@ -332,6 +332,27 @@ TEST(DiagnoseRanking, ALagOnOnePressureTransducerIsFoundOnThatTransducer) {
   EXPECT_LT(r.validation_after.total.rms, 1.3);
 }
 
+TEST(DiagnoseRanking, AFailedCushionSealIsFoundAsALeak) {
+  // A failed cushion seal: the cushion volume leaks into the channel as
+  // through a 1.5 mm orifice (2.5e-9 m3/(s*Pa), about the cushion throttle's
+  // own conductance). The leak candidate's range reaches a failed seal, not
+  // only a worn one, so the leak is named and explains the gap - rather than
+  // a re-calibrated meter-out throttle standing in for it.
+  const fs::path dir = scratch("failed_cushion_seal");
+  write_runs(dir / "runs", truth_with(R"({set: {cylinder.cushion_taps: "yes"},
+    components: {t_leak: {type: iso6358_throttle, C: 2.5e-9, b: 0.3}},
+    connections: [[t_leak.a, cylinder.EC], [t_leak.b, cylinder.B]]})"), kRuns, 27);
+  const auto r = run_diagnosis(dir, catalogue(dir, {"leakage_cushion_seal", "leakage_piston_seal", "line_volume",
+                                                    "friction_cushion_zone", "valve_timing"},
+                                              "{recalibrate: {meter_out.C: {lower: 0.5x, upper: 2x}}}"));
+  EXPECT_GT(r.validation_before.total.rms, 5.0);
+  ASSERT_FALSE(r.verdict.empty());
+  EXPECT_EQ(r.verdict[0], "leakage_cushion_seal");
+  ASSERT_FALSE(r.final_values.empty());
+  EXPECT_NEAR(r.final_values[0].second[0], 2.5e-9, 0.5e-9);
+  EXPECT_LT(r.validation_after.total.rms, 1.3);
+}
+
 TEST(DiagnoseRanking, AWrongModelParameterIsFoundAsSuch) {
   // The load is 1.5 times the netlist's m_load (runs at other supply
   // pressures and cushion screws, the load not among their operating
