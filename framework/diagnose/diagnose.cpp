@@ -398,8 +398,8 @@ class Diagnosis {
   // null (where the added effect is a small change of the current model) and
   // from its initial values (a far start's step is judged on that start's own
   // misfit), and the direct gain at its single fit (what one effect improves
-  // alone says little about what it adds to another). The best four, each
-  // with the start that did best.
+  // alone says little about what it adds to another). The best, each with
+  // the start that did best.
   std::vector<EffectInstance> rescreen() {
     const double c0 = ssr(r_cal_cur_);
     std::vector<std::pair<double, EffectInstance>> gains;
@@ -433,8 +433,11 @@ class Diagnosis {
     }
     eng_.screen_cutoff_ = -1;
     std::stable_sort(gains.begin(), gains.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+    // A flat screen says little about which candidate adds most: every one
+    // within half the best gain is fitted (at least four, at most eight).
     std::vector<EffectInstance> out;
-    for (std::size_t i = 0; i < gains.size() && i < 4; ++i) out.push_back(gains[i].second);
+    for (std::size_t i = 0; i < gains.size() && i < 8; ++i)
+      if (i < 4 || gains[i].first >= 0.5 * gains[0].first) out.push_back(gains[i].second);
     return out;
   }
 
