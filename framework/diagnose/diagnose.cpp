@@ -185,6 +185,13 @@ class Diagnosis {
   double elapsed() const { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start_).count(); }
   static double ssr(const std::vector<double>& r) { return ssr_of(r.data(), r.size()); }
   static double gap_of(const std::vector<double>& r) { return std::sqrt(ssr(r) / r.size()); }
+  // Where a linearised screen starts: the initial values, and the null when
+  // the effect has one that differs from them.
+  static std::vector<std::vector<double>> linearisation_starts(const Effect& e) {
+    std::vector<std::vector<double>> starts = {e.initial_values()};
+    if (auto null = e.null_values(); !null.empty() && null != starts[0]) starts.push_back(std::move(null));
+    return starts;
+  }
   const Cand* cand_of(const std::string& n) const {
     for (const auto& c : cands_)
       if (c.e->name == n) return &c;
@@ -270,12 +277,11 @@ class Diagnosis {
         log("  " + e.name + ": " + e.unavailable);
         continue;
       }
-      const std::vector<double> init = e.initial_values(), null = e.null_values();
+      const bool has_null = e.null_values().size() == e.parameters.size();
       double gain = 0;
-      for (const auto* start : {&init, &null}) {
-        if (start->size() != e.parameters.size() || (start == &null && null == init)) continue;
-        const auto f = eng_.fit({EffectInstance{&e, *start}}, cal_, {}, 1);
-        const double reference = null.size() == init.size() ? ssr_cal0 : ssr(f.r_cal);
+      for (const auto& start : linearisation_starts(e)) {
+        const auto f = eng_.fit({EffectInstance{&e, start}}, cal_, {}, 1);
+        const double reference = has_null ? ssr_cal0 : ssr(f.r_cal);
         gain = std::max(gain, 1 - ssr(f.r_cal) * (1 - f.screening) / reference);
       }
       results_[k].screening_improvement = gain;
@@ -411,11 +417,9 @@ class Diagnosis {
       for (const auto& g : rep_.verdict_groups)
         for (const auto& n : g) skip = skip || n == e->name;
       if (skip) continue;
-      std::vector<std::vector<double>> starts = {e->initial_values()};
-      if (const auto null = e->null_values(); !null.empty() && null != starts[0]) starts.push_back(null);
       double gain = -INFINITY;
-      EffectInstance from{e, starts[0]};
-      for (const auto& values : starts) {
+      EffectInstance from{e, e->initial_values()};
+      for (const auto& values : linearisation_starts(*e)) {
         auto start = chosen_;
         start.push_back({e, values});
         const auto lin = eng_.fit(start, cal_, {}, 1);
