@@ -43,9 +43,10 @@ struct RunSpec {
 
 // Measured runs of `truth` (a netlist YAML) at each run's operating point:
 // every 2 ms over 0.5 s, the four rig signals with white Gaussian noise;
-// `lags` puts a first-order sensor (time constant, s) on named signals.
+// `lags` puts a first-order sensor (time constant, s) on named signals,
+// `gains` a gain error g (the reading is (1 + g) times the value).
 void write_runs(const fs::path& dir, const YAML::Node& truth, const std::vector<RunSpec>& runs, unsigned seed,
-                const std::map<std::string, double>& lags = {}) {
+                const std::map<std::string, double>& lags = {}, const std::map<std::string, double>& gains = {}) {
   const std::vector<std::pair<std::string, double>> noise = {{"x", 2e-5}, {"p_A", 2e3}, {"p_EC", 2e3}, {"T_EC", 0.3}};
   std::mt19937 rng(seed);
   fs::create_directories(dir);
@@ -70,6 +71,7 @@ void write_runs(const fs::path& dir, const YAML::Node& truth, const std::vector<
           const double dt = i == 0 ? 0 : row[0] - res.table.rows[i - 1][0];
           y = sensed[signal] = i == 0 ? y : (lag->second * sensed[signal] + dt * y) / (lag->second + dt);
         }
+        if (const auto g = gains.find(signal); g != gains.end()) y *= 1 + g->second;
         csv << "," << y + sigma * std::normal_distribution<>()(rng);
       }
     }
@@ -330,6 +332,24 @@ TEST(DiagnoseRanking, ALagOnOnePressureTransducerIsFoundOnThatTransducer) {
   EXPECT_NEAR(f->values[1], 0.010, 0.002);
   EXPECT_LT(f->values[0], 0.002);  // tau_A
   EXPECT_LT(r.validation_after.total.rms, 1.3);
+}
+
+TEST(DiagnoseRanking, OneSignalOffIsNotExplainedByAFittingTotal) {
+  // A position-sensor gain error (no candidate describes one), small enough
+  // that three well-fitted pressure and temperature traces pull the total
+  // gap under the adequate 1.3 while x alone stays clearly off: the model
+  // does not explain the data, and the report must say so.
+  const fs::path dir = scratch("one_signal_off");
+  write_runs(dir / "runs", YAML::LoadFile(kModel), kRuns, 27, {}, {{"x", 3.5e-4}});
+  const auto r = run_diagnosis(dir, catalogue(dir, {"friction_pressure", "heat_transfer", "leakage_piston_seal",
+                                                    "line_volume", "sensor_lag_p"}));
+  const auto& x = r.validation_before.by_signal[0];
+  ASSERT_EQ(r.validation_before.signals[0], "x");
+  EXPECT_LT(r.validation_before.total.rms, 1.3);  // the premise: the total alone would pass
+  EXPECT_GT(x.rms, 1.5);
+  EXPECT_TRUE(r.verdict.empty()) << r.verdict[0];
+  ASSERT_TRUE(r.unexplained.has_value());
+  EXPECT_EQ(r.unexplained->signal, "x");
 }
 
 TEST(DiagnoseRanking, AFailedCushionSealIsFoundAsALeak) {

@@ -157,7 +157,8 @@ class Diagnosis {
     order_ = rank_effects(results_);
     group();
     if (name_first_effect())
-      while (static_cast<int>(rep_.verdict.size()) < opt_.max_effects && gap_of(r_val_cur_) > opt_.adequate_gap &&
+      while (static_cast<int>(rep_.verdict.size()) < opt_.max_effects &&
+             !explains_the_data(eng_.gaps(r_val_cur_, val_), opt_) &&
              add_effect()) {
       }
     finish();
@@ -184,7 +185,6 @@ class Diagnosis {
   }
   double elapsed() const { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start_).count(); }
   static double ssr(const std::vector<double>& r) { return ssr_of(r.data(), r.size()); }
-  static double gap_of(const std::vector<double>& r) { return std::sqrt(ssr(r) / r.size()); }
   // Where a linearised screen starts: the initial values, and the null when
   // the effect has one that differs from them.
   static std::vector<std::vector<double>> linearisation_starts(const Effect& e) {
@@ -328,7 +328,7 @@ class Diagnosis {
     er.delta_bic = s.delta_bic;
     er.p_value = s.p;
     er.n_eff = s.n_eff;
-    er.significant = s.delta_bic > opt_.significance_bic && er.gap_before > opt_.adequate_gap &&
+    er.significant = s.delta_bic > opt_.significance_bic && !explains_the_data(rep_.validation_before, opt_) &&
                      practically_significant(rep_.validation_before, er.validation_after, opt_);
   }
 
@@ -535,7 +535,7 @@ class Diagnosis {
     for (const auto& c : cands_) fits[c.e->name] = c.fit.effects;
     rep_.sensors = decisive_sensors(eng_, rep_, fits);
     auto logger = [this](const std::string& s) { log(s); };
-    if (rep_.validation_after.total.rms > opt_.adequate_gap)
+    if (!explains_the_data(rep_.validation_after, opt_))
       rep_.unexplained = leftover(eng_, eng_.model(chosen_), rep_, cal_, val_, r_cal_cur_, r_val_cur_, logger);
     rep_.seconds = elapsed();
     rep_.simulations = eng_.simulations;

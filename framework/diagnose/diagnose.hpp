@@ -68,7 +68,7 @@ struct DiagnoseOptions {
   // because a model-form mismatch of the right effect leaves residual
   // structure that abundant data make "statistically" significant: the model
   // explains the data when its validation gap is at most `adequate_gap`
-  // (noise = 1), and an effect must remove at least one noise variance of
+  // (noise = 1) on the whole set and on every signal, and an effect must remove at least one noise variance of
   // mean square and at least what a `noise_uncertainty` error of the noise
   // level (relative, of sigma) would move it by, on the total or on one
   // signal whose own gap exceeds `adequate_gap`.
@@ -122,7 +122,7 @@ struct TracePlot {  // decimated traces of one validation run and signal
 
 // What the verdict leaves unexplained (README "Diagnosing the sim-to-real
 // gap"): set when the validation gap after the named effects stays above the
-// noise (DiagnoseOptions::adequate_gap). The model's balances (each
+// noise (DiagnoseOptions::adequate_gap) on the whole set or on one signal. The model's balances (each
 // differential equation, as the derivative of its state) and each sensor
 // reading (offset and gain) are given a smooth additive disturbance in turn,
 // fitted by regularised least squares over the runs; the one that explains

@@ -19,6 +19,12 @@ bool removes_enough(const Gap& before, const Gap& after, double noise_uncertaint
 
 }  // namespace
 
+bool explains_the_data(const GapTable& gap, const DiagnoseOptions& opt) {
+  if (gap.total.rms > opt.adequate_gap) return false;
+  return std::none_of(gap.by_signal.begin(), gap.by_signal.end(),
+                      [&](const Gap& g) { return g.rms > opt.adequate_gap; });
+}
+
 bool practically_significant(const GapTable& before, const GapTable& after, const DiagnoseOptions& opt,
                              std::string* why) {
   if (removes_enough(before.total, after.total, opt.noise_uncertainty)) {

@@ -14,6 +14,12 @@ namespace pneumo::diagnose {
 // Share of the gap in excess of the noise (gap - 1) that a model removes.
 double excess_reduction(double gap_before, double gap_after);
 
+// The model explains the data: the validation gap within `adequate_gap` on
+// the whole set and on every signal - one badly fitted signal (x off by two
+// noise sd while three pressures and temperatures fit) is a gap the total
+// averages away, not an explained measurement.
+bool explains_the_data(const GapTable& gap, const DiagnoseOptions& opt);
+
 // Practical significance of going from `before` to `after`, judged on the
 // whole set and on each signal whose own gap exceeds `adequate_gap` (one badly
 // fitted signal, a lagging thermometer, can dominate the total and hide an
