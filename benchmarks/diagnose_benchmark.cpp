@@ -476,6 +476,11 @@ struct Outcome {
 bool claims(const Outcome& o, const std::string& cls) {
   return std::find(o.verdict.begin(), o.verdict.end(), cls) != o.verdict.end();
 }
+// Named, or in a verdict slot's group (the data cannot tell it from the one named there).
+bool claims_within_groups(const Outcome& o, const std::string& cls) {
+  return std::any_of(o.groups.begin(), o.groups.end(),
+                     [&](const auto& g) { return std::find(g.begin(), g.end(), cls) != g.end(); });
+}
 
 double median(std::vector<double> v) {
   if (v.empty()) return NAN;
@@ -518,7 +523,7 @@ void print_confusion(const std::vector<Outcome>& outcomes) {
 }
 
 void print_summary(const std::vector<Outcome>& outcomes, bool classic, int threads) {
-  int single = 0, right = 0, right_group = 0, extra = 0, pairs = 0, pair_both = 0, ooc = 0, ooc_flagged = 0,
+  int single = 0, right = 0, right_group = 0, extra = 0, pairs = 0, pair_both = 0, pair_groups = 0, ooc = 0, ooc_flagged = 0,
       ooc_silent = 0, clean = 0, clean_ok = 0;
   std::vector<double> shrink, excess;
   for (const auto& o : outcomes) {
@@ -544,6 +549,8 @@ void print_summary(const std::vector<Outcome>& outcomes, bool classic, int threa
     } else {
       ++pairs;
       pair_both += std::all_of(o.c.truth.begin(), o.c.truth.end(), [&](const Draw& d) { return claims(o, class_of(d.name)); });
+      pair_groups += std::all_of(o.c.truth.begin(), o.c.truth.end(),
+                                 [&](const Draw& d) { return claims_within_groups(o, class_of(d.name)); });
     }
   }
   auto pct = [](int a, int b) { return b ? 100.0 * a / b : 0.0; };
@@ -552,8 +559,8 @@ void print_summary(const std::vector<Outcome>& outcomes, bool classic, int threa
   std::printf("\nsingle-effect cases: named effect first in %d / %d (%.0f %%; target >= 90 %%), within the first group %d / %d\n",
               right, single, pct(right, single), right_group, single);
   std::printf("single-effect cases with a second effect claimed as well: %d / %d\n", extra, single);
-  std::printf("double-effect cases: both found in %d / %d (%.0f %%; target >= 80 %%)\n", pair_both, pairs,
-              pct(pair_both, pairs));
+  std::printf("double-effect cases: both found in %d / %d (%.0f %%; target >= 80 %%), within their slots' groups %d / %d\n",
+              pair_both, pairs, pct(pair_both, pairs), pair_groups, pairs);
   if (!classic)
     std::printf("out-of-catalogue cases: flagged unexplained in %d / %d (%.0f %%; target >= 80 %%); "
                 "nothing claimed and nothing flagged in %d\n",

@@ -1,7 +1,11 @@
 // Small text helpers shared by the readers of user files (measured data,
-// fit data, sample lists): whitespace trimming and field splitting.
+// fit data, sample lists) - whitespace trimming and field splitting - and by
+// the reports that people read: numbers rounded to what they resolve.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -26,6 +30,22 @@ inline std::vector<std::string> split_trimmed(const std::string& s, char sep) {
   while (std::getline(ss, item, sep)) out.push_back(trim(item));
   if (!s.empty() && s.back() == sep) out.push_back("");
   return out;
+}
+
+// `v` rounded to `n` significant digits, in plain notation where that stays
+// short (210, 0.0042), else in exponent form (1.5e-07); "-" when not finite.
+inline std::string rounded(double v, int n) {
+  if (!std::isfinite(v)) return "-";
+  if (v == 0) return "0";
+  const int e = static_cast<int>(std::floor(std::log10(std::fabs(v))));
+  char buf[48];
+  if (e < -4 || e >= 7) {
+    std::snprintf(buf, sizeof buf, "%.*g", n, v);
+  } else {
+    const double q = std::pow(10.0, e - n + 1);
+    std::snprintf(buf, sizeof buf, "%.*f", std::max(0, n - 1 - e), std::round(v / q) * q);
+  }
+  return buf;
 }
 
 }  // namespace pneumo

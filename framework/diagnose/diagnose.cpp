@@ -89,12 +89,16 @@ Unexplained leftover(Engine& eng, const Model& verdict, const DiagnosisReport& r
   return u;
 }
 
+// The effects each member of a verdict slot's group was fitted with: alone
+// for the first slot, beside the effects already chosen for the later ones.
+using SlotFits = std::map<std::string, std::vector<EffectInstance>>;
+
 // Which sensor would separate each verdict effect from those the data cannot
-// tell apart from it (its group), each at its own single fit: measured
+// tell apart from it (its slot's group), each at its own fit: measured
 // noise per SI unit where a signal has the unit, the measured quantities by
 // their output's COMPONENT.QUANTITY.
 std::vector<SensorChoice> decisive_sensors(const Engine& eng, const DiagnosisReport& rep,
-                                           const std::map<std::string, std::vector<EffectInstance>>& fits) {
+                                           const std::vector<SlotFits>& slot_fits) {
   std::map<std::string, std::vector<double>> sigmas;
   std::map<std::string, std::string> measured;
   for (const auto& [signal, unit] : rep.signal_units) {
@@ -116,7 +120,9 @@ std::vector<SensorChoice> decisive_sensors(const Engine& eng, const DiagnosisRep
     return out;
   };
   std::vector<SensorChoice> out;
-  for (const auto& group : rep.verdict_groups) {
+  for (std::size_t i = 0; i < rep.verdict_groups.size() && i < slot_fits.size(); ++i) {
+    const auto& group = rep.verdict_groups[i];
+    const auto& fits = slot_fits[i];
     if (group.size() < 2 || !fits.count(group[0])) continue;
     const auto runs_a = netlists(fits.at(group[0]));
     for (std::size_t j = 1; j < group.size(); ++j)
@@ -332,39 +338,54 @@ class Diagnosis {
                      practically_significant(rep_.validation_before, er.validation_after, opt_);
   }
 
-  // Groups: near-collinear improvement patterns that the data do not
-  // separate - and neither fit significantly better than the other on the
-  // validation runs.
+  // Groups: effects the data cannot tell apart - near-collinear improvements
+  // and neither fit practically better than the other on the validation
+  // runs (in noise units, as an effect must be practically significant to
+  // be named: between two form-mismatched explanations abundant data make
+  // every difference "statistically" significant).
   void group() {
-    auto improvement_cosine = [&](const Cand& a, const Cand& b) {
-      double ab = 0, aa = 0, bb = 0;
-      for (std::size_t i = 0; i < r_val0_.size(); ++i) {
-        const double da = r_val0_[i] - a.r_val[i], db = r_val0_[i] - b.r_val[i];
-        ab += da * db, aa += da * da, bb += db * db;
-      }
-      return aa > 0 && bb > 0 ? ab / std::sqrt(aa * bb) : 0.0;
-    };
     for (auto& er : results_) {
       const Cand* a = cand_of(er.name);
       if (!a || !er.significant) continue;
       for (const auto& other : results_) {
         const Cand* b = cand_of(other.name);
         if (!b || b == a || !other.significant) continue;
-        const auto s_ab = eng_.significance(b->r_val, a->r_val, val_, 0);
-        if (improvement_cosine(*a, *b) > opt_.group_cosine && std::abs(s_ab.lr) < opt_.significance_bic)
+        if (indistinguishable(r_val0_, {a->r_val, er.validation_after}, {b->r_val, other.validation_after}))
           er.group.push_back(other.name);
       }
     }
   }
 
-  void name_in_verdict(const std::string& name) {
-    rep_.verdict.push_back(name);
-    for (const auto& er : results_)
-      if (er.name == name) {
-        auto g = er.group;
-        g.insert(g.begin(), er.name);
-        rep_.verdict_groups.push_back(g);
-      }
+  struct Outcome {  // a model's validation residuals and gaps
+    const std::vector<double>& r_val;
+    const GapTable& gap;
+  };
+  bool indistinguishable(const std::vector<double>& r_from, const Outcome& a, const Outcome& b) const {
+    return improvement_cosine(r_from, a.r_val, b.r_val) > opt_.group_cosine &&
+           !practically_significant(a.gap, b.gap, opt_) && !practically_significant(b.gap, a.gap, opt_);
+  }
+  bool indistinguishable(const std::vector<double>& r_from, const Step& a, const Step& b) const {
+    return indistinguishable(r_from, {a.r_val, a.gap}, {b.r_val, b.gap});
+  }
+
+  // Cosine between two models' improvements (r_from - r_a, r_from - r_b).
+  static double improvement_cosine(const std::vector<double>& r_from, const std::vector<double>& r_a,
+                                   const std::vector<double>& r_b) {
+    double ab = 0, aa = 0, bb = 0;
+    for (std::size_t i = 0; i < r_from.size(); ++i) {
+      const double da = r_from[i] - r_a[i], db = r_from[i] - r_b[i];
+      ab += da * db, aa += da * da, bb += db * db;
+    }
+    return aa > 0 && bb > 0 ? ab / std::sqrt(aa * bb) : 0.0;
+  }
+
+  // A verdict slot: the effect named, then those the data cannot tell apart
+  // from it there, each with the effects it was fitted with (for the sensor
+  // that would decide).
+  void name_in_verdict(const std::vector<std::string>& group, SlotFits fits) {
+    rep_.verdict.push_back(group[0]);
+    rep_.verdict_groups.push_back(group);
+    slot_fits_.push_back(std::move(fits));
   }
 
   // The best-ranked significant effect, polished alone with a second
@@ -395,7 +416,13 @@ class Diagnosis {
           er.gap_after = er.validation_after.total.rms;
         }
     }
-    name_in_verdict(best->e->name);
+    std::vector<std::string> group = {best->e->name};
+    SlotFits fits;
+    for (const auto& er : results_)
+      if (er.name == best->e->name) group.insert(group.end(), er.group.begin(), er.group.end());
+    for (const auto& n : group)
+      if (const Cand* c = cand_of(n)) fits[n] = c->fit.effects;
+    name_in_verdict(group, std::move(fits));
     return true;
   }
 
@@ -448,10 +475,13 @@ class Diagnosis {
   // Forward selection: the re-screened candidates fitted jointly with the
   // chosen effects (their parameters free); the one that removes the most of
   // the validation gap among those that pass both gates against the current
-  // model is added. False: none does.
+  // model is added, grouped (as the first effect is) with every other that
+  // passed with a near-collinear improvement and a fit not significantly
+  // different - two effects the data cannot tell apart in this slot are
+  // reported as such, not one of them by a hair. False: none passes.
   bool add_effect() {
     const GapTable gap_cur = eng_.gaps(r_val_cur_, val_);
-    std::optional<Step> bs;
+    std::vector<Step> passed;
     for (const auto& add : rescreen()) {
       const Effect* e = add.effect;
       auto start = chosen_;
@@ -466,15 +496,23 @@ class Diagnosis {
       log("    + " + e->name +
           fmt(": validation gap %.3g -> %.3g, dBIC %.3g", gap_cur.total.rms, st.gap.total.rms, s.delta_bic) +
           (practical ? ", removes enough of the gap of " + why : ", not practically significant"));
-      if (s.delta_bic > opt_.significance_bic && practical && (!bs || st.gap.total.rms < bs->gap.total.rms) &&
-          adds_its_own(st))
-        bs = std::move(st);
+      if (s.delta_bic > opt_.significance_bic && practical && adds_its_own(st)) passed.push_back(std::move(st));
     }
-    if (!bs) return false;
+    if (passed.empty()) return false;
+    const auto bs = std::min_element(passed.begin(), passed.end(), [](const Step& a, const Step& b) {
+      return a.gap.total.rms < b.gap.total.rms;
+    });
+    std::vector<std::string> group = {bs->e->name};
+    SlotFits fits = {{bs->e->name, bs->fit.effects}};
+    for (const auto& other : passed)
+      if (&other != &*bs && indistinguishable(r_val_cur_, *bs, other)) {
+        group.push_back(other.e->name);
+        fits[other.e->name] = other.fit.effects;
+      }
     chosen_ = bs->fit.effects;
     r_val_cur_ = bs->r_val;
     r_cal_cur_ = bs->fit.r_cal;
-    name_in_verdict(bs->e->name);
+    name_in_verdict(group, std::move(fits));
     return true;
   }
 
@@ -531,9 +569,7 @@ class Diagnosis {
       if ((a.rank == 0) != (b.rank == 0)) return a.rank != 0;
       return a.rank < b.rank;
     });
-    std::map<std::string, std::vector<EffectInstance>> fits;
-    for (const auto& c : cands_) fits[c.e->name] = c.fit.effects;
-    rep_.sensors = decisive_sensors(eng_, rep_, fits);
+    rep_.sensors = decisive_sensors(eng_, rep_, slot_fits_);
     auto logger = [this](const std::string& s) { log(s); };
     if (!explains_the_data(rep_.validation_after, opt_))
       rep_.unexplained = leftover(eng_, eng_.model(chosen_), rep_, cal_, val_, r_cal_cur_, r_val_cur_, logger);
@@ -555,6 +591,7 @@ class Diagnosis {
   std::vector<double> r_cal0_, r_val0_, r_cal_cur_, r_val_cur_;
   std::vector<EffectResult> results_;
   std::vector<Cand> cands_;
+  std::vector<SlotFits> slot_fits_;  // per verdict slot, parallel to rep_.verdict_groups
   std::vector<int> order_;
   std::vector<EffectInstance> chosen_;
 };

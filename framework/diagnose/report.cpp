@@ -7,6 +7,7 @@
 #include <functional>
 #include <sstream>
 
+#include "framework/core/text.hpp"
 #include "framework/core/units.hpp"
 #include "framework/io/results.hpp"
 #include "framework/diagnose/diagnose.hpp"
@@ -70,23 +71,8 @@ std::string gap_json(const GapTable& g, const std::vector<std::string>& phases) 
   return o.str();
 }
 
-// Rounded to n significant digits, in plain notation where that stays short.
-std::string sig(double v, int n) {
-  if (!std::isfinite(v)) return "-";
-  if (v == 0) return "0";
-  const int e = static_cast<int>(std::floor(std::log10(std::fabs(v))));
-  char buf[48];
-  if (e < -4 || e >= 7) {
-    std::snprintf(buf, sizeof buf, "%.*g", n, v);
-  } else {
-    const double q = std::pow(10.0, e - n + 1);
-    std::snprintf(buf, sizeof buf, "%.*f", std::max(0, n - 1 - e), std::round(v / q) * q);
-  }
-  return buf;
-}
-
 // Gaps are RMS residuals over a noise level estimated to about 10 %: two digits.
-std::string gap(double v) { return sig(v, 2); }
+std::string gap(double v) { return rounded(v, 2); }
 
 // How the report shows a quantity of an SI unit: bar, mm, degC, cm3,
 // dm3/(s*bar), ms; other units as they are. A `difference` (a noise level)
@@ -198,7 +184,7 @@ std::string svg_plot(const TracePlot& p, const std::vector<std::string>& phases,
     o << "<polyline class=\"" << cls << "\" fill=\"none\" stroke=\"" << color << "\" stroke-width=\"" << width
       << "\" points=\"";
     for (std::size_t i = 0; i < v.size(); ++i)
-      if (std::isfinite(v[i])) o << sig(X(p.t[i]), 5) << "," << sig(at(v[i]), 5) << " ";
+      if (std::isfinite(v[i])) o << rounded(X(p.t[i]), 5) << "," << rounded(at(v[i]), 5) << " ";
     o << "\"/>\n";
   };
   const auto shown_value = [&](double si) { return Y(u(si)); };
@@ -351,15 +337,15 @@ namespace {
 // no confidence interval that would say more).
 std::string parameter(double si, const std::string& unit) {
   const Shown u = shown(unit);
-  return sig(u(si), 3) + (u.label.empty() || u.label == "1" ? "" : " " + u.label);
+  return rounded(u(si), 3) + (u.label.empty() || u.label == "1" ? "" : " " + u.label);
 }
 
 // p-values below what the effective sample size can mean are shown as a bound.
-std::string p_value(double p) { return p < 1e-4 ? "&lt; 0.0001" : sig(p, 2); }
+std::string p_value(double p) { return p < 1e-4 ? "&lt; 0.0001" : rounded(p, 2); }
 
 std::string share(double part, double total) {
   const double pct = 100 * part / (total > 0 ? total : 1);
-  return pct < 0.1 ? "&lt; 0.1 %" : sig(pct, 2) + " %";
+  return pct < 0.1 ? "&lt; 0.1 %" : rounded(pct, 2) + " %";
 }
 
 std::string file_name(const std::string& path) {
@@ -382,7 +368,7 @@ void gap_section(std::ostream& o, const DiagnosisReport& r) {
     const double sigma = noise_of(r, name);
     const Shown du = shown(unit_of(r, name), true);
     const bool has_after = s < r.validation_after.by_signal.size();
-    o << "<tr><td class=\"l\">" << html(name) << "</td><td>" << sig(du(sigma), 2) << " " << html(du.label) << "</td>";
+    o << "<tr><td class=\"l\">" << html(name) << "</td><td>" << rounded(du(sigma), 2) << " " << html(du.label) << "</td>";
     for (std::size_t p = 0; p < r.phase_names.size(); ++p)
       o << "<td>" << gap(r.validation_before.by_phase[s][p].rms) << "</td><td>"
         << (has_after ? gap(r.validation_after.by_phase[s][p].rms) : "") << "</td>";
@@ -451,14 +437,15 @@ void write_report_html(const DiagnosisReport& r, const std::string& path) {
   o << "; validation";
   for (const auto& n : r.validation_runs) o << " " << html(n);
   o << "), catalogue " << file_name(r.catalogue_file) << "; " << r.simulations << " simulations in "
-    << sig(r.seconds, 2) << " s.</p>\n";
+    << rounded(r.seconds, 2) << " s.</p>\n";
   o << "<h2>Verdict</h2>\n<p id=\"verdict\">";
   if (r.verdict.empty()) o << "No candidate effect is needed or helps significantly.";
   for (std::size_t i = 0; i < r.verdict_groups.size(); ++i) {
     o << (i ? "; then " : "") << "<b>" << html(r.verdict_groups[i][0]) << "</b>";
     if (r.verdict_groups[i].size() > 1) {
       o << " (indistinguishable from";
-      for (std::size_t j = 1; j < r.verdict_groups[i].size(); ++j) o << " " << html(r.verdict_groups[i][j]);
+      for (std::size_t j = 1; j < r.verdict_groups[i].size(); ++j)
+        o << (j > 1 ? ", " : " ") << html(r.verdict_groups[i][j]);
       o << ")";
     }
   }

@@ -2,9 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 
 #include "framework/core/parallel.hpp"
+#include "framework/core/text.hpp"
 #include "framework/diagnose/statistics.hpp"
 #include "framework/model/circuit.hpp"
 #include "framework/run/run.hpp"
@@ -138,11 +138,9 @@ SensorChoice choose_sensor(const std::string& effect_a, const std::string& effec
 std::string sensor_sentence(const SensorChoice& c) {
   if (c.best.empty()) return {};
   const auto& s = c.best.front();
-  char buf[512];
-  std::snprintf(buf, sizeof buf, "%s at %s would separate %s from %s by %.2g noise sd (the measured signals: %.2g at best)",
-                kind_of(s.unit)->words, s.quantity.c_str(), c.effect_a.c_str(), c.effect_b.c_str(), s.separation,
-                c.measured_separation);
-  return buf;
+  return std::string(kind_of(s.unit)->words) + " at " + s.quantity + " would separate " + c.effect_a + " from " +
+         c.effect_b + " by " + rounded(s.separation, 2) + " noise sd (the measured signals: " +
+         rounded(c.measured_separation, 2) + " at best)";
 }
 
 }  // namespace pneumo::diagnose

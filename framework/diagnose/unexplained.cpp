@@ -5,12 +5,12 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
 #include <numeric>
 #include <sstream>
 
 #include "framework/assembly/system.hpp"
 #include "framework/core/parallel.hpp"
+#include "framework/core/text.hpp"
 
 namespace pneumo::diagnose {
 
@@ -135,11 +135,7 @@ std::string state_unit(const std::string& rate) {
   return rate.ends_with("/s2") ? rate.substr(0, rate.size() - 1) : rate.substr(0, rate.size() - 2);
 }
 
-std::string number(double v) {
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.2g", v);
-  return buf;
-}
+std::string number(double v) { return rounded(v, 2); }
 
 // The phase where the fitted disturbance adds or removes most in all (its
 // sum over the phase's samples, all runs: a net source or sink, which a
