@@ -10,6 +10,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <random>
 
@@ -429,6 +430,17 @@ TEST(DiagnoseRanking, AWrongModelParameterIsFoundAsSuch) {
   const auto* m = result_of(r, "m_load");
   ASSERT_NE(m, nullptr);
   EXPECT_EQ(m->parameter_units[0], "kg");
+  // The verdict says how far from the netlist's 3.7 kg the data put it (+50 %).
+  ASSERT_TRUE(m->netlist_value.has_value());
+  EXPECT_DOUBLE_EQ(*m->netlist_value, 3.7);
+  write_report_html(r, (dir / "report.html").string());
+  std::ifstream in(dir / "report.html");
+  const std::string page((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const auto at = page.find("<b>m_load</b> = ");
+  ASSERT_NE(at, std::string::npos);
+  const auto from = page.find("(netlist 3.70 kg, +", at);
+  ASSERT_NE(from, std::string::npos) << page.substr(at, 120);
+  EXPECT_NEAR(std::stod(page.substr(from + 19)), 50.0, 5.0) << page.substr(at, 120);
 }
 
 TEST(DiagnoseRanking, RecalibrationCandidateIsTheNetlistsValueAndRefusesARunsOperatingPoint) {

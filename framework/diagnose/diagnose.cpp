@@ -261,6 +261,7 @@ class Diagnosis {
         er.parameter_units.push_back(p.unit);
         er.values.push_back(p.null_value ? *p.null_value : p.initial);
       }
+      if (!e.recalibrates.empty() && e.parameters.size() == 1) er.netlist_value = e.parameters[0].null_value;
       er.gap_before = er.gap_after = rep_.validation_before.total.rms;
       results_.push_back(er);
     }

@@ -99,6 +99,7 @@ struct EffectResult {
   double screening_improvement = 0;  // linearised share of the calibration SSR removed
   std::vector<std::string> parameter_names, parameter_units;
   std::vector<double> values;
+  std::optional<double> netlist_value;   // a re-calibration candidate: the netlist's value of its parameter
   double gap_before = 0, gap_after = 0;  // validation, normalised RMS
   GapTable validation_after;
   double lr_eff = 0, delta_bic = 0, p_value = 1, n_eff = 0;  // whitened LR, whitened samples
@@ -122,11 +123,12 @@ struct TracePlot {  // decimated traces of one validation run and signal
 
 // What the verdict leaves unexplained (README "Diagnosing the sim-to-real
 // gap"): set when the validation gap after the named effects stays above the
-// noise (DiagnoseOptions::adequate_gap) on the whole set or on one signal. The model's balances (each
-// differential equation, as the derivative of its state) and each sensor
-// reading (offset and gain) are given a smooth additive disturbance in turn,
-// fitted by regularised least squares over the runs; the one that explains
-// most of the remaining gap is named, with its shape.
+// noise (DiagnoseOptions::adequate_gap) on the whole set or on one signal.
+// The model's balances (each differential equation, as the derivative of its
+// state) and each sensor reading (offset and gain) are given a smooth
+// additive disturbance in turn, fitted by regularised least squares over the
+// runs; the one that explains most of the remaining gap is named, with its
+// shape.
 struct DisturbanceShape {  // one run's fitted disturbance, SI units of the balance's rate
   std::string run;
   std::vector<double> t, value;  // knots of the piecewise-linear d(t); a sensor's offset in the signal's unit
