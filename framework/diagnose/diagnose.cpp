@@ -361,6 +361,7 @@ class Diagnosis {
     const std::vector<double>& r_val;
     const GapTable& gap;
   };
+  // Two models the data cannot tell apart, each improving on r_from.
   bool indistinguishable(const std::vector<double>& r_from, const Outcome& a, const Outcome& b) const {
     return improvement_cosine(r_from, a.r_val, b.r_val) > opt_.group_cosine &&
            !practically_significant(a.gap, b.gap, opt_) && !practically_significant(b.gap, a.gap, opt_);
@@ -477,7 +478,7 @@ class Diagnosis {
   // chosen effects (their parameters free); the one that removes the most of
   // the validation gap among those that pass both gates against the current
   // model is added, grouped (as the first effect is) with every other that
-  // passed with a near-collinear improvement and a fit not significantly
+  // passed with a near-collinear improvement and a fit not practically
   // different - two effects the data cannot tell apart in this slot are
   // reported as such, not one of them by a hair. False: none passes.
   bool add_effect() {

@@ -63,15 +63,16 @@ struct DiagnoseOptions {
   // after AR(p) whitening (each signal of each run its own series, p <= 5
   // by BIC) minus a BIC penalty k ln(n) above this ("strong" evidence).
   double significance_bic = 6.0;
-  double group_cosine = 0.9;
+  double group_cosine = 0.9;  // grouped: improvements at least this collinear, neither fit practically better
   // Practical significance in noise units (framework/diagnose/ranking.hpp),
   // because a model-form mismatch of the right effect leaves residual
   // structure that abundant data make "statistically" significant: the model
   // explains the data when its validation gap is at most `adequate_gap`
-  // (noise = 1) on the whole set and on every signal, and an effect must remove at least one noise variance of
-  // mean square and at least what a `noise_uncertainty` error of the noise
-  // level (relative, of sigma) would move it by, on the total or on one
-  // signal whose own gap exceeds `adequate_gap`.
+  // (noise = 1) on the whole set and on every signal, and an effect must
+  // remove at least one noise variance of mean square and at least what a
+  // `noise_uncertainty` error of the noise level (relative, of sigma) would
+  // move it by, on the total or on one signal whose own gap exceeds
+  // `adequate_gap`.
   double adequate_gap = 1.3;
   double noise_uncertainty = 0.1;
   bool progress = true;
