@@ -304,8 +304,9 @@ const char* const kFrictionAndWeakHeat = R"({set: {cylinder.friction: custom, cy
 
 TEST(DiagnoseRanking, ASecondEffectNearItsNullOnAWideRangeIsStillAdded) {
   // kFrictionAndWeakHeat: the heat transfer is a hundredth of the
-  // candidate's 0-600 W/(m2*K) range, so "close to the null in the parameter's range" must not decide
-  // whether the heat transfer is there - its own share of the fit does.
+  // candidate's 0-600 W/(m2*K) range, so "close to the null in the
+  // parameter's range" must not decide whether the heat transfer is there -
+  // its own share of the fit does.
   const fs::path dir = scratch("second_near_null");
   write_runs(dir / "runs", truth_with(kFrictionAndWeakHeat), kRuns, 25);
   const auto r = run_diagnosis(dir, catalogue(dir, {"friction_pressure", "heat_transfer", "leakage_piston_seal",

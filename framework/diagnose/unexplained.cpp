@@ -135,8 +135,6 @@ std::string state_unit(const std::string& rate) {
   return rate.ends_with("/s2") ? rate.substr(0, rate.size() - 1) : rate.substr(0, rate.size() - 2);
 }
 
-std::string number(double v) { return rounded(v, 2); }
-
 // The phase where the fitted disturbance adds or removes most in all (its
 // sum over the phase's samples, all runs: a net source or sink, which a
 // wiggle about zero is not, nor a short phase's edge where the hats are
@@ -288,8 +286,8 @@ class Search {
       const double total = std::accumulate(first, last, 0.0);
       Candidate& c = cands[chosen[a]];
       if (in_.log)
-        in_.log("  " + c.finding.balance + ": predicted gap " + number(c.finding.gap_after) + ", simulated " +
-                (ok ? number(std::sqrt(total / n)) : std::string("failed")));
+        in_.log("  " + c.finding.balance + ": predicted gap " + rounded(c.finding.gap_after, 2) + ", simulated " +
+                (ok ? rounded(std::sqrt(total / n), 2) : std::string("failed")));
       if (ok) c.ssr = total, c.finding.gap_after = std::sqrt(total / n), c.finding.confirmed = true;
     }
   }
@@ -324,7 +322,7 @@ std::string percent(double share) { return std::to_string(static_cast<int>(std::
 // The report's sentence: where the gap lies, and what the best balance's
 // disturbance says, or that no single one explains it.
 std::string sentence_of(const Unexplained& u, const Candidate& best, const std::string& phase, double mean) {
-  std::string s = "No candidate explains the remaining gap (" + number(u.gap) + " x noise, most of it in " + u.signal +
+  std::string s = "No candidate explains the remaining gap (" + rounded(u.gap, 2) + " x noise, most of it in " + u.signal +
                   (u.phase.empty() ? "" : " during " + u.phase) + "); ";
   if (best.finding.explained < kMinExplained)
     return s + "nor does a smooth disturbance of any single balance (the best, on " + best.finding.balance +
@@ -332,7 +330,7 @@ std::string sentence_of(const Unexplained& u, const Candidate& best, const std::
   const bool sensor = best.variable.empty();
   s += sensor ? "the reading of " + best.finding.balance.substr(7) + " is off (a drifting offset and gain)"
               : "the model misses " + what_is_missed(state_unit(best.finding.unit), mean > 0, best.finding.balance);
-  return s + ", mostly" + (phase.empty() ? "" : " during " + phase) + " (on average " + number(std::abs(mean)) + " " +
+  return s + ", mostly" + (phase.empty() ? "" : " during " + phase) + " (on average " + rounded(std::abs(mean), 2) + " " +
          (sensor ? "in the signal's unit" : best.finding.unit) + " there), which removes " +
          percent(best.finding.explained) + " of the excess gap.";
 }
@@ -368,7 +366,7 @@ void explain_by_balances(const UnexplainedInput& in, const DiagnoseOptions& opt,
   u.simulations = search.simulations;
   u.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   if (in.log)
-    in.log("unexplained: " + u.sentence + " [" + std::to_string(u.simulations) + " simulations, " + number(u.seconds) +
+    in.log("unexplained: " + u.sentence + " [" + std::to_string(u.simulations) + " simulations, " + rounded(u.seconds, 2) +
            " s]");
 }
 
@@ -429,8 +427,8 @@ std::string svg_shape(const Unexplained& u, const std::function<std::string(cons
     << "\" fill=\"none\" stroke=\"#444\"/>\n";
   for (int k = 0; k <= 4; ++k) {
     const double tv = t0 + (t1 - t0) * k / 4, yv = lo + (hi - lo) * k / 4;
-    o << "<text x=\"" << X(tv) << "\" y=\"" << H - b + 14 << "\" text-anchor=\"middle\">" << number(tv) << "</text>"
-      << "<text x=\"" << l - 4 << "\" y=\"" << Y(yv) + 4 << "\" text-anchor=\"end\">" << number(yv) << "</text>\n";
+    o << "<text x=\"" << X(tv) << "\" y=\"" << H - b + 14 << "\" text-anchor=\"middle\">" << rounded(tv, 2) << "</text>"
+      << "<text x=\"" << l - 4 << "\" y=\"" << Y(yv) + 4 << "\" text-anchor=\"end\">" << rounded(yv, 2) << "</text>\n";
   }
   o << "<text x=\"" << (l + W - r) / 2 << "\" y=\"" << H - 4 << "\" text-anchor=\"middle\">t [s]</text>\n";
   const char* const colours[] = {"#4c8fd6", "#d64c4c", "#4cb04c", "#f0a030", "#9b6bd6", "#666"};
@@ -456,13 +454,13 @@ std::string unexplained_html(const std::optional<Unexplained>& u,
   std::ostringstream o;
   o << "<h2>What no candidate explains</h2>\n<p id=\"unexplained\">" << html(u->sentence) << "</p>\n"
     << svg_shape(*u, html) << "<p>The fitted disturbance of the best balance, per run (its knots joined). Gap of all "
-    << "runs with the verdict's model: " << number(u->gap_all_runs) << " x noise; each balance's own disturbance "
+    << "runs with the verdict's model: " << rounded(u->gap_all_runs, 2) << " x noise; each balance's own disturbance "
     << "fitted:</p>\n<table id=\"balances\"><tr><th>balance</th><th>kind</th><th>gap after</th>"
     << "<th>excess gap removed</th></tr>\n";
   for (std::size_t i = 0; i < u->balances.size() && i < 8; ++i) {
     const auto& b = u->balances[i];
     o << "<tr><td class=\"l\">" << html(b.balance) << "</td><td class=\"l\">" << html(b.kind) << "</td><td>"
-      << number(b.gap_after) << (b.confirmed ? "" : " (predicted)") << "</td><td>"
+      << rounded(b.gap_after, 2) << (b.confirmed ? "" : " (predicted)") << "</td><td>"
       << std::lround(100 * b.explained) << " %</td></tr>\n";
   }
   o << "</table>\n";
