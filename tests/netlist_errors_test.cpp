@@ -350,7 +350,7 @@ TEST(FailedRun, ApiReportsFailureWithRowsSoFar) {
   EXPECT_EQ(run.table.rows.front().front(), 0.0);
 }
 
-TEST(FailedRun, CliLeavesOnlyAnIncompletePartialFileAndRemovesStaleResults) {
+TEST(FailedRun, CliLeavesAnIncompletePartialFileAndTheNamedFileAsItWas) {
   TempDir dir;
   const fs::path output = dir.path() / "out.csv";
   const fs::path partial = dir.path() / "out.partial.csv";
@@ -358,13 +358,13 @@ TEST(FailedRun, CliLeavesOnlyAnIncompletePartialFileAndRemovesStaleResults) {
   const CliResult r = run_cli(simulate_args(kSolverFailure, {}, output), dir.path());
   ASSERT_TRUE(r.exited) << r.err;
   EXPECT_EQ(r.status, 1) << r.err;
-  EXPECT_FALSE(fs::exists(output)) << "a failed run must not leave a results file";
+  EXPECT_EQ(first_line(output), "t [s],T [K]") << "a failed run must not delete or change the file -o names";
   ASSERT_TRUE(fs::exists(partial));
   EXPECT_EQ(first_line(partial).rfind("# INCOMPLETE", 0), 0u) << first_line(partial);
   EXPECT_NE(r.err.find("failed"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find(partial.string()), std::string::npos) << r.err;
   for (const auto& entry : fs::directory_iterator(dir.path()))
-    EXPECT_EQ(entry.path().string().find(".writing"), std::string::npos) << entry.path();
+    EXPECT_EQ(entry.path().filename().string().rfind(".out", 0), std::string::npos) << "no temporary left: " << entry.path();
   // The partial file is still readable data (the comment line is skipped).
   const ResultsTable t = read_csv(partial.string());
   ASSERT_EQ(t.names.size(), 2u);
@@ -382,14 +382,14 @@ ResultsTable small_table() {
   return t;
 }
 
-TEST(ResultsFiles, PartialRemovesStaleResultsAndIsMarkedIncomplete) {
+TEST(ResultsFiles, PartialLeavesTheTargetAsItWasAndIsMarkedIncomplete) {
   TempDir dir;
   const fs::path output = dir.path() / "run.csv";
-  std::ofstream(output) << "stale\n";
+  std::ofstream(output) << "earlier\n";
   const std::string partial = write_partial_csv(output.string(), small_table(), "solver gave up\nat t = 0.5 s");
   EXPECT_EQ(partial, (dir.path() / "run.partial.csv").string());
   EXPECT_EQ(partial, partial_csv_path(output.string()));
-  EXPECT_FALSE(fs::exists(output));
+  EXPECT_EQ(first_line(output), "earlier") << "a failed run must not delete or change the file -o names";
   const std::string first = first_line(partial);
   EXPECT_EQ(first.rfind("# INCOMPLETE", 0), 0u) << first;
   EXPECT_NE(first.find("solver gave up at t = 0.5 s"), std::string::npos) << "the reason is one line: " << first;
@@ -416,11 +416,13 @@ TEST(ResultsFiles, AtomicWriteReplacesAndRemovesStalePartial) {
   EXPECT_EQ(read_csv(output.string()).rows.size(), 2u);
 }
 
-TEST(ResultsFiles, AtomicWriteToMissingDirectoryThrowsAndWritesNothing) {
+TEST(ResultsFiles, AtomicWriteBelowAFileThrowsAndWritesNothing) {
   TempDir dir;
-  const fs::path output = dir.path() / "no_such_dir" / "run.csv";
+  std::ofstream(dir.path() / "plain") << "x\n";
+  const fs::path output = dir.path() / "plain" / "run.csv";
   EXPECT_THROW(write_csv_atomic(output.string(), small_table()), std::runtime_error);
   EXPECT_FALSE(fs::exists(output));
+  EXPECT_EQ(first_line(dir.path() / "plain"), "x");
 }
 
 TEST(ResultsFiles, CliSuccessRemovesStalePartial) {

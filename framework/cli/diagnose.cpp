@@ -6,6 +6,7 @@
 #include "components/builtin.hpp"
 #include "framework/cli/command.hpp"
 #include "framework/diagnose/diagnose.hpp"
+#include "framework/io/files.hpp"
 
 namespace pneumo::cli {
 
@@ -17,7 +18,29 @@ struct DiagnoseArgs {
   bool quiet = false;
 };
 
+bool is_report_json(const std::string& first_line) { return first_line == "{"; }
+bool is_report_html(const std::string& first_line) { return first_line == "<!DOCTYPE html>"; }
+
+// The report folder, checked before the diagnosis: not the runs folder (the
+// measured data), and report.json / report.html in it are replaced only when
+// they are reports pneumo wrote, never an input.
+void check_report_folder(const DiagnoseArgs& a) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const std::vector<std::string> inputs{a.model, a.effects};
+  try {
+    if (fs::equivalent(a.out, a.runs, ec))
+      throw std::invalid_argument("--out " + a.out + ": this is the runs folder; write the report to a folder of its own");
+    const std::string again = "choose another --out";
+    check_chosen_output_file((fs::path(a.out) / "report.json").string(), again, inputs, is_report_json);
+    check_chosen_output_file((fs::path(a.out) / "report.html").string(), again, inputs, is_report_html);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(SourceLocation{"--out", 0, 0}, "", "", e.what());
+  }
+}
+
 int diagnose_command(const DiagnoseArgs& a) {
+  check_report_folder(a);
   diagnose::DiagnoseOptions opt;
   opt.threads = std::max(1, a.threads);
   opt.max_effects = std::max(1, a.max_effects);

@@ -10,6 +10,8 @@
 #include <sstream>
 
 #include "framework/cli/command.hpp"
+#include "framework/core/text.hpp"
+#include "framework/io/files.hpp"
 #include "framework/fit/friction_fit.hpp"
 #include "framework/fit/throttle_fit.hpp"
 
@@ -19,17 +21,10 @@ namespace {
 
 using namespace pneumo::fit;
 
-void write_text(const std::string& path, const std::string& text) {
-  if (const auto parent = std::filesystem::path(path).parent_path(); !parent.empty())
-    std::filesystem::create_directories(parent);
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream f(tmp);
-    if (!f) throw std::runtime_error("cannot write " + path);
-    f << text;
-    if (!f.flush()) throw std::runtime_error("cannot write " + path);
-  }
-  std::filesystem::rename(tmp, path);
+// A named output is checked before any work: not the data file, a directory,
+// a device or a link.
+void check_output(const std::string& output, const std::string& data) {
+  if (!output.empty()) check_output_file(output, "-o", {data});
 }
 
 std::string bar_rel(double p_abs, double p_amb) {
@@ -87,9 +82,10 @@ class FitCommand {
     } catch (const std::invalid_argument& e) {
       throw std::invalid_argument(std::string("fit friction: ") + e.what());
     }
+    check_output(output_, data_);
     const DataTable d = read_data_table(data_);
     const auto points = friction_points(d, pressure);
-    const std::string cmd = "pneumo fit friction " + data_ + " --model " + model_ +
+    const std::string cmd = "pneumo fit friction " + one_line(data_) + " --model " + model_ +
                             (pressure == components::FrictionPressure::none ? "" : " --pressure " +
                                                                                       friction_pressure_name(pressure));
     // Eq. 7 with a p0 column: one fit per supply pressure, as Annex B.
@@ -128,7 +124,7 @@ class FitCommand {
       yaml << friction_preset_yaml(c, r, m, pressure == components::FrictionPressure::ec, header);
     }
     if (!output_.empty()) {
-      write_text(output_, yaml.str());
+      write_text_atomic(output_, yaml.str());
       std::cout << "wrote the friction preset to " << output_ << "\n";
     }
     if (!all_converged) std::cerr << "pneumo: the fit did not converge (see above)\n";
@@ -136,10 +132,11 @@ class FitCommand {
   }
 
   int run_throttle() {
+    check_output(toutput_, tdata_);
     const DataTable d = read_data_table(tdata_);
     bool has_z = false;
     const auto pts = throttle_points(d, &has_z);
-    const std::string header = "pneumo fit throttle " + tdata_;
+    const std::string header = "pneumo fit throttle " + one_line(tdata_);
     std::string yaml;
     bool ok = true;
     try {
@@ -162,7 +159,7 @@ class FitCommand {
       throw data_error(tdata_, e.what());
     }
     if (!toutput_.empty()) {
-      write_text(toutput_, yaml);
+      write_text_atomic(toutput_, yaml);
       std::cout << "wrote the throttle parameters to " << toutput_ << "\n";
     }
     if (!ok) std::cerr << "pneumo: the fit did not converge (see above)\n";

@@ -12,6 +12,8 @@
 #include "components/builtin.hpp"
 #include "framework/cli/command.hpp"
 #include "framework/cli/split_list.hpp"
+#include "framework/io/files.hpp"
+#include "framework/io/plot.hpp"
 #include "framework/study/communicator.hpp"
 #include "framework/study/optimize.hpp"
 
@@ -30,29 +32,18 @@ struct OptimizeArgs {
   bool pareto = false, auto_adjust = false, quiet = false;
 };
 
-// The Pareto front over every feasible point evaluated (gnuplot).
+// The Pareto front over every feasible point evaluated.
 void plot_front(const OptimizeProblem& p, const OptimizeResult& r, const std::string& prefix) {
-  const int f1 = 0, f2 = 1;
-  {
-    std::ofstream d(prefix + ".dat");
-    d << std::setprecision(10) << "# all points: " << p.objectives[0] << " " << p.objectives[1] << "\n";
-    for (const auto& h : r.history)
-      if (h.feasible()) d << h.robust[f1] << " " << h.robust[f2] << "\n";
-    d << "\n\n# front\n";
-    for (const auto& f : r.front) d << f.f1 << " " << f.f2 << "\n";
-  }
-  std::ofstream g(prefix + ".gnuplot");
+  std::vector<std::vector<double>> designs, front;
+  for (const auto& h : r.history)
+    if (h.feasible()) designs.push_back({h.robust[0], h.robust[1]});
+  for (const auto& f : r.front) front.push_back({f.f1, f.f2});
   auto label = [&](int i) { return p.objectives[i] + " [" + r.metric_units[i] + "]"; };
-  for (const char* term : {"pngcairo", "svg"}) {
-    g << "set terminal " << term << " size 700,480" << (std::string(term) == "pngcairo" ? " font 'sans,10'" : "")
-      << "\nset termoption noenhanced\nset output '" << prefix << (std::string(term) == "pngcairo" ? ".png" : ".svg") << "'\n"
-      << "set xlabel '" << label(f1) << "'\nset ylabel '" << label(f2) << "'\nset grid\nset key top right\n"
-      << "plot '" << prefix << ".dat' index 0 with points pt 7 ps 0.5 lc rgb '#aaaaaa' title 'designs evaluated', "
-      << "'' index 1 with linespoints pt 7 lw 2 lc rgb '#d62728' title 'Pareto front'\n";
+  try {
+    plot_pareto_front(prefix, label(0), label(1), designs, front);
+  } catch (const std::exception& e) {
+    std::cerr << "pneumo optimize: no plot of the front: " << e.what() << "\n";
   }
-  g.close();
-  if (std::system(("gnuplot '" + prefix + ".gnuplot'").c_str()) != 0)
-    std::cerr << "pneumo optimize: gnuplot failed; the front's data are in " << prefix << ".dat\n";
 }
 
 void print_result(const OptimizeProblem& p, const OptimizeOptions& o, const OptimizeResult& r, bool given) {
@@ -117,8 +108,14 @@ int optimize_command(const OptimizeArgs& a) {
   o.auto_adjust = a.auto_adjust;
   o.progress = !a.quiet;
   const std::string output = a.output.empty() ? fs::path(a.netlist).stem().string() + ".optimum.yaml" : a.output;
-  if (fs::is_directory(output))
-    throw InputError(SourceLocation{"-o", 0, 0}, "", "", "-o " + output + " is a directory, not a file");
+  try {
+    if (a.output.empty())
+      check_chosen_output_file(output, "give -o " + output + " to replace it, or another name", {a.netlist});
+    else
+      check_output_file(output, "-o", {a.netlist});
+  } catch (const std::invalid_argument& e) {
+    throw InputError(SourceLocation{"-o", 0, 0}, "", "", e.what());
+  }
   if (const auto parent = fs::path(output).parent_path(); !parent.empty()) fs::create_directories(parent);
   o.journal = output + ".journal";
   OptimizeResult r;

@@ -19,6 +19,8 @@ namespace pneumo::cli {
 
 namespace {
 
+bool is_sensitivity_header(const std::string& first_line) { return first_line.rfind("metric,parameter,", 0) == 0; }
+
 namespace fs = std::filesystem;
 using namespace pneumo::study;
 
@@ -63,8 +65,13 @@ int sensitivity_command(const SensitivityArgs& a) {
     for (int j = 0; j < k; ++j) s.push_back(ranges[j].lo + u[j] * (ranges[j].hi - ranges[j].lo));
     d.samples.push_back(std::move(s));
   }
-  const std::string output = a.output.empty() ? default_output(a.netlist, ".sensitivity.csv") : a.output;
+  const std::string output = study_output(a, ".sensitivity.csv", is_sensitivity_header, {a.netlist});
   const std::string runs_path = (fs::path(output).parent_path() / fs::path(output).stem()).string() + ".runs.csv";
+  try {
+    check_chosen_output_file(runs_path, "choose another -o", {a.netlist}, is_sweep_results_header);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(SourceLocation{"-o", 0, 0}, "", "", e.what());
+  }
   SweepOptions opt;
   opt.threads = a.threads;
   opt.progress = !a.quiet;

@@ -76,12 +76,21 @@ void write_metrics_csv(const std::string& path, const Netlist& nl, const std::ve
   write_text_atomic(path, csv.str());
 }
 
-// Bad output names are bad input, found before the run.
+// Bad output names are bad input, found before the run. A default name
+// (no -o) never replaces a file that is there.
 void check_outputs(const SimulateArgs& a, const std::string& output) {
+  const std::vector<std::string> inputs{a.netlist};
   try {
-    check_output_file(output, "-o");
-    if (!a.audit_path.empty()) check_output_file(a.audit_path, "--energy-audit");
-    if (!a.metrics_path.empty()) check_output_file(a.metrics_path, "--metrics-out");
+    if (a.output_given)
+      check_output_file(output, "-o", inputs);
+    else
+      check_chosen_output_file(output, "give -o " + output + " to replace it, or another name", inputs);
+    if (!a.audit_path.empty()) check_output_file(a.audit_path, "--energy-audit", inputs);
+    if (!a.metrics_path.empty()) check_output_file(a.metrics_path, "--metrics-out", inputs);
+    if (!a.plot_prefix.empty()) {
+      check_output_file(a.plot_prefix + ".png", "--plot", inputs);
+      check_output_file(a.plot_prefix + ".svg", "--plot", inputs);
+    }
   } catch (const std::invalid_argument& e) {
     throw InputError(SourceLocation{a.netlist, 0, 0}, "", "", e.what());
   }
@@ -146,9 +155,9 @@ int simulate_command(const SimulateArgs& a) {
   if (!run.solver.ok) {
     const std::string partial = write_partial_csv(output, run.table, run.solver.message);
     std::cerr << "pneumo: simulation of " << netlist_path << " failed: " << run.solver.message << "\n";
-    if (!partial.empty())
-      std::cerr << "pneumo: no results written to " << output << "; the rows computed so far are in " << partial
-                << "\n";
+    std::cerr << "pneumo: no results written to " << output << " (a file of that name is left as it was)";
+    if (!partial.empty()) std::cerr << "; the rows computed so far are in " << partial;
+    std::cerr << "\n";
     if (stats) print_stats(run.solver, seconds, std::cerr);
     return 1;
   }

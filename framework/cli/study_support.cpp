@@ -3,6 +3,7 @@
 #include <filesystem>
 #include <iostream>
 
+#include "framework/io/files.hpp"
 #include "framework/study/communicator.hpp"
 
 namespace pneumo::cli {
@@ -20,6 +21,20 @@ void add_study_options(CLI::App* cmd, StudyArgs& a) {
 
 std::string default_output(const std::string& netlist, const char* suffix) {
   return fs::path(netlist).stem().string() + suffix;
+}
+
+std::string study_output(const StudyArgs& a, const char* suffix, bool (*ours)(const std::string&),
+                         const std::vector<std::string>& inputs) {
+  const std::string output = a.output.empty() ? default_output(a.netlist, suffix) : a.output;
+  try {
+    if (a.output.empty())
+      check_chosen_output_file(output, "give -o " + output + " to replace it, or another name", inputs, ours);
+    else
+      check_output_file(output, "-o", inputs);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(SourceLocation{"-o", 0, 0}, "", "", e.what());
+  }
+  return output;
 }
 
 void stop_ranks() {

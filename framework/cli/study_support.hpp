@@ -23,6 +23,13 @@ void add_study_options(CLI::App* cmd, StudyArgs& a);
 // NETLIST_STEM + suffix, in the working directory.
 std::string default_output(const std::string& netlist, const char* suffix);
 
+// The command's output file, checked before any work: the one named with -o
+// (not an input, directory, device or link), or NETLIST_STEM + suffix, which
+// replaces only a file whose first line `ours` accepts (one pneumo wrote).
+// Bad names are InputErrors (exit 2).
+std::string study_output(const StudyArgs& a, const char* suffix, bool (*ours)(const std::string& first_line),
+                         const std::vector<std::string>& inputs);
+
 // After bad input: under mpirun an error on one rank must stop the others,
 // which would otherwise wait for it in a collective call.
 void stop_ranks();

@@ -31,7 +31,7 @@ int sweep_command(const SweepArgs& a) {
     throw InputError(SourceLocation{a.netlist, 1, 1}, "", "", "pneumo sweep: give either --grid NAME=FROM:TO:COUNT ... or --samples FILE");
   const Design d = a.grid.empty() ? samples_design(nl, builtin_registry(), a.samples)
                                   : grid_design(nl, builtin_registry(), a.grid);
-  const std::string output = a.output.empty() ? default_output(a.netlist, ".sweep.csv") : a.output;
+  const std::string output = study_output(a, ".sweep.csv", is_sweep_results_header, {a.netlist, a.samples});
   SweepOptions opt;
   opt.threads = a.threads;
   opt.progress = !a.quiet;

@@ -23,6 +23,14 @@ inline std::string trim(const std::string& s) {
 // The fields of `s` separated by `sep`, each trimmed. A trailing separator
 // gives a trailing empty field ("a,b," has three fields), so that a missing
 // last value is reported as such rather than silently dropped.
+// `s` on one line: line breaks and other control characters made spaces, so
+// that a name quoted in a file's comment or title cannot start a new line.
+inline std::string one_line(std::string s) {
+  for (auto& c : s)
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) c = ' ';
+  return s;
+}
+
 inline std::vector<std::string> split_trimmed(const std::string& s, char sep) {
   std::vector<std::string> out;
   std::string item;

@@ -7,6 +7,7 @@
 
 #include "framework/core/text.hpp"
 #include "framework/core/units.hpp"
+#include "framework/io/files.hpp"
 
 namespace pneumo::fit {
 
@@ -89,11 +90,11 @@ DataTable parse_data_table(const std::string& text, const std::string& file_name
 }
 
 DataTable read_data_table(const std::string& path, double ambient_pressure_pa) {
-  std::ifstream f(path);
-  if (!f) throw InputError(SourceLocation{path, 0, 0}, "", "", "cannot open the data file");
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return parse_data_table(ss.str(), path, ambient_pressure_pa);
+  try {
+    return parse_data_table(read_input_file(path, "data file"), path, ambient_pressure_pa);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(SourceLocation{path, 0, 0}, "", "", e.what());
+  }
 }
 
 }  // namespace pneumo::fit

@@ -9,7 +9,9 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "framework/io/files.hpp"
 #include "framework/io/results.hpp"
+#include "framework/io/spawn.hpp"
 
 namespace pneumo {
 
@@ -17,13 +19,16 @@ namespace fs = std::filesystem;
 
 namespace {
 
+// A gnuplot string literal that is data, never script: single quotes (no
+// escapes are interpreted inside them), a quote doubled, and line breaks and
+// other control characters - which would end the command - made spaces.
 std::string quoted(const std::string& s) {
-  std::string out = "\"";
+  std::string out = "'";
   for (char c : s) {
-    if (c == '"' || c == '\\') out += '\\';
-    out += c;
+    if (c == '\'') out += "''";
+    else out += static_cast<unsigned char>(c) < 0x20 || c == 0x7f ? ' ' : c;
   }
-  return out + "\"";
+  return out + "'";
 }
 
 int column_of(const ResultsTable& table, const std::string& name, const std::string& csv_path) {
@@ -66,34 +71,46 @@ std::string panel_label(const ResultsTable& table, const std::vector<int>& panel
   return names + (table.units[panel[0]].empty() ? "" : " [" + table.units[panel[0]] + "]");
 }
 
-// Writes PREFIX.png and PREFIX.svg from a script whose body draws the plot
-// (`body(term)` gets "png" or "svg" to size fonts), then cleans up.
+// Draws PREFIX.png and PREFIX.svg with gnuplot. Everything gnuplot reads or
+// writes lives in a private folder (the plotted data copied there, the
+// script, the images), so no user's name ever becomes script text; the images
+// are then written to PREFIX.png/.svg as any output is. `body(gp, title)`
+// writes the plot commands; it finds its data as `folder.data(name)`.
 template <class Body>
 void run_gnuplot(const std::string& prefix, int height, const std::string& title, const Body& body) {
-  if (const auto parent = fs::path(prefix).parent_path(); !parent.empty()) fs::create_directories(parent);
-  const std::string script_path = prefix + ".gnuplot";
+  const std::string png = prefix + ".png", svg = prefix + ".svg";
+  check_output_file(png, "plot");
+  check_output_file(svg, "plot");
+  const PrivateFolder folder;
+  const std::string script_path = folder.path("plot.gnuplot");
   {
     std::ofstream gp(script_path);
-    if (!gp) throw std::runtime_error("plot: cannot write " + script_path);
+    if (!gp) throw std::runtime_error("plot: cannot write its script in " + folder.path(""));
     gp << "set datafile separator ','\nset grid\n";
     for (const std::string term : {"pngcairo", "svg"}) {
       const std::string ext = term == "pngcairo" ? ".png" : ".svg";
       gp << "set terminal " << term << " size 900," << height << (term == "pngcairo" ? " font 'sans,10'" : "")
          << "\n"
          << "set termoption noenhanced\n"
-         << "set output " << quoted(prefix + ext) << "\n";
-      body(gp, title);
+         << "set output " << quoted(folder.path("plot" + ext)) << "\n";
+      body(gp, title, folder);
       gp << "set output\n";
     }
   }
-  const std::string cmd = "gnuplot " + quoted(script_path) + " 2>" + quoted(prefix + ".gnuplot.log");
-  const int rc = std::system(cmd.c_str());
-  if (rc != 0)
-    throw std::runtime_error("plot: gnuplot failed (is the Debian package gnuplot-nox installed?); see " + prefix +
-                             ".gnuplot.log");
-  std::error_code ec;
-  fs::remove(prefix + ".gnuplot.log", ec);
-  fs::remove(script_path, ec);
+  run_program({"gnuplot", script_path}, folder.path("gnuplot.log"), "gnuplot-nox");
+  write_text_atomic(png, read_input_file(folder.path("plot.png"), "plot"));
+  write_text_atomic(svg, read_input_file(folder.path("plot.svg"), "plot"));
+}
+
+// Writes the rows of `table` (no header) as the CSV gnuplot reads.
+void write_rows(const std::string& path, const std::vector<std::vector<double>>& rows) {
+  std::ofstream out(path);
+  out << std::setprecision(10);
+  for (const auto& row : rows) {
+    for (std::size_t i = 0; i < row.size(); ++i) out << (i ? "," : "") << row[i];
+    out << "\n";
+  }
+  if (!out) throw std::runtime_error("plot: cannot write its data in " + path);
 }
 
 }  // namespace
@@ -103,7 +120,9 @@ void plot_results(const std::string& csv_path, const std::string& prefix, const 
   const ResultsTable table = read_csv(csv_path);
   const auto panels = panels_of(table, columns, csv_path);
   const int n = static_cast<int>(panels.size());
-  run_gnuplot(prefix, 220 * n + 60, title, [&](std::ostream& gp, const std::string& t) {
+  run_gnuplot(prefix, 220 * n + 60, title, [&](std::ostream& gp, const std::string& t, const PrivateFolder& folder) {
+    const std::string data = folder.path("data.csv");
+    write_rows(data, table.rows);
     gp << "set multiplot layout " << n << ",1 title " << quoted(t) << "\n"
        << "set lmargin 12\n";  // the panels' time axes aligned whatever their labels
     for (int k = 0; k < n; ++k) {
@@ -114,7 +133,7 @@ void plot_results(const std::string& csv_path, const std::string& prefix, const 
          << (k + 1 == n ? "set xlabel 't [s]'\n" : "unset xlabel\n") << "plot ";
       for (std::size_t j = 0; j < panel.size(); ++j) {
         const int c = panel[j];
-        gp << (j ? ", " : "") << quoted(csv_path) << " every ::1 using 1:" << (c + 1) << " with lines lw 2 title "
+        gp << (j ? ", " : "") << quoted(data) << " using 1:" << (c + 1) << " with lines lw 2 title "
            << quoted(label.empty() ? with_unit(table, c) : table.names[c]);
       }
       gp << "\n";
@@ -149,20 +168,15 @@ void plot_step_diagram(const std::string& csv_path, const std::string& prefix, c
     lo.push_back(table.rows[0][c]), hi.push_back(table.rows[0][c]);
     for (const auto& r : table.rows) lo.back() = std::min(lo.back(), r[c]), hi.back() = std::max(hi.back(), r[c]);
   }
-  const std::string data_path = prefix + ".steps.csv";
-  if (const auto parent = fs::path(prefix).parent_path(); !parent.empty()) fs::create_directories(parent);
+  std::vector<std::vector<double>> lanes;
   {
-    std::ofstream out(data_path);
-    if (!out) throw std::runtime_error("plot: cannot write " + data_path);
-    out << std::setprecision(10);
     for (std::size_t k = 0; k + 1 < change.size(); ++k) {
       const double t0 = table.rows[change[k]][0], t1 = table.rows[change[k + 1]][0];
       for (std::size_t i = change[k]; i <= change[k + 1]; ++i) {
         const auto& row = table.rows[i];
-        out << (k + 1) + (t1 > t0 ? (row[0] - t0) / (t1 - t0) : 0.0);
+        lanes.push_back({(k + 1) + (t1 > t0 ? (row[0] - t0) / (t1 - t0) : 0.0)});
         for (std::size_t j = 0; j < cols.size(); ++j)
-          out << "," << (hi[j] > lo[j] ? (row[cols[j]] - lo[j]) / (hi[j] - lo[j]) : 0.0);
-        out << "\n";
+          lanes.back().push_back(hi[j] > lo[j] ? (row[cols[j]] - lo[j]) / (hi[j] - lo[j]) : 0.0);
       }
     }
   }
@@ -175,7 +189,9 @@ void plot_step_diagram(const std::string& csv_path, const std::string& prefix, c
     label << std::fixed << std::setprecision(3) << table.rows[change[k]][0];
     times << (k ? ", " : "") << quoted(label.str()) << " " << k + 1;
   }
-  run_gnuplot(prefix, 150 * n + 120, title, [&](std::ostream& gp, const std::string& t) {
+  run_gnuplot(prefix, 150 * n + 120, title, [&](std::ostream& gp, const std::string& t, const PrivateFolder& folder) {
+    const std::string data_path = folder.path("steps.csv");
+    write_rows(data_path, lanes);
     gp << "set multiplot layout " << n << ",1 title "
        << quoted(t + ": displacement-step diagram (top axis: transition times in s)") << "\n"
        << "set key off\nset xrange [1:" << last << "]\nset yrange [-0.15:1.15]\nset ytics ('0' 0, '1' 1)\n"
@@ -187,8 +203,18 @@ void plot_step_diagram(const std::string& csv_path, const std::string& prefix, c
     }
     gp << "unset multiplot\n";
   });
-  std::error_code ec;
-  fs::remove(data_path, ec);
+}
+
+void plot_pareto_front(const std::string& prefix, const std::string& x_label, const std::string& y_label,
+                       const std::vector<std::vector<double>>& designs, const std::vector<std::vector<double>>& front) {
+  run_gnuplot(prefix, 480, "", [&](std::ostream& gp, const std::string&, const PrivateFolder& folder) {
+    write_rows(folder.path("designs.csv"), designs);
+    write_rows(folder.path("front.csv"), front);
+    gp << "set xlabel " << quoted(x_label) << "\nset ylabel " << quoted(y_label) << "\nset key top right\n"
+       << "plot " << quoted(folder.path("designs.csv"))
+       << " using 1:2 with points pt 7 ps 0.5 lc rgb '#aaaaaa' title 'designs evaluated', "
+       << quoted(folder.path("front.csv")) << " using 1:2 with linespoints pt 7 lw 2 lc rgb '#d62728' title 'Pareto front'\n";
+  });
 }
 
 }  // namespace pneumo

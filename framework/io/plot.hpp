@@ -23,4 +23,9 @@ void plot_results(const std::string& csv_path, const std::string& prefix, const 
 void plot_step_diagram(const std::string& csv_path, const std::string& prefix, const std::vector<std::string>& columns,
                        const std::string& step_column, const std::string& title = "");
 
+// A two-objective plot: every design evaluated (grey points) and the Pareto
+// front (a red line), to PREFIX.png and PREFIX.svg.
+void plot_pareto_front(const std::string& prefix, const std::string& x_label, const std::string& y_label,
+                       const std::vector<std::vector<double>>& designs, const std::vector<std::vector<double>>& front);
+
 }  // namespace pneumo

@@ -1,6 +1,5 @@
 #include "framework/io/results.hpp"
 
-#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
@@ -8,8 +7,6 @@
 #include <stdexcept>
 
 namespace pneumo {
-
-namespace fs = std::filesystem;
 
 void ResultsTable::drop_columns(const std::string& prefix) {
   std::vector<std::size_t> keep;
@@ -57,80 +54,48 @@ void write_table(std::ostream& out, const ResultsTable& table) {
 
 }  // namespace
 
-void write_text_atomic(const std::string& path, const std::string& text) {
-  const fs::path target(path);
-  std::error_code ec;
-  if (target.has_parent_path()) fs::create_directories(target.parent_path(), ec);
-  const fs::path tmp = target.string() + ".writing";
-  {
-    std::ofstream out(tmp);
-    out << text;
-    out.flush();
-    if (!out) {
-      fs::remove(tmp, ec);
-      throw std::runtime_error("cannot write '" + path + "'");
-    }
-  }
-  fs::rename(tmp, target, ec);
-  if (ec) {
-    const std::string why = ec.message();
-    fs::remove(tmp, ec);
-    throw std::runtime_error("cannot move '" + tmp.string() + "' to '" + path + "': " + why);
-  }
-}
-
-void check_output_file(const std::string& path, const std::string& option) {
-  if (path.empty()) throw std::invalid_argument(option + " \"\": give a file name");
-  std::error_code ec;
-  if (fs::is_directory(path, ec))
-    throw std::invalid_argument(option + " " + path + ": this is a directory; give a file name in it");
-}
-
 void write_csv_atomic(const std::string& path, const ResultsTable& table) {
-  const fs::path target(path);
-  const fs::path tmp = target.string() + ".writing";
-  {
-    std::ofstream out(tmp);
-    if (!out) throw std::runtime_error("cannot write results file '" + path + "'");
-    write_table(out, table);
-    out.flush();
-    if (!out) {
-      std::error_code ec;
-      fs::remove(tmp, ec);
-      throw std::runtime_error("error while writing results file '" + path + "'");
-    }
-  }
-  std::error_code ec;
-  fs::rename(tmp, target, ec);
-  if (ec) {
-    const std::string why = ec.message();
-    fs::remove(tmp, ec);
-    throw std::runtime_error("cannot move results into '" + path + "': " + why);
-  }
-  fs::remove(partial_csv_path(path), ec);
+  std::ostringstream out;
+  write_table(out, table);
+  write_text_atomic(path, out.str());
+  remove_if_ours(partial_csv_path(path), is_partial_csv_header);
 }
 
 std::string partial_csv_path(const std::string& path) {
-  fs::path partial(path);
+  std::filesystem::path partial(path);
   partial.replace_extension(".partial.csv");
   return partial.string();
 }
 
+namespace {
+constexpr const char* kIncomplete = "# INCOMPLETE: the run failed; ";
+}
+
+bool is_partial_csv_header(const std::string& first_line) { return first_line.rfind("# INCOMPLETE:", 0) == 0; }
+
 std::string write_partial_csv(const std::string& path, const ResultsTable& table, const std::string& reason) {
-  std::error_code ec;
-  fs::remove(path, ec);
-  const fs::path partial = partial_csv_path(path);
-  std::ofstream out(partial);
-  if (!out) return "";
+  const std::string partial = partial_csv_path(path);
+  try {
+    check_chosen_output_file(partial, "", {}, is_partial_csv_header);
+  } catch (const std::invalid_argument&) {
+    return "";
+  }
   std::string one_line = reason;
   for (auto& ch : one_line)
-    if (ch == '\n') ch = ' ';
-  out << "# INCOMPLETE: the run failed; " << one_line << "\n";
+    if (ch == '\n' || ch == '\r') ch = ' ';
+  std::ostringstream out;
+  out << kIncomplete << one_line << "\n";
   write_table(out, table);
-  return partial.string();
+  try {
+    write_text_atomic(partial, out.str());
+  } catch (const std::exception&) {
+    return "";
+  }
+  return partial;
 }
 
 ResultsTable read_csv(const std::string& path) {
+  check_input_file(path, "results file");
   std::ifstream in(path);
   if (!in) throw std::runtime_error("cannot open '" + path + "'");
   ResultsTable t;

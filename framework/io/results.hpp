@@ -1,13 +1,15 @@
-// Results files. A results file is either complete or absent: it is written
-// to a temporary file beside the target and renamed into place only when the
-// run has succeeded. A failed run removes any stale file of that name and
-// leaves its data in NAME.partial.csv, whose first line says it is incomplete.
+// Results files. A results file is either complete or untouched: it is
+// written through framework/io/files (a temporary beside the target, renamed
+// into place only when the run has succeeded). A failed run leaves the target
+// as it was and its rows in NAME.partial.csv, whose first line says it is
+// incomplete.
 #pragma once
 
 #include <string>
 #include <vector>
 
 #include "framework/core/units.hpp"
+#include "framework/io/files.hpp"
 
 namespace pneumo {
 
@@ -25,26 +27,22 @@ struct ResultsTable {
   void drop_columns(const std::string& prefix);
 };
 
-// Writes `text` to PATH.writing (creating PATH's directory) and renames it
-// to PATH, so that PATH is never half-written. Throws std::runtime_error
-// naming the path and the reason.
-void write_text_atomic(const std::string& path, const std::string& text);
-
-// Before any work: throws std::invalid_argument if `path` cannot name an
-// output file (empty, or a directory); `option` names the argument ("-o").
-void check_output_file(const std::string& path, const std::string& option);
-
 // Header "t [s],p [Pa],...". Throws std::runtime_error naming the path.
-// On success also removes a stale PATH.partial.csv left by an earlier failed
-// run, so that the directory never holds results from two different runs.
+// On success also removes a stale PATH.partial.csv that an earlier failed run
+// of pneumo left, so that the directory never holds results of two runs.
 void write_csv_atomic(const std::string& path, const ResultsTable& table);
 
 // The name of the partial file for results path `path`: "out.csv" ->
 // "out.partial.csv", "out" -> "out.partial.csv".
 std::string partial_csv_path(const std::string& path);
 
-// For a failed run: removes `path` if present, writes PATH.partial.csv with a
-// leading "# INCOMPLETE ..." comment line. Returns the partial file's path.
+// Whether a first line is that of a partial file pneumo wrote.
+bool is_partial_csv_header(const std::string& first_line);
+
+// For a failed run: writes PATH.partial.csv with a leading "# INCOMPLETE ..."
+// comment line, leaving PATH as it was. A PATH.partial.csv that pneumo did not
+// write is not replaced: then nothing is written and "" returned. Returns the
+// partial file's path.
 std::string write_partial_csv(const std::string& path, const ResultsTable& table, const std::string& reason);
 
 // Read a CSV written by write_csv_atomic (or any numeric CSV with a header).

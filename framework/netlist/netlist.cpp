@@ -1,5 +1,7 @@
 #include "framework/netlist/netlist.hpp"
 
+#include "framework/io/files.hpp"
+
 #include "framework/netlist/metric_reader.hpp"
 #include "framework/netlist/reader.hpp"
 #include "framework/netlist/yaml_location.hpp"
@@ -57,11 +59,11 @@ const TopParameter* Netlist::parameter(const std::string& name) const {
 Netlist load_netlist(const std::string& path) {
   // There is no line to point at: the message names the file only.
   const SourceLocation where{path, 0, 0};
-  std::error_code ec;
-  if (!std::filesystem::exists(path, ec))
-    throw InputError(where, "", "", "cannot open the netlist file: no such file");
-  if (std::filesystem::is_directory(path, ec))
-    throw InputError(where, "", "", "cannot read the netlist: this is a directory, not a file");
+  try {
+    check_input_file(path, "netlist");
+  } catch (const std::invalid_argument& e) {
+    throw InputError(where, "", "", std::string("cannot open the netlist file (") + e.what() + ")");
+  }
   errno = 0;
   std::ifstream in(path);
   if (!in)

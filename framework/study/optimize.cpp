@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstring>
 #include <deque>
+#include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
@@ -23,6 +24,7 @@
 #include "components/builtin.hpp"
 #include "framework/core/text.hpp"
 #include "framework/core/units.hpp"
+#include "framework/io/files.hpp"
 #include "framework/io/results.hpp"
 #include "framework/study/sweep.hpp"
 
@@ -114,7 +116,10 @@ class RunJournal {
  public:
   RunJournal(const std::string& path, const std::string& identity) : path_(path) {
     if (path.empty()) return;
-    std::ifstream in(path);
+    std::error_code ec;
+    const bool present = std::filesystem::exists(std::filesystem::symlink_status(path, ec));
+    if (present) check_input_file(path, "journal");
+    std::ifstream in(present ? path : std::string());
     std::string line;
     if (in && std::getline(in, line)) {
       if (line != identity)
@@ -126,9 +131,14 @@ class RunJournal {
         if (comma != std::string::npos && !line.empty() && line.back() == ';') done_[line.substr(0, comma)] = line;
       }
     }
-    out_.open(path, std::ios::app);
-    if (!in) out_ << identity << "\n" << std::flush;
+    out_ = open_journal(path);
+    if (!in) write(identity);
   }
+  ~RunJournal() {
+    if (out_) std::fclose(out_);
+  }
+  RunJournal(const RunJournal&) = delete;
+  RunJournal& operator=(const RunJournal&) = delete;
   // The recorded line of a run (key,ok|failed,metrics...;), or "".
   std::string find(const std::string& key) const {
     const auto it = done_.find(key);
@@ -137,13 +147,15 @@ class RunJournal {
   void write(const std::string& line) {
     if (path_.empty()) return;
     std::lock_guard<std::mutex> lock(mutex_);
-    out_ << line << "\n" << std::flush;
+    const std::string text = line + "\n";
+    if (std::fwrite(text.data(), 1, text.size(), out_) != text.size() || std::fflush(out_) != 0)
+      throw std::runtime_error("cannot write the journal '" + path_ + "'");
   }
 
  private:
   std::string path_;
   std::map<std::string, std::string> done_;
-  std::ofstream out_;
+  std::FILE* out_ = nullptr;
   std::mutex mutex_;
 };
 
@@ -151,10 +163,7 @@ class Evaluator {
  public:
   Evaluator(const std::string& netlist_path, const OptimizeProblem& p, const OptimizeOptions& o)
       : problem_(p), options_(o), registry_(builtin_registry()) {
-    std::ifstream in(netlist_path);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    text_ = ss.str();
+    text_ = read_input_file(netlist_path, "netlist");
     path_ = netlist_path;
     const Netlist nl = parse_netlist(text_, netlist_path);
     std::vector<std::string> names = p.objectives;

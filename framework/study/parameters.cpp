@@ -6,6 +6,7 @@
 
 #include "framework/core/text.hpp"
 #include "framework/core/units.hpp"
+#include "framework/io/files.hpp"
 
 namespace pneumo::study {
 
@@ -170,6 +171,11 @@ Design grid_design(const Netlist& nl, const Registry& registry, const std::vecto
 }
 
 Design samples_design(const Netlist& nl, const Registry& registry, const std::string& path) {
+  try {
+    check_input_file(path, "samples file");
+  } catch (const std::invalid_argument& e) {
+    throw InputError(SourceLocation{path, 0, 0}, "", "", e.what());
+  }
   std::ifstream in(path);
   if (!in) throw InputError(SourceLocation{path, 0, 0}, "", "", "cannot open the samples file");
   Design d;

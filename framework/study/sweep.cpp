@@ -17,6 +17,7 @@
 
 #include "components/builtin.hpp"
 #include "framework/core/parallel.hpp"
+#include "framework/io/files.hpp"
 
 namespace pneumo::study {
 
@@ -149,8 +150,12 @@ std::vector<RunRecord> read_journals(const std::string& output, const std::strin
   std::vector<RunRecord> out;
   std::set<long> seen;
   for (const auto& path : journal_files(output)) {
-    std::ifstream in(path, std::ios::binary);
-    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    std::string text;
+    try {
+      text = read_input_file(path.string(), "sweep journal");
+    } catch (const std::invalid_argument& e) {
+      throw InputError(SourceLocation{path.string(), 0, 0}, "", "", e.what());
+    }
     if (text.empty()) continue;
     const auto first_end = text.find('\n');
     if (first_end == std::string::npos || text.substr(0, first_end) != identity)
@@ -175,18 +180,13 @@ std::vector<RunRecord> read_journals(const std::string& output, const std::strin
 class Journal {
  public:
   Journal(const fs::path& path, const std::string& identity) : path_(path) {
+    file_ = open_journal(path.string());  // refuses a link, device or FIFO planted there
     // Drop a trailing partial line from an earlier kill before appending.
+    std::string text = read_input_file(path.string(), "sweep journal");
+    const auto last = text.rfind('\n');
     std::error_code ec;
-    if (fs::exists(path, ec)) {
-      std::ifstream in(path, std::ios::binary);
-      std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-      const auto last = text.rfind('\n');
-      fs::resize_file(path, last == std::string::npos ? 0 : last + 1, ec);
-    }
-    const bool fresh = !fs::exists(path, ec) || fs::file_size(path, ec) == 0;
-    file_ = std::fopen(path.string().c_str(), "ab");
-    if (!file_) throw std::runtime_error("cannot write the sweep journal '" + path.string() + "'");
-    if (fresh) write(identity + "\n");
+    fs::resize_file(path, last == std::string::npos ? 0 : last + 1, ec);
+    if (last == std::string::npos) write(identity + "\n");
   }
   ~Journal() {
     if (file_) std::fclose(file_);
@@ -240,36 +240,27 @@ class Progress {
   long last_done_ = -1;
 };
 
+constexpr const char* kResultsHeader = "run,status";
+
 void write_results(const std::string& output, const Design& d, const std::vector<Metric>& metrics,
                    const std::vector<RunRecord>& records) {
-  const fs::path target(output);
-  const fs::path tmp = target.string() + ".writing";
-  {
-    std::ofstream out(tmp);
-    if (!out) throw std::runtime_error("cannot write results file '" + output + "'");
-    out << "run,status";
-    for (const auto& p : d.parameters) out << "," << p.name << " [" << p.display_unit << "]";
-    for (const auto& m : metrics) out << "," << m.name << " [" << m.unit << "]";
-    out << ",steps,reason\n";
-    for (const auto& r : records) {
-      out << r.index << (r.ok ? ",ok" : ",failed");
-      for (std::size_t j = 0; j < d.parameters.size(); ++j) out << "," << shortest(d.parameters[j].shown(d.samples[r.index][j]));
-      for (std::size_t k = 0; k < metrics.size(); ++k) out << "," << (r.ok ? shortest(r.metrics[k]) : "");
-      out << "," << r.steps << "," << quoted(r.reason) << "\n";
-    }
-    out.flush();
-    if (!out) {
-      std::error_code ec;
-      fs::remove(tmp, ec);
-      throw std::runtime_error("error while writing results file '" + output + "'");
-    }
+  std::ostringstream out;
+  out << kResultsHeader;
+  for (const auto& p : d.parameters) out << "," << p.name << " [" << p.display_unit << "]";
+  for (const auto& m : metrics) out << "," << m.name << " [" << m.unit << "]";
+  out << ",steps,reason\n";
+  for (const auto& r : records) {
+    out << r.index << (r.ok ? ",ok" : ",failed");
+    for (std::size_t j = 0; j < d.parameters.size(); ++j) out << "," << shortest(d.parameters[j].shown(d.samples[r.index][j]));
+    for (std::size_t k = 0; k < metrics.size(); ++k) out << "," << (r.ok ? shortest(r.metrics[k]) : "");
+    out << "," << r.steps << "," << quoted(r.reason) << "\n";
   }
-  std::error_code ec;
-  fs::rename(tmp, target, ec);
-  if (ec) throw std::runtime_error("cannot move results into '" + output + "': " + ec.message());
+  write_text_atomic(output, out.str());
 }
 
 }  // namespace
+
+bool is_sweep_results_header(const std::string& first_line) { return first_line.rfind(kResultsHeader, 0) == 0; }
 
 RunRecord run_one(const Netlist& netlist, const Registry& registry, const std::vector<StudyParameter>& parameters,
                   const Sample& sample, const std::vector<Metric>& metrics,
@@ -300,9 +291,11 @@ RunRecord run_one(const Netlist& netlist, const Registry& registry, const std::v
 namespace {
 
 std::string read_netlist_text(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(SourceLocation{path, 0, 0}, "", "", "cannot open the netlist");
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  try {
+    return read_input_file(path, "netlist");
+  } catch (const std::invalid_argument& e) {
+    throw InputError(SourceLocation{path, 0, 0}, "", "", e.what());
+  }
 }
 
 // The runs journalled by an earlier, interrupted sweep of the same study:
@@ -401,7 +394,7 @@ SweepSummary run_sweep(const std::string& netlist_path, const Design& design, co
   const std::string text = read_netlist_text(netlist_path);
   const Netlist base = parse_netlist(text, netlist_path);
   try {
-    check_output_file(output, "-o");
+    check_output_file(output, "-o", {netlist_path});
   } catch (const std::invalid_argument& e) {
     throw InputError(SourceLocation{"-o", 0, 0}, "", "", e.what());
   }
@@ -434,6 +427,7 @@ SweepSummary run_sweep(const std::string& netlist_path, const Design& design, co
 }
 
 SweepTable read_sweep_csv(const std::string& path) {
+  check_input_file(path, "sweep results");
   std::ifstream in(path);
   if (!in) throw std::runtime_error("cannot open '" + path + "'");
   SweepTable t;

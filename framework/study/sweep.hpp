@@ -39,6 +39,9 @@ struct SweepOptions {
   AssemblyOptions assembly;            // alias elimination (default on)
 };
 
+// Whether a first line is the header of a sweep's results file.
+bool is_sweep_results_header(const std::string& first_line);
+
 struct SweepSummary {
   long runs = 0;        // in the design
   long done_before = 0; // found in journals (resumed)
