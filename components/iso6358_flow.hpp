@@ -10,27 +10,17 @@ namespace pneumo::components {
 // Flow function phi(r) of the pressure ratio r = p_down/p_up <= 1:
 //   1                                  r <= b          (choked, eq. 16)
 //   sqrt(1 - ((r - b)/(1 - b))^2)      b < r <= r_lam  (subsonic, eq. 15)
-//   laminar continuation               r > r_lam, u = 1 - r, u0 = 1 - r_lam:
-//     phi = a u + (a - s) u^2 (u0 - u) / u0^2
-// with a = phi(r_lam) / u0, the conductance at zero flow of the linear
-// continuation, and s = -dphi/dr of eq. 15 at r_lam: phi and its slope are
-// continuous at r_lam (s < a, so phi rises monotonically from 0). A kink
-// there (the slope halves for b = 0.3) stalls Newton on a node without
-// volume whose pressure settles at the kink - a valve's exhaust into a
-// silencer as the flow dies away (issue 36).
+//   phi(r_lam) (1 - r)/(1 - r_lam)     r > r_lam       (laminar continuation)
 template <class T>
 T iso6358_phi(const T& r, double b, double r_lam) {
-  const double x_lam = (r_lam - b) / (1.0 - b);
-  const double phi_lam = std::sqrt(1.0 - x_lam * x_lam);
   auto subsonic = [&] {
     const T x = (min(r, T(r_lam)) - b) / (1.0 - b);
     return sqrt(1.0 - max(x, T(0.0)) * max(x, T(0.0)));
   };
   auto laminar = [&] {
-    const double u0 = 1.0 - r_lam, a = phi_lam / u0;
-    const double s = x_lam / ((1.0 - b) * phi_lam);
-    const T u = 1.0 - r;
-    return a * u + (a - s) / (u0 * u0) * u * u * (u0 - u);
+    const double x_lam = (r_lam - b) / (1.0 - b);
+    const double phi_lam = std::sqrt(1.0 - x_lam * x_lam);
+    return phi_lam * (1.0 - r) / (1.0 - r_lam);
   };
   return select_lazy<T>(value(r) <= r_lam, subsonic, laminar);
 }
