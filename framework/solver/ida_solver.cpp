@@ -435,12 +435,12 @@ Integration::Next Integration::step() {
 // without volume, out of the error test) are held on their equations only
 // by the Newton test, which IDA passes after one iteration with an old
 // matrix: when a node's flow law steepens as its flows die away (a valve's
-// exhaust into a silencer after a stop contact) the node's residual error
-// is amplified step by step by the order-5 predictor, alternating and
-// growing, until no step converges (issue 36: 54 of the meter-out grid's
-// 1512 runs, after the flow law's kink was smoothed). The states are still
-// accurate: restart from the start of the last step with consistent
-// values, at most 3 times between two output times.
+// exhaust into a silencer after a stop contact, its pressure ratio near the
+// ISO 6358 law's laminar kink) the node's residual error is amplified step
+// by step by the order-5 predictor, alternating and growing, until no step
+// converges (issue 36: 154 of the meter-out grid's 1512 runs). The states
+// are still accurate: restart from the start of the last step with
+// consistent values, at most 3 times between two output times.
 bool Integration::recover(double t_ret) {
   if (recoveries_ - recoveries_at_budget_ >= 3) return false;
   ++recoveries_;
