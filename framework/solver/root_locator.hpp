@@ -16,18 +16,35 @@ namespace pneumo {
 class RootLocator {
  public:
   explicit RootLocator(int n_roots)
-      : n_(n_roots), root_info_(std::max(1, n_roots)), lo_(n_roots), hi_(n_roots), c_(n_roots), t_of_(n_roots) {}
+      : n_(n_roots),
+        root_info_(std::max(1, n_roots)),
+        lo_(n_roots),
+        hi_(n_roots),
+        c_(n_roots),
+        t_of_(n_roots),
+        g_root_(n_roots),
+        g_before_(n_roots) {}
   int size() const { return n_; }
 
   // Start an interval at t with the root functions g there (filled by the
   // caller into low()); `fired`: the roots just handled, which count as
   // crossed whatever rounding left at t.
   std::vector<double>& low() { return lo_; }
+  // A handled root left on its old side counts as crossed only if g is
+  // still what it was where the crossing was located (rounding, or exactly
+  // 0); an event that re-armed it (a timer started again, due later) moved
+  // g away, and its next crossing is a new event, however soon (issue 29: a
+  // timer due 1 us after its previous event was lost, or fired at once).
   void start(double t, const std::vector<int>* fired) {
     t_lo_ = t;
     if (!fired) return;
-    for (int i = 0; i < n_; ++i)
-      if ((*fired)[i] != 0) lo_[i] = (*fired)[i] > 0 ? std::max(lo_[i], 1e-300) : std::min(lo_[i], -1e-300);
+    for (int i = 0; i < n_; ++i) {
+      const int dir = (*fired)[i];
+      if (dir == 0) continue;
+      const double tol = 1e-9 * (std::abs(g_root_[i]) + std::abs(g_before_[i]));
+      if (std::abs(lo_[i] - g_root_[i]) > tol) continue;  // re-armed: keep its side
+      lo_[i] = dir > 0 ? std::max(lo_[i], 1e-300) : std::min(lo_[i], -1e-300);
+    }
   }
   // The root functions at the step's end, filled by the caller.
   std::vector<double>& high() { return hi_; }
@@ -78,6 +95,7 @@ class RootLocator {
   template <class G>
   double illinois(int i, double t_hi, double ttol, G& g_at) {
     double a = t_lo_, fa = lo_[i], b = t_hi, fb = hi_[i];
+    g_before_[i] = fa, g_root_[i] = fb;  // g at a and b, without Illinois' halving
     int side = 0;
     for (int it = 0; it < 60 && b - a > ttol && fb != 0.0; ++it) {
       double c = b - fb * (b - a) / (fb - fa);
@@ -86,10 +104,12 @@ class RootLocator {
       const double fc = c_[i];
       if (crosses(fa, fc)) {  // the root lies in (a, c]
         b = c, fb = fc;
+        g_root_[i] = fc;
         if (side == -1) fa *= 0.5;
         side = -1;
       } else {
         a = c, fa = fc;
+        g_before_[i] = fc;
         if (side == 1) fb *= 0.5;
         side = 1;
       }
@@ -100,6 +120,7 @@ class RootLocator {
   int n_;
   std::vector<int> root_info_;
   std::vector<double> lo_, hi_, c_, t_of_;
+  std::vector<double> g_root_, g_before_;  // each root's g at its located crossing and just before
   double t_lo_ = 0.0;
 };
 
