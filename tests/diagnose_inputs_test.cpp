@@ -113,8 +113,9 @@ TEST(DiagnoseInputs, HeaderUnitsAreConvertedToSi) {
     o << t * 1e3 << "," << p / 1e5 << "," << T - 273.15;
   }));
   const Runs si(si_csv());
-  const auto& a = run_named(with_units.load(), "cal");
-  const auto& b = run_named(si.load(), "cal");
+  const auto runs_a = with_units.load(), runs_b = si.load();
+  const auto& a = run_named(runs_a, "cal");
+  const auto& b = run_named(runs_b, "cal");
   ASSERT_EQ(a.t.size(), b.t.size());
   for (std::size_t i = 0; i < a.t.size(); ++i) {
     EXPECT_NEAR(a.t[i], b.t[i], 1e-12);
@@ -129,7 +130,8 @@ TEST(DiagnoseInputs, GaugePressureAddsTheModelsAmbient) {
   const Runs r(csv("t, p [barg], T", 1.0, [](std::ostream& o, double t, double, double T) {
     o << t << "," << 4.0 << "," << T;
   }));
-  const auto& cal = run_named(r.load(), "cal");
+  const auto runs = r.load();
+  const auto& cal = run_named(runs, "cal");
   EXPECT_NEAR(cal.y[0][0], 4.95e5, 1e-6);
 }
 

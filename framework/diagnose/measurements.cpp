@@ -122,6 +122,12 @@ std::string si_unit_of(const std::vector<Probe>& probes, const std::string& name
 // often a time column in another unit than its header says.
 constexpr double kMinSpanShare = 0.1;
 
+std::string seconds(double t) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.6g", t);
+  return buf;
+}
+
 void check_time_span(const MeasuredRun& run, const Netlist& model, const std::string& path, int first_line,
                      int last_line, const units::Unit& t_unit) {
   const double t0 = model.simulation.t_start, t1 = model.simulation.t_end;
@@ -130,20 +136,20 @@ void check_time_span(const MeasuredRun& run, const Netlist& model, const std::st
   const std::string unit_hint =
       t_unit.scale == 1 ? " If the time column is not in seconds, give its unit in the header (e.g. 't [ms]')."
                         : " Check the time column's unit in the header.";
-  const std::string model_span = "the model " + model.file + " simulates t = " + rounded(t0, 6) + " s to t_end = " +
-                                 rounded(t1, 6) + " s";
+  const std::string model_span = "the model " + model.file + " simulates t = " + seconds(t0) + " s to t_end = " +
+                                 seconds(t1) + " s";
   if (run.t.front() < t0 - tol)
     throw InputError(SourceLocation{path, first_line, 1}, "", "t",
-                     "the measured run starts at t = " + rounded(run.t.front(), 6) + " s, before the simulation: " +
+                     "the measured run starts at t = " + seconds(run.t.front()) + " s, before the simulation: " +
                          model_span + "." + unit_hint);
   if (run.t.back() > t1 + tol)
     throw InputError(SourceLocation{path, last_line, 1}, "", "t",
-                     "the measured run ends at t = " + rounded(run.t.back(), 6) + " s, after the simulation: " +
+                     "the measured run ends at t = " + seconds(run.t.back()) + " s, after the simulation: " +
                          model_span + "; raise simulation.t_end to the measured span or cut the data." + unit_hint);
   if (run.t.back() - run.t.front() < kMinSpanShare * (t1 - t0))
     throw InputError(SourceLocation{path, last_line, 1}, "", "t",
-                     "the measured run spans only t = " + rounded(run.t.front(), 6) + " s to " +
-                         rounded(run.t.back(), 6) + " s, less than a tenth of the simulation: " + model_span +
+                     "the measured run spans only t = " + seconds(run.t.front()) + " s to " +
+                         seconds(run.t.back()) + " s, less than a tenth of the simulation: " + model_span +
                          "; set simulation.t_end to the measured span." + unit_hint);
 }
 
