@@ -49,9 +49,7 @@ int diagnose_command(const DiagnoseArgs& a) {
   std::filesystem::create_directories(a.out);
   diagnose::write_report_json(rep, (std::filesystem::path(a.out) / "report.json").string());
   diagnose::write_report_html(rep, (std::filesystem::path(a.out) / "report.html").string());
-  std::cout << "verdict:";
-  for (const auto& v : rep.verdict) std::cout << " " << v;
-  if (rep.verdict.empty()) std::cout << " (none: the model explains the data within noise)";
+  std::cout << "verdict: " << diagnose::verdict_sentence(rep);
   std::cout << "\nvalidation gap " << rep.validation_before.total.rms << " -> " << rep.validation_after.total.rms
             << " (noise = 1)\nwrote " << a.out << "/report.json and report.html\n";
   return 0;

@@ -10,7 +10,9 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "framework/assembly/system.hpp"
 #include "framework/core/expression.hpp"
+#include "framework/diagnose/yaml_file.hpp"
 #include "framework/netlist/netlist.hpp"
 #include "framework/netlist/reader.hpp"
 #include "framework/netlist/yaml_location.hpp"
@@ -461,15 +463,20 @@ InputError does_not_apply(const Effect& e, const std::string& model_file, const 
                     "effect '" + e.name + "' does not apply to " + model_file + ": " + ex.message());
 }
 
-// The patch applied at the initial values and elaborated, so that errors
-// surface at load time with the catalogue's file:line.
+// The patch applied at the initial values, elaborated and assembled (its
+// ports all connected, its equations structurally solvable), so that a
+// broken patch - a dangling port, two sources joined - is an error at load
+// time with the catalogue's file:line, not a candidate whose every run fails.
 void check_applies(const Effect& e, const Netlist& model, const Registry& registry) {
   MeasurementModel mm;
   const Netlist patched = apply_effects(model, {EffectInstance{&e, e.initial_values()}}, &mm);
   try {
-    (void)elaborate(patched, registry);
+    const System assembled(elaborate(patched, registry));
   } catch (const InputError& ex) {
     throw does_not_apply(e, model.file, ex);
+  } catch (const StructureError& ex) {
+    throw InputError(e.where, "", "",
+                     "effect '" + e.name + "' does not apply to " + model.file + ": " + ex.what());
   }
 }
 
@@ -518,16 +525,7 @@ std::optional<InputError> read_patch(const Reader& r, const YAML::Node& body, Ef
 
 // The catalogue file's root node, its top-level keys checked.
 YAML::Node read_root(const std::string& path) {
-  YAML::Node root;
-  {
-    std::ifstream in(path);
-    if (!in) throw InputError(SourceLocation{path, 0, 0}, "", "", "cannot open the catalogue file");
-    try {
-      root = YAML::Load(in);
-    } catch (const YAML::ParserException& ex) {
-      throw InputError(SourceLocation{path, ex.mark.line + 1, ex.mark.column + 1}, "", "", ex.msg);
-    }
-  }
+  const YAML::Node root = load_yaml_document(path, "catalogue file");
   if (!root.IsMap() || !(root["effects"] || root["recalibrate"]) || (root["effects"] && !root["effects"].IsMap()))
     throw InputError(SourceLocation{path, 1, 1}, "", "",
                      "a catalogue needs 'effects:', a map of effect name -> patch, or 'recalibrate:'");

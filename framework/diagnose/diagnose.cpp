@@ -148,7 +148,7 @@ class Diagnosis {
   Diagnosis(const std::string& model_file, const std::string& runs_dir, const std::string& catalogue_file,
             const Registry& registry, const DiagnoseOptions& opt)
       : opt_(opt), eng_(model_file, registry, opt) {
-    eng_.runs = load_runs(runs_dir, eng_.base());
+    eng_.runs = load_runs(runs_dir, eng_.base(), eng_.base_probes());
     cat_ = load_catalogue(catalogue_file, eng_.base(), registry);
     refuse_recalibrating_operating_points();
     rep_.model_file = model_file;
@@ -198,6 +198,19 @@ class Diagnosis {
     if (auto null = e.null_values(); !null.empty() && null != starts[0]) starts.push_back(std::move(null));
     return starts;
   }
+  // Runs that failed since `mark` (Engine::failure_count()): counted, and
+  // the first few reasons kept for the report and logged.
+  void keep_failures(std::size_t mark, long& count, std::vector<std::string>& reasons, const std::string& whose) const {
+    const auto failed = eng_.failures_since(mark);
+    if (failed.empty()) return;
+    count += static_cast<long>(failed.size());
+    for (const auto& f : failed)
+      if (reasons.size() < kKeptFailures && std::find(reasons.begin(), reasons.end(), f) == reasons.end())
+        reasons.push_back(f);
+    log("  " + whose + ": " + std::to_string(failed.size()) + " run(s) failed, first: " + failed.front());
+  }
+  static constexpr std::size_t kKeptFailures = 5;
+
   const Cand* cand_of(const std::string& n) const {
     for (const auto& c : cands_)
       if (c.e->name == n) return &c;
@@ -241,8 +254,10 @@ class Diagnosis {
   // right" the normalised residuals are white with unit variance).
   void where() {
     base_model_ = eng_.model({});
+    const std::size_t mark = eng_.failure_count();
     r_cal0_ = eng_.residuals({base_model_}, cal_)[0];
     r_val0_ = eng_.residuals({base_model_}, val_)[0];
+    keep_failures(mark, rep_.base_failed_runs, rep_.base_run_failures, "the unpatched model");
     r_cal_cur_ = r_cal0_;
     r_val_cur_ = r_val0_;
     rep_.calibration_before = eng_.gaps(r_cal0_, cal_);
@@ -286,11 +301,13 @@ class Diagnosis {
       }
       const bool has_null = e.null_values().size() == e.parameters.size();
       double gain = 0;
+      const std::size_t mark = eng_.failure_count();
       for (const auto& start : linearisation_starts(e)) {
         const auto f = eng_.fit({EffectInstance{&e, start}}, cal_, {}, 1);
         const double reference = has_null ? ssr_cal0 : ssr(f.r_cal);
         gain = std::max(gain, 1 - ssr(f.r_cal) * (1 - f.screening) / reference);
       }
+      keep_failures(mark, results_[k].failed_runs, results_[k].run_failures, e.name + " (screening)");
       results_[k].screening_improvement = gain;
       screened.push_back({gain, static_cast<int>(k)});
       log(fmt("  screening %-2.0f ", k + 1) + e.name +
@@ -311,8 +328,10 @@ class Diagnosis {
         results_[k].screened_out = true;
         continue;
       }
+      const std::size_t mark = eng_.failure_count();
       auto f = eng_.fit({EffectInstance{&e, e.initial_values()}}, cal_, {}, opt_.max_iterations, true);
       const auto r_val = eng_.residuals({eng_.model(f.effects)}, val_)[0];
+      keep_failures(mark, results_[k].failed_runs, results_[k].run_failures, e.name + " (fit)");
       judge(results_[k], f, r_val);
       log(fmt("  fit %-2.0f/%-2.0f ", q + 1, std::min<double>(screened.size(), opt_.screen_keep)) + e.name +
           fmt(": validation gap %.3g -> %.3g, dBIC %.3g", results_[k].gap_before, results_[k].gap_after,
@@ -489,8 +508,11 @@ class Diagnosis {
       auto start = chosen_;
       start.push_back(add);
       log("  forward selection: " + rep_.verdict.back() + " + " + e->name + fmt("  [%.1f s]", elapsed()));
+      const std::size_t mark = eng_.failure_count();
       auto f = eng_.fit(start, cal_, {}, opt_.max_iterations, true);
       Step st{e, f, eng_.residuals({eng_.model(f.effects)}, val_)[0], {}};
+      for (auto& er : results_)
+        if (er.name == e->name) keep_failures(mark, er.failed_runs, er.run_failures, e->name + " (forward selection)");
       st.gap = eng_.gaps(st.r_val, val_);
       const auto s = eng_.significance(r_val_cur_, st.r_val, val_, static_cast<int>(e->parameters.size()));
       std::string why;

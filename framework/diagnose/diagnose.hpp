@@ -27,6 +27,7 @@
 
 #include "framework/diagnose/catalogue.hpp"
 #include "framework/diagnose/sensors.hpp"
+#include "framework/model/circuit.hpp"
 #include "framework/model/registry.hpp"
 #include "framework/netlist/netlist.hpp"
 
@@ -46,9 +47,14 @@ struct MeasuredRun {
 };
 
 // Reads DIR/*.yaml (each with data, role, operating_point) and their CSVs,
-// checked against the model's outputs and top-level parameters. Throws
+// checked against the model's outputs (`probes`: their SI units) and
+// top-level parameters. A CSV header cell may give its column's unit,
+// "p [bar]", "p [barg]" (gauge: the model's ambient pressure added),
+// "t [ms]"; without one the column is SI. Every value is converted to SI.
+// `data:` must name a regular file inside DIR. A run's samples must lie in
+// the model's [t_start, t_end] and span at least a tenth of it. Throws
 // InputError naming the file, line and column or parameter.
-std::vector<MeasuredRun> load_runs(const std::string& dir, const Netlist& model);
+std::vector<MeasuredRun> load_runs(const std::string& dir, const Netlist& model, const std::vector<Probe>& probes);
 
 // Robust white-noise level of a sampled signal: median absolute deviation of
 // third differences / sqrt(20), floored by the quantisation step / sqrt(12).
@@ -109,6 +115,8 @@ struct EffectResult {
   std::vector<std::string> group;  // effects the data cannot tell apart from this one
   int fit_evaluations = 0;
   int failed_validation_runs = 0;  // the solver failed at the fitted values (residual set to 1e4 noise units)
+  long failed_runs = 0;                   // runs that failed while it was screened and fitted
+  std::vector<std::string> run_failures;  // why (the first few)
 };
 
 struct WindowFinding {
@@ -172,12 +180,20 @@ struct DiagnosisReport {
   std::vector<std::pair<std::string, std::vector<double>>> final_values;  // effect -> fitted values in the verdict model
   std::vector<SensorChoice> sensors;  // per verdict effect and one the data cannot tell from it: what would
   std::optional<Unexplained> unexplained;  // empty: the verdict brings the gap down to noise
+  long base_failed_runs = 0;                 // runs of the unpatched model that failed
+  std::vector<std::string> base_run_failures;  // why (the first few)
   double seconds = 0;
   long simulations = 0;
 };
 
 DiagnosisReport diagnose(const std::string& model_file, const std::string& runs_dir,
                          const std::string& catalogue_file, const Registry& registry, const DiagnoseOptions& options);
+
+// The verdict in one plain sentence (the command's output, both reports):
+// the effects named, or with none whether the model explains the data
+// within noise or no candidate explains the gap left (its size in noise
+// units) - an empty verdict is not "within noise" when a gap remains.
+std::string verdict_sentence(const DiagnosisReport& report);
 
 void write_report_json(const DiagnosisReport& report, const std::string& path);
 void write_report_html(const DiagnosisReport& report, const std::string& path);

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <fstream>
 #include <map>
+#include <mutex>
 #include <sstream>
 
 #include "framework/analysis/run_metrics.hpp"
@@ -146,10 +147,14 @@ class Engine {
       // mass below zero) leaves the solver crawling: such a run fails.
       if (!disturbances.empty()) so.max_steps = kDisturbedMaxSteps;
       res = run_circuit(elaborate(nl, registry_), so);
-    } catch (const std::exception&) {
+    } catch (const std::exception& ex) {
+      note_failure(run.name, ex.what());
       return {};
     }
-    if (!res.solver.ok || res.table.rows.size() < 2) return {};
+    if (!res.solver.ok || res.table.rows.size() < 2) {
+      note_failure(run.name, res.solver.ok ? "fewer than two output rows" : res.solver.message);
+      return {};
+    }
     std::vector<double> ts;
     for (const auto& row : res.table.rows) ts.push_back(row[0]);
     std::vector<std::vector<double>> out;
@@ -312,8 +317,9 @@ class Engine {
       RunResult res;
       try {
         res = run_simulation(nl, registry_);
-      } catch (const std::exception&) {
-        continue;  // input errors surfaced when the model was loaded; a failed run gets one phase
+      } catch (const std::exception& ex) {
+        note_failure(runs[k].name, ex.what());  // input errors surfaced when the model was loaded
+        continue;                               // a failed run gets one phase
       }
       ++simulations;
       for (const auto& e : res.solver.events)
@@ -327,6 +333,17 @@ class Engine {
     phase_names = std::move(ph.names);
     phases = std::move(ph.of_sample);
     phase_times = std::move(ph.times);
+  }
+
+  // Why runs failed, in the order noted (a failed run's residuals are
+  // kFailedResidual): kept, so that what could not be judged says why.
+  std::size_t failure_count() const {
+    const std::lock_guard<std::mutex> lock(failures_mutex_);
+    return failures_.size();
+  }
+  std::vector<std::string> failures_since(std::size_t mark) const {
+    const std::lock_guard<std::mutex> lock(failures_mutex_);
+    return {failures_.begin() + static_cast<long>(std::min(mark, failures_.size())), failures_.end()};
   }
 
   const DiagnoseOptions& options() const { return options_; }
@@ -427,8 +444,15 @@ class Engine {
     return false;
   }
 
+  void note_failure(const std::string& run, const std::string& why) {
+    const std::lock_guard<std::mutex> lock(failures_mutex_);
+    failures_.push_back("run " + run + ": " + why);
+  }
+
   const Registry& registry_;
   DiagnoseOptions options_;
+  mutable std::mutex failures_mutex_;
+  std::vector<std::string> failures_;
   Netlist base_netlist_;
   std::vector<Probe> base_probes_;
 };

@@ -9,7 +9,9 @@
 #include <sstream>
 
 #include "framework/core/text.hpp"
+#include "framework/core/units.hpp"
 #include "framework/diagnose/diagnose.hpp"
+#include "framework/diagnose/yaml_file.hpp"
 #include "framework/netlist/yaml_location.hpp"
 
 namespace pneumo::diagnose {
@@ -45,44 +47,148 @@ double estimate_noise(const std::vector<double>& y) {
 
 namespace {
 
-void read_csv_into(MeasuredRun& run, const std::string& path, const Netlist& model) {
+// One header cell: "NAME" or "NAME [UNIT]", at 1-based `column` of its line.
+struct HeaderCell {
+  std::string name, unit;
+  bool has_unit = false;  // written in brackets (possibly "[]" or "[1]": dimensionless)
+  int column = 1;
+};
+
+// The cells of a header line with their columns (for file:line:column).
+std::vector<HeaderCell> header_cells(const std::string& line, const std::string& path, int lineno) {
+  std::vector<HeaderCell> out;
+  std::size_t begin = 0;
+  while (true) {
+    const std::size_t comma = line.find(',', begin);
+    const std::string raw = line.substr(begin, comma == std::string::npos ? std::string::npos : comma - begin);
+    HeaderCell c;
+    const auto first = raw.find_first_not_of(" \t\r");
+    c.column = static_cast<int>(begin + (first == std::string::npos ? 0 : first)) + 1;
+    const std::string cell = trim(raw);
+    if (const auto lb = cell.find('['); lb != std::string::npos) {
+      if (cell.back() != ']')
+        throw InputError(SourceLocation{path, lineno, c.column}, "", "",
+                         "header cell '" + quoted_cell(cell) + "': write the unit in brackets at its end, e.g. 'p [bar]'");
+      c.name = trim(cell.substr(0, lb));
+      c.unit = trim(cell.substr(lb + 1, cell.size() - lb - 2));
+      c.has_unit = true;
+    } else {
+      c.name = cell;
+    }
+    out.push_back(c);
+    if (comma == std::string::npos) break;
+    begin = comma + 1;
+  }
+  return out;
+}
+
+// A column's unit, checked against the dimension the model's quantity has
+// (SI inside: a column without a unit is SI).
+units::Unit column_unit(const HeaderCell& c, const std::string& si_unit, const std::string& path, int lineno) {
+  const SourceLocation at{path, lineno, c.column};
+  if (!c.has_unit) return units::Unit{};  // SI
+  units::Unit u;
+  try {
+    u = units::parse_unit(c.unit);
+  } catch (const std::exception& ex) {
+    throw InputError(at, "", quoted_cell(c.name),
+                     "column '" + quoted_cell(c.name) + "': unit '" + quoted_cell(c.unit) + "': " + ex.what());
+  }
+  units::Dimension want;
+  try {
+    want = units::dimension_of(si_unit);
+  } catch (const std::exception&) {
+    return u;  // a model unit the parser does not know: nothing to check against
+  }
+  if (!(u.dim == want))
+    throw InputError(at, "", quoted_cell(c.name),
+                     "column '" + quoted_cell(c.name) + "': unit '" + quoted_cell(c.unit) + "' (" +
+                         u.dim.to_string() + ") does not fit the model's " +
+                         (c.name == "t" ? std::string("time") : "output '" + c.name + "'") + " in " + si_unit +
+                         " (" + want.to_string() + ")");
+  return u;
+}
+
+// The model's SI unit of each output, by name.
+std::string si_unit_of(const std::vector<Probe>& probes, const std::string& name) {
+  for (const auto& p : probes)
+    if (p.name == name) return p.unit;
+  return "";
+}
+
+// A run is simulated from the model's t_start to its last sample: its
+// samples must lie within the model's [t_start, t_end] - a run past t_end
+// or before t_start, or one spanning less than kMinSpanShare of it, is most
+// often a time column in another unit than its header says.
+constexpr double kMinSpanShare = 0.1;
+
+std::string seconds(double t) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.6g", t);
+  return buf;
+}
+
+void check_time_span(const MeasuredRun& run, const Netlist& model, const std::string& path, int first_line,
+                     int last_line, const units::Unit& t_unit) {
+  const double t0 = model.simulation.t_start, t1 = model.simulation.t_end;
+  const double dt = (run.t.back() - run.t.front()) / static_cast<double>(run.t.size() - 1);
+  const double tol = 0.5 * dt + 1e-9 * std::max(1.0, std::abs(t1));
+  const std::string unit_hint =
+      t_unit.scale == 1 ? " If the time column is not in seconds, give its unit in the header (e.g. 't [ms]')."
+                        : " Check the time column's unit in the header.";
+  const std::string model_span = "the model " + model.file + " simulates t = " + seconds(t0) + " s to t_end = " +
+                                 seconds(t1) + " s";
+  if (run.t.front() < t0 - tol)
+    throw InputError(SourceLocation{path, first_line, 1}, "", "t",
+                     "the measured run starts at t = " + seconds(run.t.front()) + " s, before the simulation: " +
+                         model_span + "." + unit_hint);
+  if (run.t.back() > t1 + tol)
+    throw InputError(SourceLocation{path, last_line, 1}, "", "t",
+                     "the measured run ends at t = " + seconds(run.t.back()) + " s, after the simulation: " +
+                         model_span + "; raise simulation.t_end to the measured span or cut the data." + unit_hint);
+  if (run.t.back() - run.t.front() < kMinSpanShare * (t1 - t0))
+    throw InputError(SourceLocation{path, last_line, 1}, "", "t",
+                     "the measured run spans only t = " + seconds(run.t.front()) + " s to " +
+                         seconds(run.t.back()) + " s, less than a tenth of the simulation: " + model_span +
+                         "; set simulation.t_end to the measured span." + unit_hint);
+}
+
+void read_csv_into(MeasuredRun& run, const std::string& path, const Netlist& model, const std::vector<Probe>& probes) {
   std::ifstream in(path);
   if (!in) throw InputError(SourceLocation{path, 0, 0}, "", "", "cannot open the measured data file");
   std::string line;
   int lineno = 0;
-  std::vector<std::string> header;
+  std::vector<HeaderCell> header;
   while (std::getline(in, line)) {
     ++lineno;
     if (trim(line).empty() || trim(line)[0] == '#') continue;
-    header = split_trimmed(line, ',');
+    header = header_cells(line, path, lineno);
     break;
   }
   if (header.empty()) throw InputError(SourceLocation{path, 0, 0}, "", "", "the file is empty (expected a header t,<output>,...)");
-  auto bare = [](const std::string& h) {  // "p_A [Pa]" -> "p_A"
-    const auto b = h.find(" [");
-    return trim(b == std::string::npos ? h : h.substr(0, b));
-  };
-  if (bare(header[0]) != "t")
-    throw InputError(SourceLocation{path, lineno, 1}, "", bare(header[0]), "the first column must be 't' (time in s)");
+  if (header[0].name != "t")
+    throw InputError(SourceLocation{path, lineno, header[0].column}, "", quoted_cell(header[0].name),
+                     "the first column must be 't' (time; in s, or give its unit: 't [ms]')");
+  std::vector<units::Unit> col_units = {column_unit(header[0], "s", path, lineno)};
   std::set<std::string> seen;
   std::string valid;
   for (const auto& o : model.outputs) valid += (valid.empty() ? "" : ", ") + o.name;
-  int col = static_cast<int>(header[0].size()) + 2;
   for (std::size_t k = 1; k < header.size(); ++k) {
-    const std::string name = bare(header[k]);
+    const std::string& name = header[k].name;
+    const SourceLocation at{path, lineno, header[k].column};
     bool known = false;
     for (const auto& o : model.outputs) known = known || o.name == name;
     if (!known)
-      throw InputError(SourceLocation{path, lineno, col}, "", name,
-                       "unknown output name '" + name + "' (the model's outputs: " + valid + ")");
-    if (!seen.insert(name).second)
-      throw InputError(SourceLocation{path, lineno, col}, "", name, "column '" + name + "' appears twice");
+      throw InputError(at, "", quoted_cell(name),
+                       "unknown output name '" + quoted_cell(name) + "' (the model's outputs: " + valid + ")");
+    if (!seen.insert(name).second) throw InputError(at, "", name, "column '" + name + "' appears twice");
+    col_units.push_back(column_unit(header[k], si_unit_of(probes, name), path, lineno));
     run.signals.push_back(name);
-    col += static_cast<int>(header[k].size()) + 1;
   }
   if (run.signals.empty())
     throw InputError(SourceLocation{path, lineno, 1}, "", "", "no measured signal: the header has only 't'");
   run.y.assign(run.signals.size(), {});
+  int first_line = 0;
   while (std::getline(in, line)) {
     ++lineno;
     if (trim(line).empty() || trim(line)[0] == '#') continue;
@@ -98,23 +204,55 @@ void read_csv_into(MeasuredRun& run, const std::string& path, const Netlist& mod
       v[k] = std::strtod(cells[k].c_str(), &end);
       if (cells[k].empty() || end == cells[k].c_str() || *end != '\0' || !std::isfinite(v[k]))
         throw InputError(SourceLocation{path, lineno, 1}, "", cname,
-                         "column '" + cname + "': '" + cells[k] + "' is not a finite number");
+                         "column '" + cname + "': '" + quoted_cell(cells[k]) + "' is not a finite number");
+      v[k] = units::to_si(col_units[k], v[k], model.gas.p_ambient);
     }
     if (!run.t.empty() && !(v[0] > run.t.back()))
       throw InputError(SourceLocation{path, lineno, 1}, "", "t",
-                       "time must increase strictly: t = " + cells[0] + " s follows t = " +
-                           std::to_string(run.t.back()) + " s");
+                       "time must increase strictly: t = " + quoted_cell(cells[0]) + " (" + rounded(v[0], 9) +
+                           " s) follows t = " + rounded(run.t.back(), 9) + " s");
+    if (run.t.empty()) first_line = lineno;
     run.t.push_back(v[0]);
     for (std::size_t k = 1; k < v.size(); ++k) run.y[k - 1].push_back(v[k]);
   }
   if (run.t.size() < 10)
     throw InputError(SourceLocation{path, lineno, 1}, "", "", "fewer than 10 samples: nothing to diagnose");
+  check_time_span(run, model, path, first_line, lineno, col_units[0]);
   for (const auto& y : run.y) run.sigma.push_back(estimate_noise(y));
+}
+
+// The data file a run file's `data:` names: a relative path that stays
+// inside the runs folder once links and '..' are resolved, and a regular
+// file (a device or FIFO would be read forever). Returns its resolved path.
+std::string data_file(const fs::path& runs_dir, const std::string& run_file, const YAML::Node& node) {
+  const std::string text = plain_text(run_file, node, "", "data", "'data'");
+  const SourceLocation at = location_of(run_file, node);
+  const fs::path rel(text);
+  if (text.empty()) throw InputError(at, "", "data", "'data' is empty: name the run's CSV file in the runs folder");
+  if (rel.is_absolute() || rel.has_root_name() || rel.has_root_directory())
+    throw InputError(at, "", "data",
+                     "data: '" + quoted_cell(text, 200) + "' is an absolute path; name a file inside the runs folder " +
+                         runs_dir.string() + ", relative to it");
+  std::error_code ec;
+  const fs::path base = fs::canonical(runs_dir, ec);
+  const fs::path target = ec ? fs::path() : fs::weakly_canonical(base / rel, ec);
+  const fs::path inside = target.lexically_relative(base);
+  if (ec || inside.empty() || *inside.begin() == "..")
+    throw InputError(at, "", "data",
+                     "data: '" + quoted_cell(text, 200) + "' lies outside the runs folder " + runs_dir.string() +
+                         " (after following links and '..'); put the data file inside it");
+  const auto st = fs::status(target, ec);
+  if (ec || !fs::exists(st))
+    throw InputError(at, "", "data", "data: '" + quoted_cell(text, 200) + "': no such file in the runs folder");
+  if (!fs::is_regular_file(st))
+    throw InputError(at, "", "data",
+                     "data: '" + quoted_cell(text, 200) + "' is not a regular file (a directory, device or FIFO)");
+  return target.string();
 }
 
 }  // namespace
 
-std::vector<MeasuredRun> load_runs(const std::string& dir, const Netlist& model) {
+std::vector<MeasuredRun> load_runs(const std::string& dir, const Netlist& model, const std::vector<Probe>& probes) {
   if (!fs::is_directory(dir)) throw InputError(SourceLocation{dir, 0, 0}, "", "", "runs directory does not exist");
   std::vector<fs::path> files;
   for (const auto& e : fs::directory_iterator(dir))
@@ -123,18 +261,14 @@ std::vector<MeasuredRun> load_runs(const std::string& dir, const Netlist& model)
   std::vector<MeasuredRun> runs;
   for (const auto& f : files) {
     const std::string path = f.string();
-    YAML::Node y;
-    try {
-      y = YAML::LoadFile(path);
-    } catch (const YAML::ParserException& ex) {
-      throw InputError(SourceLocation{path, ex.mark.line + 1, ex.mark.column + 1}, "", "", ex.msg);
-    }
+    const YAML::Node y = load_yaml_document(path, "run file");
     auto at = [&](const YAML::Node& n) { return location_of(path, n); };
     if (!y.IsMap()) throw InputError(SourceLocation{path, 1, 1}, "", "", "a run file is a map: data, role, operating_point");
     for (auto it = y.begin(); it != y.end(); ++it) {
       const auto k = plain_text(path, it->first, "", "", "a key");
       if (k != "data" && k != "role" && k != "operating_point" && k != "description")
-        throw InputError(at(it->first), "", k, "unknown key '" + k + "' (data, role, operating_point, description)");
+        throw InputError(at(it->first), "", quoted_cell(k),
+                         "unknown key '" + quoted_cell(k) + "' (data, role, operating_point, description)");
     }
     MeasuredRun run;
     run.name = f.stem().string();
@@ -143,7 +277,7 @@ std::vector<MeasuredRun> load_runs(const std::string& dir, const Netlist& model)
     const auto role = plain_text(path, y["role"], "", "role", "'role'");
     if (role == "calibration") run.role = Role::calibration;
     else if (role == "validation") run.role = Role::validation;
-    else throw InputError(at(y["role"]), "", "role", "role must be 'calibration' or 'validation', not '" + role + "'");
+    else throw InputError(at(y["role"]), "", "role", "role must be 'calibration' or 'validation', not '" + quoted_cell(role) + "'");
     if (y["operating_point"]) {
       const auto& op = y["operating_point"];
       if (!op.IsMap()) throw InputError(at(op), "", "operating_point", "operating_point maps parameter names to SI values");
@@ -152,8 +286,9 @@ std::vector<MeasuredRun> load_runs(const std::string& dir, const Netlist& model)
         if (!model.parameter(name)) {
           std::string valid;
           for (const auto& p : model.parameters) valid += (valid.empty() ? "" : ", ") + p.name;
-          throw InputError(at(it->first), "", name,
-                           "operating_point: the model has no top-level parameter '" + name + "' (it has: " + valid + ")");
+          throw InputError(at(it->first), "", quoted_cell(name),
+                           "operating_point: the model has no top-level parameter '" + quoted_cell(name) +
+                               "' (it has: " + valid + ")");
         }
         if (!it->second.IsScalar())
           throw InputError(at(it->second), "", name, "operating_point: the value must be a number (SI)");
@@ -166,8 +301,8 @@ std::vector<MeasuredRun> load_runs(const std::string& dir, const Netlist& model)
         }
       }
     }
-    run.csv_file = (f.parent_path() / plain_text(path, y["data"], "", "data", "'data'")).string();
-    read_csv_into(run, run.csv_file, model);
+    run.csv_file = data_file(fs::path(dir), path, y["data"]);
+    read_csv_into(run, run.csv_file, model, probes);
     runs.push_back(std::move(run));
   }
   int ncal = 0, nval = 0;

@@ -255,10 +255,24 @@ std::string svg_phase_bars(const DiagnosisReport& r) {
 
 }  // namespace
 
+std::string verdict_sentence(const DiagnosisReport& r) {
+  std::string named;
+  for (const auto& v : r.verdict) named += (named.empty() ? "" : ", then ") + v;
+  const std::string left = rounded(r.validation_after.total.rms, 2);
+  if (named.empty())
+    return r.unexplained ? "none: no candidate effect explains the gap of " + left +
+                               " times the noise (validation gap " + left + ", noise = 1)"
+                         : "none needed: the model explains the data within noise (validation gap " + left +
+                               ", noise = 1)";
+  return named + (r.unexplained ? "; a gap of " + left + " times the noise remains unexplained"
+                                : "; the validation gap is then " + left + " (noise = 1)");
+}
+
 void write_report_json(const DiagnosisReport& r, const std::string& path) {
   std::ostringstream o;
   o << "{\n\"model\": " << str(r.model_file) << ",\n\"catalogue\": " << str(r.catalogue_file)
-    << ",\n\"runs\": " << str(r.runs_dir) << ",\n\"verdict\": [";
+    << ",\n\"runs\": " << str(r.runs_dir) << ",\n\"verdict_sentence\": " << str(verdict_sentence(r))
+    << ",\n\"verdict\": [";
   for (std::size_t i = 0; i < r.verdict.size(); ++i) o << (i ? ", " : "") << str(r.verdict[i]);
   o << "],\n\"verdict_groups\": [";
   for (std::size_t i = 0; i < r.verdict_groups.size(); ++i) {
@@ -281,7 +295,9 @@ void write_report_json(const DiagnosisReport& r, const std::string& path) {
   o << "},\n\"signal_units\": {";
   for (std::size_t i = 0; i < r.signal_units.size(); ++i)
     o << (i ? ", " : "") << str(r.signal_units[i].first) << ": " << str(r.signal_units[i].second);
-  o << "},\n\"gap_unit\": \"RMS of (measured - simulated)/noise; 1 = within noise\",";
+  o << "},\n\"unpatched_model_failed_runs\": " << r.base_failed_runs << ",\n\"unpatched_model_run_failures\": [";
+  for (std::size_t i = 0; i < r.base_run_failures.size(); ++i) o << (i ? ", " : "") << str(r.base_run_failures[i]);
+  o << "],\n\"gap_unit\": \"RMS of (measured - simulated)/noise; 1 = the noise level\",";
   o << "\n\"where\": {\"validation_before\": " << gap_json(r.validation_before, r.phase_names)
     << ",\n  \"validation_after\": " << gap_json(r.validation_after, r.phase_names)
     << ",\n  \"calibration_before\": " << gap_json(r.calibration_before, r.phase_names) << ",\n  \"significant_windows\": [";
@@ -296,6 +312,8 @@ void write_report_json(const DiagnosisReport& r, const std::string& path) {
     const auto& e = r.effects[i];
     o << (i ? ",\n  " : "\n  ") << "{\"name\": " << str(e.name) << ", \"rank\": " << e.rank;
     if (!e.unavailable.empty()) o << ", \"status\": " << str(e.unavailable);
+    else if (e.screened_out && e.failed_runs)
+      o << ", \"status\": \"screened out: " << e.failed_runs << " run(s) of it failed\"";
     else if (e.screened_out) o << ", \"status\": \"screened out (linearised improvement too small)\"";
     else if (e.failed_validation_runs)
       o << ", \"status\": \"fitted; the solver failed on " << e.failed_validation_runs
@@ -313,6 +331,11 @@ void write_report_json(const DiagnosisReport& r, const std::string& path) {
       << ", \"p_value\": " << num(e.p_value) << "}, \"group\": [";
     for (std::size_t j = 0; j < e.group.size(); ++j) o << (j ? ", " : "") << str(e.group[j]);
     o << "]";
+    if (e.failed_runs) {
+      o << ", \"failed_runs\": " << e.failed_runs << ", \"run_failures\": [";
+      for (std::size_t j = 0; j < e.run_failures.size(); ++j) o << (j ? ", " : "") << str(e.run_failures[j]);
+      o << "]";
+    }
     if (!e.unavailable.empty() || e.screened_out) o << "}";
     else o << ", \"where_after\": " << gap_json(e.validation_after, r.phase_names) << "}";
   }
@@ -425,6 +448,8 @@ void ranking_section(std::ostream& o, const DiagnosisReport& r) {
     o << "<tr class=\"effect" << (present ? " present" : "") << "\"><td>" << (e.rank ? std::to_string(e.rank) : "-")
       << "</td><td class=\"l\">" << html(e.name) << "</td><td class=\"l w\">"
       << html(!e.unavailable.empty() ? e.unavailable
+              : e.screened_out && e.failed_runs ? "screened out: " + std::to_string(e.failed_runs) +
+                                                      " run(s) failed, first: " + e.run_failures.front()
               : e.screened_out        ? "screened out"
               : e.failed_validation_runs ? "fitted; solver failed on " + std::to_string(e.failed_validation_runs) +
                                                " validation run(s)"
@@ -462,7 +487,7 @@ void write_report_html(const DiagnosisReport& r, const std::string& path) {
   o << "), catalogue " << file_name(r.catalogue_file) << "; " << r.simulations << " simulations in "
     << rounded(r.seconds, 2) << " s.</p>\n";
   o << "<h2>Verdict</h2>\n<p id=\"verdict\">";
-  if (r.verdict.empty()) o << "No candidate effect is needed or helps significantly.";
+  if (r.verdict.empty()) o << html(verdict_sentence(r)) << ".";
   for (std::size_t i = 0; i < r.verdict_groups.size(); ++i) {
     o << (i ? "; then " : "") << "<b>" << html(r.verdict_groups[i][0]) << "</b>" << html(recalibrated(r, i));
     if (r.verdict_groups[i].size() > 1) {
@@ -472,7 +497,7 @@ void write_report_html(const DiagnosisReport& r, const std::string& path) {
       o << ")";
     }
   }
-  o << "</p>\n<p>Validation gap (RMS of residual / noise; 1 = within noise): before <b>"
+  o << "</p>\n<p>Validation gap (RMS of residual / noise; 1 = the noise level): before <b>"
     << gap(r.validation_before.total.rms) << "</b>, after <b>" << gap(r.validation_after.total.rms) << "</b>.</p>\n";
   for (const auto& c : r.sensors)
     if (!c.best.empty()) o << "<p class=\"sensor\">To tell them apart: " << html(sensor_sentence(c)) << ".</p>\n";
