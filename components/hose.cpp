@@ -120,7 +120,7 @@ class Hose final : public ComponentT<Hose> {
       const T& T_left = j == 0 ? a.T_in : Tg[j - 1];
       const T& T_right = j == N_ ? b.T_in : Tg[j];
       T right, left;
-      smooth_pos_pair(w, gas.m_flow_small, right, left);
+      upwind_weights(w, gas.m_flow_small, right, left);
       return T(gas.cp() * (right * T_left - left * T_right));
     };
     r[0] = a.m_flow - e.var(var_w(0));

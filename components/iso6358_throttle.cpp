@@ -5,6 +5,7 @@
 // Jacobian stays finite there.
 #include "components/builtin.hpp"
 #include "components/iso6358_flow.hpp"
+#include "components/signal_watch.hpp"
 
 namespace pneumo::components {
 
@@ -30,6 +31,7 @@ class Iso6358Throttle final : public ComponentT<Iso6358Throttle> {
                {"opening", Domain::signal, Causality::input, "fraction of C that is open (default 1)", true, 1.0}};
     i.observables = {{"m_flow", "kg/s", "mass flow from a to b"}};
     i.equations = {"ISO 6358 mass flow", "mass balance", "stream temperature a", "stream temperature b"};
+    SignalWatch::declare(i);
     return i;
   }
 
@@ -52,8 +54,17 @@ class Iso6358Throttle final : public ComponentT<Iso6358Throttle> {
 
   double observe(int, const Eval<double>& e) const override { return e.gas_port(kA).m_flow; }
 
+  void initial_modes(double*) const override { watch_.reset(); }
+  void roots(const Eval<double>& e, double* g) const override { g[0] = watch_.root(e); }
+  EventResult on_event(const Eval<double>&, double*, EventKind, int, int direction) const override {
+    return watch_.crossed(direction);
+  }
+  EventResult on_inputs_changed(const Eval<double>& e, double*) const override { return watch_.check(e); }
+
  private:
   double C_, b_, laminar_;
+  // Negative openings are taken as closed.
+  const SignalWatch watch_{kOpening, "opening", "", -1e-6, ">= 0", "taken as 0 (closed) while below 0"};
 };
 
 void register_iso6358_throttle(Registry& r) { r.add<Iso6358Throttle>(); }

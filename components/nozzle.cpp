@@ -8,6 +8,7 @@
 #include <numbers>
 
 #include "components/builtin.hpp"
+#include "components/signal_watch.hpp"
 #include "components/nozzle_flow.hpp"
 
 namespace pneumo::components {
@@ -39,6 +40,7 @@ class Nozzle final : public ComponentT<Nozzle> {
         {"opening", Domain::signal, Causality::input, "fraction of the area that is open (default 1)", true, 1.0}};
     i.observables = {{"m_flow", "kg/s", "mass flow from a to b"}};
     i.equations = {"isentropic nozzle mass flow", "mass balance", "stream temperature a", "stream temperature b"};
+    SignalWatch::declare(i);
     return i;
   }
 
@@ -70,8 +72,17 @@ class Nozzle final : public ComponentT<Nozzle> {
 
   double observe(int, const Eval<double>& e) const override { return e.gas_port(kA).m_flow; }
 
+  void initial_modes(double*) const override { watch_.reset(); }
+  void roots(const Eval<double>& e, double* g) const override { g[0] = watch_.root(e); }
+  EventResult on_event(const Eval<double>&, double*, EventKind, int, int direction) const override {
+    return watch_.crossed(direction);
+  }
+  EventResult on_inputs_changed(const Eval<double>& e, double*) const override { return watch_.check(e); }
+
  private:
   double Cd_, laminar_, A_ = 0.0;
+  // Negative openings are taken as closed.
+  const SignalWatch watch_{kOpening, "opening", "", -1e-6, ">= 0", "taken as 0 (closed) while below 0"};
 };
 
 void register_nozzle(Registry& r) { r.add<Nozzle>(); }

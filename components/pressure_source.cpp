@@ -2,6 +2,7 @@
 // delivers gas at a given temperature, whatever the flow. An optional signal
 // input replaces the pressure parameter (e.g. a supply pressure schedule).
 #include "components/builtin.hpp"
+#include "components/signal_watch.hpp"
 
 namespace pneumo::components {
 
@@ -19,6 +20,7 @@ class PressureSource final : public ComponentT<PressureSource> {
     i.ports = {{"port", Domain::pneumatic, Causality::acausal, "gas port"},
                {"p_in", Domain::signal, Causality::input, "pressure in Pa abs; replaces p when connected", true}};
     i.equations = {"pressure", "delivered temperature"};
+    SignalWatch::declare(i);
     return i;
   }
   explicit PressureSource(const Construction& c) : ComponentT(c), p_(c.params["p"]), T_(c.params["T"]) {}
@@ -34,9 +36,19 @@ class PressureSource final : public ComponentT<PressureSource> {
     s.guess_pressure(kPort, p_);
     s.guess_temperature(kPort, T_);
   }
+  void initial_modes(double*) const override { watch_.reset(); }
+  void roots(const Eval<double>& e, double* g) const override { g[0] = watch_.root(e); }
+  EventResult on_event(const Eval<double>&, double*, EventKind, int, int direction) const override {
+    return watch_.crossed(direction);
+  }
+  EventResult on_inputs_changed(const Eval<double>& e, double*) const override { return watch_.check(e); }
 
  private:
   double p_, T_;
+  // No absolute pressure is 0 or negative; flows toward such a "pressure"
+  // are those into a vacuum (choked), whatever the value.
+  const SignalWatch watch_{kPressure, "p_in", "Pa", 1.0, "an absolute pressure, at least 1 Pa",
+                           "the flows toward the source are those into a vacuum"};
 };
 
 void register_pressure_source(Registry& r) { r.add<PressureSource>(); }

@@ -77,7 +77,15 @@ struct Chain {
                                       "(retract), e.g. \"A+ B+ B- A-\", with ( ) around actions of one step");
       if (name == "start") throw ParameterError("steps", "'start' names the start input, not an actuator");
       if (!open) c.steps.emplace_back(), c.step_text.emplace_back();
-      c.steps.back().push_back({index_of(c.outputs, name), w.back() == '+' ? 1.0 : 0.0});
+      const int output = index_of(c.outputs, name);
+      for (const auto& a : c.steps.back())
+        if (a.output == output)
+          // Both would wait for X1 and X0 together: the chain stalls.
+          throw ParameterError("steps", "step " + std::to_string(c.steps.size()) + " (" + c.step_text.back() + " " +
+                                            w + ") acts twice on actuator '" + name +
+                                            "'; one step extends or retracts an actuator once - put " + w +
+                                            " in a step of its own or remove it");
+      c.steps.back().push_back({output, w.back() == '+' ? 1.0 : 0.0});
       c.step_text.back() += (c.step_text.back().empty() ? "" : " ") + w;
     }
     if (open) throw ParameterError("steps", "unbalanced parentheses in the steps");

@@ -297,7 +297,7 @@ std::map<std::string, std::vector<double>> sweep_columns(const std::string& path
 
 // The cushioning metrics, now declared in the rig's netlist, against the
 // sweep files the built-in metrics they replace wrote (tests/data/
-// sweep_before_metrics): identical to 1e-9 where the run is the same run.
+// sweep_before_metrics): the same within the change the upwinding made.
 // The energy audit's terms were computed on a trajectory whose step size the
 // audit's own quadratures steered; now they do not, so the two runs differ by
 // the solver's error, and the terms agree to 1e-4 of the audit's input.
@@ -321,8 +321,12 @@ TEST(NetlistMetrics, CushionRigSweepEqualsTheBuiltInMetricsItReplaces) {
   for (const auto& [name, before] : plain_before) {
     ASSERT_TRUE(plain_now.count(name)) << name;
     ASSERT_EQ(plain_now.at(name).size(), 20u);
+    // The files predate the upwinding that moves no heat at zero flow
+    // (components/enthalpy_flow.hpp): that moved the metrics by up to
+    // 1.7e-4 (T_EC_min, 0.03 K) and the step count by 4 %.
+    const double tol = name == "steps" ? 0.1 : 3e-4;
     for (std::size_t i = 0; i < before.size(); ++i)
-      if (!std::isnan(before[i])) EXPECT_NEAR(plain_now.at(name)[i], before[i], 1e-9 * std::abs(before[i])) << name << " run " << i;
+      if (!std::isnan(before[i])) EXPECT_NEAR(plain_now.at(name)[i], before[i], tol * std::abs(before[i])) << name << " run " << i;
   }
   const auto all_now = run({}, "all.csv");
   const auto all_before = sweep_columns(data + "cushion_rig_all.csv");

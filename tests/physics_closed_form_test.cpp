@@ -54,9 +54,9 @@ double netlist_parameter(const Netlist& nl, const std::string& component, const 
 // remaining difference (decaying exponentially, the flow being linear in
 // p2 - p near equilibrium) is asserted below 1e-6, and m and T within 1e-4
 // (the textbook check is 0.1 %). The residual error, measured
-// ~1e-5 in T, is the regularised upwinding: below gas.m_flow_small
-// (1e-7 kg/s) the volume's enthalpy flow blends inflow and own temperature,
-// which in the slow end phase of the filling moves ~c_p eps dT of heat.
+// ~2e-7 in T and m, is the regularised upwinding: below gas.m_flow_small
+// (1e-7 kg/s) the volume's enthalpy flow blends inflow and own temperature
+// (components/enthalpy_flow.hpp), which the slow end of the filling feels.
 struct FillingClosedForm {
   double p2, m_end, T_end;
 };

@@ -68,7 +68,7 @@ TEST(SequenceAB, StepsFollowTheNotationEachTriggeredByItsLimitSwitch) {
   }
   const double t_B_plus = ev[index_of(r, "seq", "step_2")].t;
   const double t_A_minus = ev[index_of(r, "seq", "step_4")].t;
-  EXPECT_GT(at(r, "x_A", t_B_plus), 0.099);   // A extended (switch closes 1 mm before the stop)
+  EXPECT_GT(at(r, "x_A", t_B_plus), 0.099 - 1e-9);  // A extended (switch closes 1 mm before the stop)
   EXPECT_LT(at(r, "x_B", t_B_plus), 1e-4);    // B not yet moved
   EXPECT_LT(at(r, "x_B", t_A_minus), 0.0011); // B back within its switch window
   EXPECT_GT(at(r, "x_A", t_A_minus), 0.099);  // A still out

@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <set>
 
+#include "framework/model/signal_loops.hpp"
+#include "framework/model/start_conflicts.hpp"
 #include "framework/netlist/netlist.hpp"
 #include "framework/netlist/reader.hpp"
 
@@ -276,6 +278,8 @@ Circuit elaborate(const Netlist& nl, const Registry& registry) {
     }
     circuit.connections.push_back(std::move(c));
   }
+  check_signal_loops(circuit);
+  check_start_conflicts(circuit);
   for (const auto& o : nl.outputs) circuit.probes.push_back(make_probe(nl, circuit, index, o));
   return circuit;
 }

@@ -1,7 +1,7 @@
 #include "framework/netlist/netlist.hpp"
 
 #include "framework/io/files.hpp"
-
+#include "framework/model/gas_parameters.hpp"
 #include "framework/netlist/metric_reader.hpp"
 #include "framework/netlist/reader.hpp"
 #include "framework/netlist/yaml_location.hpp"
@@ -260,40 +260,38 @@ YAML::Node load_root(const std::string& text, const std::string& file_name) {
   return root;
 }
 
+// One section of gas constants (gas:, ambient:), each checked against its
+// declared unit and range (framework/model/gas_parameters.hpp).
+void read_gas_section(Reader& r, const YAML::Node& node, const std::string& section,
+                      const std::vector<GasParameter>& specs, Netlist& nl) {
+  std::string valid;
+  for (const auto& g : specs) valid += (valid.empty() ? "" : ", ") + g.spec.name;
+  for (const auto& e : r.mapping(node, section, "", Reader::Keys::parameters, section + ".")) {
+    const std::string name = section + "." + e.key;
+    const auto it = std::find_if(specs.begin(), specs.end(), [&](const GasParameter& g) { return g.spec.name == e.key; });
+    if (it == specs.end()) r.fail(e.key_node, "", name, "unknown key '" + e.key + "' in " + section + "; valid: " + valid);
+    const ParameterSpec& spec = it->spec;
+    const units::Dimension dim = units::dimension_of(spec.unit);
+    const double v = r.quantity(e.value, nl.gas.p_ambient, dim, spec.unit, "", name);
+    if (dim == units::dims::pressure && units::parse_quantity(e.value.Scalar()).gauge)
+      r.fail(e.value, "", name,
+             "'" + e.value.Scalar() + "' is a gauge pressure, but the ambient pressure is the datum of gauge "
+             "pressures: give it absolute, e.g. 1.01325 bar or 101325 Pa");
+    if (!spec.in_range(v))
+      r.fail(e.value, "", name, "value " + units::format_si(v, dim) + " is out of range; valid: " + spec.range_text() +
+                                    " (" + spec.unit + ")");
+    nl.gas.*(it->field) = v;
+  }
+}
+
 // ambient: the atmosphere, the datum of gauge pressures.
 void read_ambient(Reader& r, const YAML::Node& node, Netlist& nl) {
-  using namespace units::dims;
-  std::map<std::string, YAML::Node> value_of;
-  for (const auto& e : r.mapping(node, "ambient", "", Reader::Keys::parameters, "ambient.")) {
-    value_of[e.key] = e.value;
-    if (e.key == "p") nl.gas.p_ambient = r.quantity(e.value, 101325.0, pressure, "Pa", "", "ambient.p");
-    else if (e.key == "T") nl.gas.T_ambient = r.quantity(e.value, 0, temperature, "K", "", "ambient.T");
-    else r.fail(e.key_node, "", "ambient." + e.key, "unknown key '" + e.key + "' in ambient; valid: p, T");
-  }
-  if (!(nl.gas.p_ambient > 0))
-    r.fail(value_of.count("p") ? value_of["p"] : node, "", "ambient.p", "the ambient pressure must be > 0");
-  if (!(nl.gas.T_ambient > 0))
-    r.fail(value_of.count("T") ? value_of["T"] : node, "", "ambient.T",
-           "the ambient temperature must be > 0 K");
+  read_gas_section(r, node, "ambient", ambient_parameters(), nl);
 }
 
 // gas: the ideal gas and the ISO 6358 reference state.
 void read_gas(Reader& r, const YAML::Node& node, Netlist& nl) {
-  using namespace units::dims;
-  std::map<std::string, YAML::Node> value_of;
-  for (const auto& e : r.mapping(node, "gas", "", Reader::Keys::parameters, "gas.")) {
-    value_of[e.key] = e.value;
-    const double a = nl.gas.p_ambient;
-    if (e.key == "R") nl.gas.R = r.quantity(e.value, a, Dimension{.m = 2, .s = -2, .K = -1}, "J/(kg*K)", "", "gas.R");
-    else if (e.key == "kappa") nl.gas.kappa = r.quantity(e.value, a, none, "1", "", "gas.kappa");
-    else if (e.key == "rho_ref") nl.gas.rho_ref = r.quantity(e.value, a, density, "kg/m3", "", "gas.rho_ref");
-    else if (e.key == "T_ref") nl.gas.T_ref = r.quantity(e.value, a, temperature, "K", "", "gas.T_ref");
-    else if (e.key == "m_flow_small") nl.gas.m_flow_small = r.quantity(e.value, a, mass_flow, "kg/s", "", "gas.m_flow_small");
-    else r.fail(e.key_node, "", "gas." + e.key, "unknown key '" + e.key + "' in gas; valid: R, kappa, rho_ref, T_ref, m_flow_small");
-  }
-  auto at_key = [&](const char* k) { return value_of.count(k) ? value_of[k] : node; };
-  if (!(nl.gas.R > 0)) r.fail(at_key("R"), "", "gas.R", "R must be > 0");
-  if (!(nl.gas.kappa > 1)) r.fail(at_key("kappa"), "", "gas.kappa", "kappa must be > 1");
+  read_gas_section(r, node, "gas", gas_parameters(), nl);
 }
 
 // parameters: top-level values with units, --set-able, referenced by name.
