@@ -154,6 +154,7 @@ study::Design samples_from(const LoadedNetlist& loaded, const std::vector<std::s
                            const std::vector<std::vector<double>>& rows) {
   study::Design d;
   for (const auto& n : names) d.parameters.push_back(study::resolve_parameter(loaded.netlist(), loaded.registry(), n));
+  study::refuse_repeated(loaded.netlist(), d.parameters, "pneumo.sweep names");
   for (const auto& r : rows) {
     if (r.size() != names.size())
       throw InputError(SourceLocation{loaded.path(), 1, 1}, "", "",

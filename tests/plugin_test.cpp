@@ -135,6 +135,9 @@ INSTANTIATE_TEST_SUITE_P(
         Refusal{"OtherTypeLayout", "defective_3.so", "sizeof(Dual) is"},
         Refusal{"TypeClashesWithBuiltin", "defective_4.so", "its component type 'volume' clashes with the built-in type 'volume'"},
         Refusal{"RegisterFunctionThrows", "defective_5.so", "registering its components failed: the sink's license file is missing"},
+        Refusal{"NullAbiStrings", "defective_6.so", "its plugin information names no pneumo version (a null string"},
+        Refusal{"RegisterThrowsNonStd", "defective_7.so", "registering its components failed: it threw something that is not a std::exception"},
+        Refusal{"EntryPointThrowsNonStd", "defective_8.so", "pneumo_plugin_info() threw something that is not a std::exception"},
         Refusal{"NoEntryPoint", "not_a_plugin.so", "not a pneumo plugin: it exports no pneumo_plugin_info()"},
         Refusal{"MissingFile", "no_such_plugin.so", "no such file"}),
     [](const ::testing::TestParamInfo<Refusal>& info) { return std::string(info.param.name); });

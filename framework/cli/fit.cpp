@@ -33,6 +33,39 @@ std::string bar_rel(double p_abs, double p_amb) {
   return buf;
 }
 
+// Data a least-squares fit can say something about: every value finite
+// (an overflowing 1e400 is read as infinity), and at least one of the
+// columns in `varying` not constant (`why` says why it must vary): a fit of
+// constant data "succeeds" with meaningless coefficients.
+void check_fit_data(const DataTable& d, const std::vector<std::string>& varying, const std::string& why) {
+  for (std::size_t i = 0; i < d.rows.size(); ++i)
+    for (std::size_t c = 0; c < d.rows[i].size() && c < d.names.size(); ++c)
+      if (!std::isfinite(d.rows[i][c]))
+        throw InputError(d.where(i), "", d.names[c],
+                         "column '" + d.names[c] + "': the value is not a finite number (too large, inf or nan)");
+  std::string present;
+  for (const auto& name : varying) {
+    const int c = d.column(name);
+    if (c < 0) continue;
+    for (const auto& row : d.rows)
+      if (row[c] != d.rows.front()[c]) return;
+    present += (present.empty() ? "'" : " and '") + name + "'";
+  }
+  if (!present.empty())
+    throw InputError(SourceLocation{d.file, d.header_line, 1}, "", "",
+                     present + " has the same value in every row: " + why);
+}
+
+// A fit whose sums of squares or coefficients overflowed says nothing.
+void check_fit_result(const FitReport& r, const std::string& file) {
+  bool finite = std::isfinite(r.rss) && std::isfinite(r.tss) && std::isfinite(r.r2);
+  for (const auto& p : r.parameters) finite = finite && std::isfinite(p.value);
+  if (!finite)
+    throw InputError(SourceLocation{file, 0, 0}, "", "",
+                     "the fit overflowed (its sums of squares or coefficients are not finite numbers): the data hold "
+                     "values too large for a measurement; check their units");
+}
+
 class FitCommand {
  public:
   explicit FitCommand(CLI::App& app) {
@@ -84,6 +117,8 @@ class FitCommand {
     }
     check_output(output_, data_);
     const DataTable d = read_data_table(data_);
+    check_fit_data(d, {"v"}, "a fit needs friction measured at several speeds");
+    check_fit_data(d, {"F"}, "a constant force leaves nothing to fit (R2 is undefined)");
     const auto points = friction_points(d, pressure);
     const std::string cmd = "pneumo fit friction " + one_line(data_) + " --model " + model_ +
                             (pressure == components::FrictionPressure::none ? "" : " --pressure " +
@@ -104,6 +139,7 @@ class FitCommand {
       FitReport r;
       try {
         r = fit_friction(m, pts, params);
+        check_fit_result(r, data_);
       } catch (const std::invalid_argument& e) {
         throw data_error(data_, std::string(e.what()) + (std::isnan(p0) ? "" : " at p0 = " + bar_rel(p0, 101325) +
                                                                                    " bar_rel"));
@@ -134,6 +170,8 @@ class FitCommand {
   int run_throttle() {
     check_output(toutput_, tdata_);
     const DataTable d = read_data_table(tdata_);
+    check_fit_data(d, {"p1", "p2"}, "a fit needs flows measured at several pressure ratios");
+    check_fit_data(d, {"m_flow"}, "a constant flow leaves nothing to fit (R2 is undefined)");
     bool has_z = false;
     const auto pts = throttle_points(d, &has_z);
     const std::string header = "pneumo fit throttle " + one_line(tdata_);
@@ -142,6 +180,7 @@ class FitCommand {
     try {
       if (has_z) {
         const NeedleFit f = fit_needle_throttle(pts);
+        for (const auto& r : f.per_opening) check_fit_result(r, tdata_);
         for (std::size_t i = 0; i < f.z.size(); ++i) {
           std::cout << "opening z = " << f.z[i] << " rev:\n" << format_report(f.per_opening[i], "(kg/s)^2");
           ok = ok && f.per_opening[i].converged;
@@ -151,6 +190,7 @@ class FitCommand {
         yaml = needle_throttle_yaml(f, header);
       } else {
         const FitReport r = fit_throttle(pts);
+        check_fit_result(r, tdata_);
         std::cout << "ISO 6358 throttle:\n" << format_report(r, "(kg/s)^2");
         ok = r.converged;
         yaml = throttle_yaml(r, header);

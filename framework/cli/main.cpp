@@ -6,6 +6,8 @@
 #include <CLI/CLI.hpp>
 
 #include <iostream>
+#include <new>
+#include <stdexcept>
 #include <vector>
 
 #include "framework/cli/command.hpp"
@@ -24,8 +26,17 @@ int run(const Command& c) {
     std::cerr << e.what() << "\n";
   } catch (const pneumo::StructureError& e) {
     std::cerr << "pneumo: " << (c.input ? c.input() + ": " : "") << e.what() << "\n";
+  } catch (const std::bad_alloc&) {
+    std::cerr << "pneumo: error: not enough memory for this command; make the study smaller (fewer grid points, "
+                 "samples or evaluations) or the results coarser (a longer output_interval)\n";
+  } catch (const std::length_error& e) {
+    std::cerr << "pneumo: error: the command asks for more elements than memory can hold (" << e.what()
+              << "); make the study smaller\n";
   } catch (const std::exception& e) {
     std::cerr << "pneumo: error: " << e.what() << "\n";
+  } catch (...) {
+    // Only foreign code (a plugin) throws what is not a std::exception.
+    std::cerr << "pneumo: error: an exception that is not a std::exception (thrown by a plugin's code?)\n";
   }
   if (c.on_error) c.on_error();
   return 2;

@@ -3,14 +3,17 @@
 #include <algorithm>
 #include "framework/cli/command.hpp"
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <memory>
+#include <sstream>
 
 #include "components/builtin.hpp"
 #include "framework/cli/command.hpp"
+#include "framework/cli/count_option.hpp"
 #include "framework/cli/split_list.hpp"
 #include "framework/io/files.hpp"
 #include "framework/io/plot.hpp"
@@ -46,10 +49,44 @@ void plot_front(const OptimizeProblem& p, const OptimizeResult& r, const std::st
   }
 }
 
+// A value of a design variable in the unit it is shown in.
+std::string text_of(const StudyParameter& parameter, double si) {
+  std::ostringstream s;
+  s << std::setprecision(4) << parameter.shown(si) << (parameter.display_unit == "1" ? "" : " " + parameter.display_unit);
+  return s.str();
+}
+
+std::string unit_of(const OptimizeResult& r, const std::string& metric) {
+  for (std::size_t m = 0; m < r.metric_names.size() && m < r.metric_units.size(); ++m)
+    if (r.metric_names[m] == metric) return r.metric_units[m];
+  return "";
+}
+
+// Why nothing was feasible: each constraint the least infeasible design
+// evaluated violates, by how much.
+void explain_infeasible(const OptimizeProblem& p, const OptimizeResult& r) {
+  if (r.best.x.size() != p.design.size() || r.best.constrained.size() != p.constraints.size()) return;
+  std::cout << "the least infeasible design evaluated:";
+  for (std::size_t i = 0; i < p.design.size(); ++i)
+    std::cout << " " << p.design[i].parameter.name << " = " << text_of(p.design[i].parameter, r.best.x[i]);
+  std::cout << "\n";
+  for (std::size_t i = 0; i < p.constraints.size(); ++i) {
+    const Constraint& c = p.constraints[i];
+    const double v = r.best.constrained[i];
+    const double excess = c.at_least ? c.limit - v : v - c.limit;
+    if (std::isnan(v))
+      std::cout << "  constraint " << c.text << ": not evaluated (the runs failed)\n";
+    else if (excess > 0)
+      std::cout << "  constraint " << c.text << " violated: " << c.metric << " is " << v << " " << unit_of(r, c.metric)
+                << ", " << excess << " " << unit_of(r, c.metric) << " beyond the limit\n";
+  }
+}
+
 void print_result(const OptimizeProblem& p, const OptimizeOptions& o, const OptimizeResult& r, bool given) {
   std::cout << std::setprecision(4);
   if (!r.found) {
     std::cout << "no feasible design found" << (r.best.reason.empty() ? "" : ": " + r.best.reason) << "\n";
+    explain_infeasible(p, r);
     return;
   }
   std::cout << (given ? "design:" : "optimum:");
@@ -75,6 +112,34 @@ void print_result(const OptimizeProblem& p, const OptimizeOptions& o, const Opti
   std::cout << "\n";
 }
 
+// The design --at gives: NAME=VALUE once for every design variable, within
+// its --design range (outside, "found" would claim what was not searched).
+std::vector<double> design_at(const Netlist& nl, const Registry& reg, const OptimizeProblem& p,
+                              const std::vector<std::string>& at) {
+  auto fail = [](const std::string& message) { throw InputError(SourceLocation{"--at", 0, 0}, "", "", message); };
+  for (const auto& s : at) {
+    const std::string name = s.substr(0, s.find('='));
+    const auto same =
+        std::count_if(at.begin(), at.end(), [&](const std::string& t) { return t.substr(0, t.find('=')) == name; });
+    if (same > 1) fail("--at: " + name + " is given " + std::to_string(same) + " times; give it once");
+    if (std::none_of(p.design.begin(), p.design.end(), [&](const Range& d) { return d.parameter.name == name; }))
+      fail("--at " + s + ": '" + name + "' is not a design variable (give --design " + name + "=LOW:HIGH)");
+  }
+  std::vector<double> x;
+  for (const auto& d : p.design) {
+    const auto it = std::find_if(at.begin(), at.end(), [&](const std::string& s) {
+      return s.substr(0, s.find('=')) == d.parameter.name;
+    });
+    if (it == at.end() || it->find('=') == std::string::npos) fail("--at: give NAME=VALUE for " + d.parameter.name);
+    const double v = parse_value(nl, reg, d.parameter, it->substr(it->find('=') + 1), "--at " + *it);
+    if (!(v >= d.lo && v <= d.hi))
+      fail("--at " + *it + ": outside the --design range of " + d.parameter.name + " (" +
+           text_of(d.parameter, d.lo) + " to " + text_of(d.parameter, d.hi) + "); widen the range or choose a value in it");
+    x.push_back(v);
+  }
+  return x;
+}
+
 int optimize_command(const OptimizeArgs& a) {
   if (process_communicator().size() > 1)
     throw InputError(SourceLocation{a.netlist, 0, 0}, "", "", "pneumo optimize runs on threads (-j), not under mpirun");
@@ -87,10 +152,19 @@ int optimize_command(const OptimizeArgs& a) {
     for (const auto& name : split_list(m)) p.objectives.push_back(name);
   if (p.objectives.empty() || p.objectives.size() > 2 || (p.objectives.size() == 2 && !a.pareto))
     throw InputError(SourceLocation{a.netlist, 1, 1}, "", "", "--minimize takes one metric (two with --pareto)");
+  if (a.pareto && p.objectives.size() != 2)
+    throw InputError(SourceLocation{"--pareto", 0, 0}, "", "",
+                     "--pareto trades two objectives: give --minimize A,B (two metrics, comma separated)");
   const auto available = select_metrics(nl, reg, {});
   (void)select_metrics(nl, reg, p.objectives);  // unknown names are errors listing the available ones
   for (const auto& c : a.constraints) p.constraints.push_back(parse_constraint(available, c));
   for (const auto& u : a.uncertain) p.uncertain.push_back(parse_uncertain(nl, reg, u));
+  {
+    std::vector<StudyParameter> all;
+    for (const auto& d : p.design) all.push_back(d.parameter);
+    for (const auto& u : p.uncertain) all.push_back(u.parameter);
+    refuse_repeated(nl, all, "--design and --uncertain");
+  }
   p.robust = parse_robust(a.robust);
   if (a.samples < 2 && !p.uncertain.empty())
     throw InputError(SourceLocation{"--samples", 0, 0}, "", "", "--samples must be at least 2");
@@ -122,16 +196,7 @@ int optimize_command(const OptimizeArgs& a) {
   if (a.at.empty()) {
     r = optimize(a.netlist, p, o);
   } else {  // evaluate one given design on the samples
-    std::vector<double> x;
-    for (const auto& d : p.design) {
-      const auto it = std::find_if(a.at.begin(), a.at.end(), [&](const std::string& s) {
-        return s.substr(0, s.find('=')) == d.parameter.name;
-      });
-      if (it == a.at.end() || it->find('=') == std::string::npos)
-        throw InputError(SourceLocation{"--at", 0, 0}, "", "", "--at: give NAME=VALUE for " + d.parameter.name);
-      x.push_back(parse_value(nl, reg, d.parameter, it->substr(it->find('=') + 1), "--at " + *it));
-    }
-    r = evaluate_design(a.netlist, p, o, x);
+    r = evaluate_design(a.netlist, p, o, design_at(nl, reg, p, a.at));
   }
   write_result_yaml(p, o, r, output);
   if (!a.quiet) print_result(p, o, r, !a.at.empty());
@@ -155,19 +220,21 @@ Command add_optimize_command(CLI::App& app) {
                 "NAME=normal:MEAN:SD | uniform:LOW:HIGH | lognormal:MEAN:SD (repeatable; units allowed)")
       ->take_all();
   c->add_option("--robust", a->robust, "statistic over the samples: mean, mean+ksd:K or quantile:Q (default mean)");
-  c->add_option("--samples", a->samples, "uncertainty samples (Latin hypercube, the same for every design)");
+  c->add_option("--samples", a->samples, "uncertainty samples (Latin hypercube, the same for every design)")
+      ->transform(whole_number(1, 1000000));
   c->add_option("--seed", a->seed, "seed of the samples");
   c->add_option("--max-evaluations", a->max_evaluations, "design points per optimisation (default 60)")
-      ->check(CLI::PositiveNumber);
+      ->transform(whole_number(1, 2000000000));
   c->add_option("--algorithm", a->algorithm, "direct+cobyla (default), cobyla, bobyqa or direct")
       ->check(CLI::IsMember({"direct+cobyla", "cobyla", "bobyqa", "direct"}));
   c->add_option("--at", a->at, "NAME=VALUE for every design variable: evaluate that design, do not optimise")
       ->take_all();
   c->add_flag("--pareto", a->pareto, "two objectives: the Pareto front (epsilon-constraint), plotted");
-  c->add_option("--pareto-points", a->pareto_points, "levels of the front (default 8)")->check(CLI::PositiveNumber);
+  c->add_option("--pareto-points", a->pareto_points, "levels of the front (default 8)")
+      ->transform(whole_number(1, 10000));
   c->add_flag("--auto-adjust", a->auto_adjust,
               "one design variable: the best setting that meets the constraints, and the range where they hold");
-  c->add_option("-j,--threads", a->threads, "threads")->check(CLI::PositiveNumber);
+  c->add_option("-j,--threads", a->threads, "threads")->transform(whole_number(1, kMaxThreads));
   c->add_option("-o,--output", a->output, "result YAML (default: NETLIST_STEM.optimum.yaml)");
   c->add_flag("-q,--quiet", a->quiet, "no progress or summary");
   return {.app = c, .run = [a] { return optimize_command(*a); }, .input = [a] { return a->netlist; }};

@@ -10,6 +10,7 @@
 #include "components/builtin.hpp"
 #include "framework/io/results.hpp"
 #include "framework/cli/command.hpp"
+#include "framework/cli/count_option.hpp"
 #include "framework/cli/split_list.hpp"
 #include "framework/cli/study_support.hpp"
 #include "framework/study/sensitivity.hpp"
@@ -83,6 +84,11 @@ int sensitivity_command(const SensitivityArgs& a) {
   if (comm.rank() != 0) return 0;
   report(s, runs_path, a.quiet);
   if (!s.complete) return 1;
+  if (s.failed == s.runs) {
+    // Indices of no data would be NaN: say why instead.
+    std::cerr << "pneumo sensitivity: every run failed, there are no indices; why:\n" << failure_summary(s.records);
+    return 1;
+  }
 
   std::ostringstream csv;
   std::ostringstream table;
@@ -131,9 +137,11 @@ Command add_sensitivity_command(CLI::App& app) {
   add_study_options(se, *sa);
   se->add_option("--param", sa->params, "NAME=LOW:HIGH (repeatable)")->take_all();
   se->add_option("--method", sa->method, "morris (screening) or sobol (variance-based indices)");
-  se->add_option("--trajectories", sa->trajectories, "Morris: trajectories (runs = trajectories * (k + 1))");
-  se->add_option("--levels", sa->levels, "Morris: grid levels (even)");
-  se->add_option("--base-samples", sa->base, "Sobol: base samples N (runs = N * (k + 2))");
+  se->add_option("--trajectories", sa->trajectories, "Morris: trajectories (runs = trajectories * (k + 1))")
+      ->transform(whole_number(1, 100000));
+  se->add_option("--levels", sa->levels, "Morris: grid levels (even)")->transform(whole_number(2, 1000));
+  se->add_option("--base-samples", sa->base, "Sobol: base samples N (runs = N * (k + 2))")
+      ->transform(whole_number(1, 1000000));
   se->add_option("--seed", sa->seed, "random seed of the design");
   se->add_option("-o,--output", sa->output,
                  "indices CSV (default: NETLIST_STEM.sensitivity.csv); the runs go to OUTPUT_STEM.runs.csv");

@@ -1,5 +1,7 @@
 #include "framework/cli/study_support.hpp"
 
+#include "framework/cli/count_option.hpp"
+
 #include <filesystem>
 #include <iostream>
 
@@ -13,7 +15,7 @@ using namespace pneumo::study;
 
 void add_study_options(CLI::App* cmd, StudyArgs& a) {
   cmd->add_option("netlist", a.netlist, "netlist file (YAML)")->required();
-  cmd->add_option("-j,--threads", a.threads, "threads (per MPI rank)")->check(CLI::PositiveNumber);
+  cmd->add_option("-j,--threads", a.threads, "threads (per MPI rank)")->transform(whole_number(1, kMaxThreads));
   cmd->add_option("--metrics", a.metrics, "metrics, comma separated (default: all the netlist provides)");
   cmd->add_flag("--eliminate-aliases,!--keep-aliases", a.eliminate,
                 "substitute alias equations before solving (the default; --keep-aliases: hand IDA every unknown)");

@@ -44,6 +44,11 @@ int sweep_command(const SweepArgs& a) {
       std::cerr << "pneumo sweep: " << s.failed << " of " << s.runs << " runs failed (status 'failed' and the reason in "
                 << output << ")\n";
   }
+  if (comm.rank() == 0 && s.complete && s.runs > 0 && s.failed == s.runs) {
+    // Nothing was computed: a results file of failures is not a success.
+    std::cerr << "pneumo sweep: every run failed; why:\n" << failure_summary(s.records);
+    return 1;
+  }
   return s.complete || comm.rank() != 0 ? 0 : 1;
 }
 

@@ -16,6 +16,10 @@ namespace pneumo {
 class Expression {
  public:
   // Throws ExpressionError naming the offending column (0-based).
+  // Longer expressions, or parentheses and signs nested deeper, are refused:
+  // the limits keep parsing and evaluation bounded in memory and stack.
+  static constexpr std::size_t kMaxLength = 100000;  // characters
+  static constexpr std::size_t kMaxDepth = 200;      // nested parentheses and signs
   explicit Expression(const std::string& text);
   double evaluate(const std::function<double(const std::string&)>& lookup) const;
   std::vector<std::string> names() const { return names_; }  // in order of first use (a copy: safe on temporaries)
@@ -23,7 +27,7 @@ class Expression {
   struct Node;
 
  private:
-  std::shared_ptr<const Node> root_;
+  std::shared_ptr<const std::vector<Node>> program_;  // postfix
   std::vector<std::string> names_;
 };
 

@@ -1,11 +1,13 @@
 #include "framework/netlist/metric_reader.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <functional>
 #include <map>
 #include <set>
 
 #include "framework/core/expression.hpp"
+#include "framework/netlist/reader.hpp"
 
 namespace pneumo {
 
@@ -58,6 +60,9 @@ class MetricReader {
       const auto q = units::parse_quantity(s);
       if (q.had_unit && !(q.dim == units::dims::time)) fail(n, what + " '" + s + "' is not a time");
       r.t = q.si_value;
+      if (!std::isfinite(r.t) || r.t < nl_.simulation.t_start)
+        fail(n, what + " '" + s + "' is before the run starts (t_start = " + std::to_string(nl_.simulation.t_start) +
+                    " s); give a time within the run or an event COMPONENT.TAG");
       return r;
     } catch (const units::ParseError&) {
     }
@@ -73,6 +78,16 @@ class MetricReader {
     r.tag = ref.substr(dot + 1);
     if (!component_known(r.component)) fail(n, "no component '" + r.component + "' in the netlist (" + what + ")");
     return r;
+  }
+
+  // The expression quoted, or for a long one the part around `column`, with
+  // the column (1-based) so that the user finds the place.
+  static std::string excerpt(const std::string& expr, std::size_t column) {
+    constexpr std::size_t kShown = 60;
+    if (expr.size() <= kShown) return "'" + expr + "' (column " + std::to_string(column + 1) + ")";
+    const std::size_t from = column > kShown / 2 ? std::min(column - kShown / 2, expr.size() - kShown) : 0;
+    return "'..." + expr.substr(from, kShown) + "...' (column " + std::to_string(column + 1) + " of " +
+           std::to_string(expr.size()) + ")";
   }
 
   int positive_int(const YAML::Node& n, const std::string& s, const std::string& what) const {
@@ -105,6 +120,7 @@ class MetricReader {
                                              "event, integral, expr, audit, with from, to, at, direction, n, unit");
       if (is_kind && !kind.empty()) fail(it->first, "has both '" + kind + "' and '" + k + "'; give one");
       if (is_kind) kind = k;
+      if (keys.count(k)) fail(it->first, "'" + k + "' is given twice; give it once");
       keys[k] = it->second;
     }
     if (kind.empty()) fail(body, "says what to compute with one of max, min, value, final, of, event, integral, expr, audit");
@@ -151,7 +167,7 @@ class MetricReader {
       try {
         (void)Expression(m.expression);
       } catch (const ExpressionError& e) {
-        fail(v, "cannot read the expression '" + m.expression + "': " + e.what());
+        fail(v, "cannot read the expression " + excerpt(m.expression, e.column) + ": " + e.what());
       }
       if (keys.count("unit")) {
         m.unit = text(keys["unit"], "unit");
@@ -180,6 +196,9 @@ class MetricReader {
         if (!windowed) fail(keys[w], std::string(w) + " limits max, min, of and integral only");
         (std::string(w) == "from" ? m.from : m.to) = time(keys[w], w);
       }
+    if (m.from && m.to && !m.from->is_event() && !m.to->is_event() && m.from->t > m.to->t)
+      fail(keys["from"], "from (" + text(keys["from"], "from") + ") is after to (" + text(keys["to"], "to") +
+                             "); the window would be empty");
     if (keys.count("at")) {
       if (m.kind != K::value) fail(keys["at"], "at is for {value: OUTPUT}");
       m.at = time(keys["at"], "at");
@@ -249,6 +268,10 @@ std::vector<MetricDecl> read_metrics(const YAML::Node& section, const Netlist& n
     const std::string name = it->first.Scalar();
     if (where.count(name))
       throw InputError(location_of(nl.file, it->first), "", "metrics." + name, "duplicate metric '" + name + "'");
+    if (const std::string why = netlist_detail::column_name_problem(name); !why.empty())
+      throw InputError(location_of(nl.file, it->first), "", "metrics." + name,
+                       "metric name '" + name + "' " + why +
+                           "; it heads a column of the results CSV: use letters, digits and _");
     where[name] = it->first;
     out.push_back(MetricReader(nl, name, it->first).read(it->second));
   }

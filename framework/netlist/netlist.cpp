@@ -6,6 +6,8 @@
 #include "framework/netlist/reader.hpp"
 #include "framework/netlist/yaml_location.hpp"
 
+#include <yaml-cpp/depthguard.h>
+
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
@@ -226,12 +228,39 @@ void read_simulation(Reader& r, const YAML::Node& section, Netlist& nl) {
 }
 
 
+// The line of the '---' that opens the document whose first node is on
+// `node_line` (the node's own line if no such marker is found).
+int second_document_line(const std::string& text, int node_line) {
+  int line = 1, marker = 0;
+  for (std::size_t i = 0; i < text.size() && line <= node_line; ++line) {
+    if (text.compare(i, 3, "---") == 0) marker = line;
+    const std::size_t nl = text.find('\n', i);
+    if (nl == std::string::npos) break;
+    i = nl + 1;
+  }
+  return marker > 0 ? marker : node_line;
+}
+
+// The text as YAML reads it: without a UTF-8 byte order mark (editors on
+// Windows write one, YAML would make it part of the first key) and with
+// old Mac line ends (CR alone) as line ends; line numbers stay the same.
+std::string normalised(std::string text) {
+  if (text.rfind("\xEF\xBB\xBF", 0) == 0) text.erase(0, 3);
+  for (std::size_t i = 0; i < text.size(); ++i)
+    if (text[i] == '\r' && (i + 1 == text.size() || text[i + 1] != '\n')) text[i] = '\n';
+  return text;
+}
+
 // The YAML tree of a netlist text; syntax errors at their line, with the
 // unclosed bracket or quote and tab indentation named.
 YAML::Node load_root(const std::string& text, const std::string& file_name) {
-  YAML::Node root;
+  std::vector<YAML::Node> documents;
   try {
-    root = YAML::Load(text);
+    documents = YAML::LoadAll(text);
+  } catch (const YAML::DeepRecursion& e) {
+    throw InputError(SourceLocation{file_name, e.mark.line + 1, e.mark.column + 1}, "", "",
+                     "YAML nested too deeply: more than " + std::to_string(e.depth() - 1) +
+                         " lists or mappings inside each other here; a netlist needs only a few levels");
   } catch (const YAML::ParserException& e) {
     SourceLocation where{file_name, e.mark.line + 1, e.mark.column + 1};
     std::string message = "YAML syntax error: " + e.msg;
@@ -257,7 +286,14 @@ YAML::Node load_root(const std::string& text, const std::string& file_name) {
     }
     throw InputError(where, "", "", message);
   }
-  return root;
+  for (std::size_t k = 1; k < documents.size(); ++k)
+    if (documents[k].IsDefined() && !documents[k].IsNull()) {
+      const int line = second_document_line(text, documents[k].Mark().line + 1);
+      throw InputError(SourceLocation{file_name, line, 1}, "", "",
+                       "a second YAML document starts here ('---'); a netlist is one document: remove the '---' "
+                       "line, or move what follows into the first document");
+    }
+  return documents.empty() ? YAML::Node() : documents.front();
 }
 
 // One section of gas constants (gas:, ambient:), each checked against its
@@ -337,6 +373,9 @@ void read_outputs(Reader& r, const YAML::Node& node, Netlist& nl) {
     // name: comp.var, or name: {integral: comp.var} for its time integral
     // (energy from a power, mass from a mass flow), integrated by the solver.
     // Either form may name a display unit: {var: comp.var, unit: barg}.
+    if (const std::string why = column_name_problem(name); !why.empty())
+      r.fail(where, "", "", "output name '" + name + "' " + why +
+                                "; it heads a column of the results CSV: use letters, digits, _ . [ ] and spaces");
     YAML::Node ref = ref_node;
     bool integral = false;
     std::string unit;
@@ -399,7 +438,7 @@ void read_plugins(Reader& r, const YAML::Node& node, Netlist& nl) {
 
 Netlist parse_netlist(const std::string& text, const std::string& file_name) {
   Reader r(file_name);
-  const YAML::Node root = load_root(text, file_name);
+  const YAML::Node root = load_root(normalised(text), file_name);
   if (!root.IsDefined() || root.IsNull())
     throw InputError(SourceLocation{file_name, 1, 1}, "", "", "the netlist is empty");
 

@@ -35,6 +35,16 @@ bool is_identifier(const std::string& s) {
   });
 }
 
+std::string column_name_problem(const std::string& name) {
+  if (name.empty()) return "is empty";
+  for (const char c : name) {
+    if (c == ',') return "contains a comma";
+    if (c == '"') return "contains a double quote";
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) return "contains a control character (a line break or tab)";
+  }
+  return "";
+}
+
 std::string choices_hint(const std::string& given, const std::vector<std::string>& valid) {
   std::string best;
   std::size_t best_d = 3;

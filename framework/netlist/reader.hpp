@@ -21,6 +21,10 @@ using units::Dimension;
 
 std::string join(const std::vector<std::string>& v, const std::string& sep = ", ");
 bool is_identifier(const std::string& s);
+// Why `name` cannot head a column of a results CSV (an output or metric
+// name): empty, or holding a comma, a double quote or a control character
+// such as a line break, which would split or shift the columns; "" if it can.
+std::string column_name_problem(const std::string& name);
 // "did you mean 'X'? valid: ..." for a name not among `valid`.
 std::string choices_hint(const std::string& given, const std::vector<std::string>& valid);
 

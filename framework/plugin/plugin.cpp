@@ -27,6 +27,12 @@ std::string describe_abi(const PluginAbi& abi) {
 // Empty if the plugin's ABI is this pneumo's; otherwise why not.
 std::string abi_mismatch(const PluginAbi& plugin) {
   constexpr PluginAbi own = plugin_abi();
+  // The strings come from the plugin: a null one is a defect, not a crash.
+  for (const auto& [text, what] : {std::pair{plugin.pneumo_version, "pneumo version"}, std::pair{plugin.stdlib, "C++ standard library"},
+                                   std::pair{plugin.compiler, "compiler"}})
+    if (!text)
+      return std::string("its plugin information names no ") + what +
+             " (a null string; declare the plugin with PNEUMO_PLUGIN from framework/plugin/plugin_api.hpp)";
   if (std::strcmp(plugin.pneumo_version, own.pneumo_version) != 0 || std::strcmp(plugin.stdlib, own.stdlib) != 0)
     return "it was built for pneumo " + describe_abi(plugin) + ", but this is pneumo " + describe_abi(own);
   for (int k = 0; k < PluginAbi::kSizes; ++k)
@@ -47,6 +53,36 @@ std::string origin_text(const TypeOrigins& origins, const std::string& type) {
   auto it = origins.find(type);
   if (it == origins.end()) return "the built-in type '" + type + "'";
   return "type '" + type + "' of plugin '" + it->second.path + "' (" + it->second.where.to_string() + ")";
+}
+
+// The entry with the plugin's factory and refinement wrapped, so that an
+// exception that is not a std::exception thrown by the plugin's code becomes
+// an error naming the plugin instead of ending pneumo.
+Registry::Entry guarded(Registry::Entry entry, const std::string& who) {
+  auto unknown = [who](const char* doing) {
+    return std::runtime_error(who + ": " + doing + " threw something that is not a std::exception");
+  };
+  if (entry.make)
+    entry.make = [make = std::move(entry.make), unknown](const Construction& c) {
+      try {
+        return make(c);
+      } catch (const std::exception&) {
+        throw;
+      } catch (...) {
+        throw unknown("making a component");
+      }
+    };
+  if (entry.refine)
+    entry.refine = [refine = std::move(entry.refine), unknown](ComponentInfo i, const ParameterValues& v) {
+      try {
+        return refine(std::move(i), v);
+      } catch (const std::exception&) {
+        throw;
+      } catch (...) {
+        throw unknown("describing an instance");
+      }
+    };
+  return entry;
 }
 
 }  // namespace
@@ -78,7 +114,14 @@ LoadedPlugin load_plugin(const std::string& path, const SourceLocation& where, R
          "() (define one with PNEUMO_PLUGIN from framework/plugin/plugin_api.hpp)");
   PluginEntryPoint entry = nullptr;
   std::memcpy(&entry, &symbol, sizeof entry);
-  const PluginInfo* info = entry();
+  const PluginInfo* info = nullptr;
+  try {
+    info = entry();
+  } catch (const std::exception& e) {
+    fail(std::string(kPluginEntryPoint) + "() failed: " + e.what());
+  } catch (...) {
+    fail(std::string(kPluginEntryPoint) + "() threw something that is not a std::exception");
+  }
   if (!info) fail(std::string(kPluginEntryPoint) + "() returned no plugin information");
   if (info->api_version != kPluginApiVersion)
     fail("plugin API version " + std::to_string(info->api_version) + ", but this pneumo (" PNEUMO_VERSION_STRING
@@ -99,6 +142,8 @@ LoadedPlugin load_plugin(const std::string& path, const SourceLocation& where, R
       info->register_components(staging);
     } catch (const std::exception& e) {
       fail(std::string("registering its components failed: ") + e.what());
+    } catch (...) {
+      fail("registering its components failed: it threw something that is not a std::exception");
     }
     const auto types = staging.types();
     if (types.empty()) fail("it registers no component types");
@@ -110,7 +155,7 @@ LoadedPlugin load_plugin(const std::string& path, const SourceLocation& where, R
              "; rename the plugin's type");
     }
     for (const auto& type : types) {
-      registry.add_entry(*staging.find(type));
+      registry.add_entry(guarded(*staging.find(type), prefix + "component type '" + type + "'"));
       loaded.types.push_back(type);
     }
   }

@@ -311,8 +311,26 @@ class Search {
   }
 
   // Runs `algorithm` from u (updated to the optimiser's end point).
+  // DIRECT allocates its work arrays for the whole budget up front, so it is
+  // given a small budget first and restarted with four times as much while
+  // it uses it all: DIRECT is deterministic, a restart retraces the points
+  // evaluated so far (answered from the history, no new runs), and memory
+  // stays proportional to the points actually evaluated.
   void run(nlopt::algorithm algorithm, std::vector<double>& u, int budget) {
-    if (budget <= 0) return;
+    if (algorithm != nlopt::GN_ORIG_DIRECT_L) {
+      (void)run_once(algorithm, u, budget);
+      return;
+    }
+    const std::vector<double> start = u;
+    for (long chunk = std::min(budget, kFirstDirectBudget);; chunk = std::min<long>(budget, chunk * 4)) {
+      u = start;
+      if (!run_once(algorithm, u, static_cast<int>(chunk)) || chunk >= budget) return;
+    }
+  }
+
+  // True if NLopt stopped because the budget was used up.
+  bool run_once(nlopt::algorithm algorithm, std::vector<double>& u, int budget) {
+    if (budget <= 0) return false;
     const auto n = static_cast<unsigned>(u.size());
     nlopt::opt opt(algorithm, n);
     opt.set_lower_bounds(std::vector<double>(n, 0.0));
@@ -327,10 +345,11 @@ class Search {
     if (algorithm == nlopt::LN_COBYLA || algorithm == nlopt::LN_BOBYQA) opt.set_initial_step(0.1);
     double f = 0.0;
     try {
-      (void)opt.optimize(u, f);
+      return opt.optimize(u, f) == nlopt::MAXEVAL_REACHED;
     } catch (const std::exception&) {
       // NLopt's stops (round-off, forced) keep the best point it had in u.
     }
+    return false;
   }
 
   // The best feasible point evaluated so far (or the least infeasible one).
@@ -421,6 +440,7 @@ class Search {
   std::vector<Constraint> constraints_;
   std::deque<Slot> slots_;
   bool global_ = false;
+  static constexpr int kFirstDirectBudget = 256;
   std::chrono::steady_clock::time_point t0_, last_{};
 };
 
@@ -428,7 +448,7 @@ class Search {
 // its best point for the last digits.
 std::vector<double> search(Search& s, const std::string& algorithm, std::vector<double> u, int budget) {
   if (algorithm == "direct+cobyla") {
-    const int global = std::max(1, budget * 3 / 5);
+    const int global = std::max(1, static_cast<int>(static_cast<long>(budget) * 3 / 5));
     s.run(nlopt::GN_ORIG_DIRECT_L, u, global);
     if (const PointResult* b = s.best()) u = s.unit_of(b->x);
     s.run(nlopt::LN_COBYLA, u, budget - global);
@@ -574,8 +594,17 @@ Constraint parse_constraint(const std::vector<Metric>& available, const std::str
   };
   if (op == std::string::npos || op == 0) fail("expected METRIC<=VALUE or METRIC>=VALUE, e.g. t_cushion<=0.1s");
   c.metric = trim(text.substr(0, op));
-  if (const auto open = c.metric.find('('); open != std::string::npos && c.metric.back() == ')') {
-    c.statistic = parse_robust(c.metric.substr(0, open));
+  if (const auto open = c.metric.find('('); open != std::string::npos) {
+    // STATISTIC(METRIC): the statistic replaces --robust for this constraint.
+    const std::string statistic = trim(c.metric.substr(0, open));
+    if (c.metric.back() != ')' || statistic.empty())
+      fail("'" + c.metric + "': parentheses hold the metric after a statistic, e.g. quantile:0.9(t_cushion)<=0.1s; "
+           "without a statistic write the metric alone");
+    try {
+      c.statistic = parse_robust(statistic);
+    } catch (const InputError&) {
+      fail("unknown statistic '" + statistic + "' before the parentheses: use mean, mean+ksd:K (K >= 0) or quantile:Q (0 < Q < 1)");
+    }
     c.metric = trim(c.metric.substr(open + 1, c.metric.size() - open - 2));
   }
   const auto m = std::find_if(available.begin(), available.end(), [&](const Metric& x) { return x.name == c.metric; });

@@ -1,6 +1,8 @@
 #include "framework/study/parameters.hpp"
 
+#include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -14,6 +16,16 @@ namespace {
 
 SourceLocation netlist_where(const Netlist& nl) {
   return nl.parameters_where.known() ? nl.parameters_where : SourceLocation{nl.file, 1, 1};
+}
+
+// Runs a study plans at most: beyond, a typing error, not a study (and the
+// plan alone would take gigabytes).
+constexpr int kMaxRuns = 10000000;
+
+std::string count_text(double n) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.4g", n);
+  return buf;
 }
 
 const ComponentDecl* find_component(const Netlist& nl, const std::string& name) {
@@ -74,6 +86,17 @@ double parse_value(const Netlist& nl, const Registry& registry, const StudyParam
                      option + ": '" + text + "' has dimension " + q.dim.to_string() + " but " + p.name + " is in " +
                          p.unit);
   return q.si_value;
+}
+
+void refuse_repeated(const Netlist& nl, const std::vector<StudyParameter>& ps, const std::string& what) {
+  auto key = [](const StudyParameter& p) { return p.component.empty() ? p.parameter : p.component + "." + p.parameter; };
+  for (std::size_t i = 0; i < ps.size(); ++i)
+    for (std::size_t j = 0; j < i; ++j)
+      if (key(ps[i]) == key(ps[j]))
+        throw InputError(netlist_where(nl), ps[i].component, ps[i].parameter,
+                         what + ": '" + key(ps[i]) + "' is given twice" +
+                             (ps[i].name == ps[j].name ? "" : " (as '" + ps[j].name + "' and '" + ps[i].name + "')") +
+                             "; give each parameter once");
 }
 
 void assign(Netlist& nl, const StudyParameter& p, double value) {
@@ -148,15 +171,23 @@ Design grid_design(const Netlist& nl, const Registry& registry, const std::vecto
     } catch (const std::exception&) {
       n = 0;
     }
-    if (n < 1) throw InputError(netlist_where(nl), p.component, p.parameter, option + ": COUNT must be an integer >= 1");
+    if (n < 1 || n > kMaxRuns)
+      throw InputError(netlist_where(nl), p.component, p.parameter,
+                       option + ": COUNT must be a whole number from 1 to " + std::to_string(kMaxRuns));
     std::vector<double> axis(n);
     for (int i = 0; i < n; ++i) axis[i] = n == 1 ? a : a + (b - a) * i / (n - 1);
     if (n > 1) axis[n - 1] = b;
     d.parameters.push_back(p);
     axes.push_back(std::move(axis));
   }
-  std::size_t total = axes.empty() ? 0 : 1;
-  for (const auto& a : axes) total *= a.size();
+  refuse_repeated(nl, d.parameters, "--grid");
+  double runs = axes.empty() ? 0 : 1;  // in double: the product of large counts overflows an integer
+  for (const auto& a : axes) runs *= static_cast<double>(a.size());
+  if (runs > kMaxRuns)
+    throw InputError(netlist_where(nl), "", "",
+                     "--grid: the full factorial grid has " + count_text(runs) + " runs, more than the " +
+                         std::to_string(kMaxRuns) + " a sweep takes; use fewer points per axis or --samples");
+  const auto total = static_cast<std::size_t>(runs);
   d.samples.reserve(total);
   for (std::size_t k = 0; k < total; ++k) {
     Sample s(axes.size());
@@ -186,6 +217,9 @@ Design samples_design(const Netlist& nl, const Registry& registry, const std::st
   bool header = false;
   while (std::getline(in, line)) {
     ++line_no;
+    // A UTF-8 byte order mark (as spreadsheets write) is not part of the first name.
+    if (line_no == 1 && line.rfind("\xEF\xBB\xBF", 0) == 0) line.erase(0, 3);
+    if (!line.empty() && line.back() == '\r') line.pop_back();
     if (trim(line).empty() || trim(line)[0] == '#') continue;
     const auto cells = split_trimmed(line, ',');
     const SourceLocation where{path, line_no, 1};
@@ -205,6 +239,11 @@ Design samples_design(const Netlist& nl, const Registry& registry, const std::st
         }
         unit_text.push_back(unit);
       }
+      try {
+        refuse_repeated(nl, d.parameters, "the header");
+      } catch (const InputError& e) {
+        throw InputError(where, e.component(), e.parameter(), e.message());
+      }
       header = true;
       continue;
     }
@@ -221,6 +260,8 @@ Design samples_design(const Netlist& nl, const Registry& registry, const std::st
       }
     }
     d.samples.push_back(std::move(s));
+    if (d.samples.size() > static_cast<std::size_t>(kMaxRuns))
+      throw InputError(where, "", "", "more than " + std::to_string(kMaxRuns) + " runs; split the samples file");
   }
   if (!header) throw InputError(SourceLocation{path, 1, 1}, "", "", "no header line naming the parameters");
   return d;
@@ -244,6 +285,9 @@ std::vector<Range> parse_ranges(const Netlist& nl, const Registry& registry, con
                        option + ": HIGH must be greater than LOW");
     out.push_back(r);
   }
+  std::vector<StudyParameter> ps;
+  for (const auto& r : out) ps.push_back(r.parameter);
+  refuse_repeated(nl, ps, flag);
   return out;
 }
 

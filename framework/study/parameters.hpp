@@ -59,6 +59,11 @@ Design grid_design(const Netlist& netlist, const Registry& registry, const std::
 // '#' lines are comments. Errors name FILE:line.
 Design samples_design(const Netlist& netlist, const Registry& registry, const std::string& path);
 
+// Throws InputError naming the parameter when `parameters` holds one twice
+// (a study that set it twice would silently use one of the values); `what`
+// says where they were given, e.g. "--grid".
+void refuse_repeated(const Netlist& netlist, const std::vector<StudyParameter>& parameters, const std::string& what);
+
 // NAME=lo:hi ranges (for sensitivity analysis).
 struct Range {
   StudyParameter parameter;

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <mutex>
 #include <optional>
 #include <set>
@@ -424,6 +425,21 @@ SweepSummary run_sweep(const std::string& netlist_path, const Design& design, co
   comm.barrier();
   summary.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
   return summary;
+}
+
+std::string failure_summary(const std::vector<RunRecord>& records, std::size_t shown) {
+  std::map<std::string, long> count;
+  for (const auto& r : records)
+    if (!r.ok) ++count[r.reason.empty() ? "no reason recorded" : r.reason];
+  std::vector<std::pair<long, std::string>> by_count;
+  for (const auto& [reason, n] : count) by_count.push_back({-n, reason});
+  std::sort(by_count.begin(), by_count.end());
+  std::string s;
+  for (std::size_t i = 0; i < by_count.size() && i < shown; ++i)
+    s += "  " + std::to_string(-by_count[i].first) + (by_count[i].first == -1 ? " run: " : " runs: ") +
+         by_count[i].second + "\n";
+  if (by_count.size() > shown) s += "  (" + std::to_string(by_count.size() - shown) + " other reasons)\n";
+  return s;
 }
 
 SweepTable read_sweep_csv(const std::string& path) {

@@ -66,6 +66,10 @@ RunRecord run_one(const Netlist& netlist, const Registry& registry, const std::v
                   const Sample& sample, const std::vector<Metric>& metrics,
                   const AssemblyOptions& assembly = {});
 
+// Why runs failed, for a message: each distinct reason once with how many
+// runs gave it (at most `shown` reasons, most frequent first).
+std::string failure_summary(const std::vector<RunRecord>& records, std::size_t shown = 5);
+
 // The results file written by run_sweep, read back (for tests and tools).
 struct SweepTable {
   std::vector<std::string> columns;

@@ -15,6 +15,7 @@ finish raises SimulationError. The C++ work runs without the GIL.
 """
 
 import itertools
+import numbers
 from collections import namedtuple
 
 import numpy as np
@@ -180,10 +181,34 @@ class SweepResult:
                 f"{', '.join(self.parameters)} -> {', '.join(self.metrics)}>")
 
 
+def _count(name, count):
+    """A grid's COUNT: a whole number however it is typed (3, 3.0, numpy.int64(3))."""
+    if isinstance(count, (bool, np.bool_)) or not isinstance(count, (numbers.Integral, numbers.Real)):
+        raise ValueError(f"pneumo.sweep: grid {name!r}: COUNT must be a whole number, not {count!r}")
+    if isinstance(count, numbers.Integral):
+        return int(count)
+    if not (np.isfinite(count) and float(count).is_integer()):
+        raise ValueError(f"pneumo.sweep: grid {name!r}: COUNT must be a whole number, not {count!r}")
+    return int(count)
+
+
+def _rows(samples, names):
+    """The runs of a samples array: one row per run, one column per name; a
+    matrix the other way round is refused rather than silently reshaped."""
+    a = np.asarray(samples, dtype=float)
+    if a.ndim == 1 and len(names) == 1:
+        a = a.reshape(-1, 1)
+    if a.ndim != 2 or a.shape[1] != len(names):
+        hint = " (it looks transposed: pass samples.T)" if a.ndim == 2 and a.shape[0] == len(names) else ""
+        raise ValueError(f"pneumo.sweep: samples has shape {a.shape}; it needs one row per run and one column "
+                         f"per name, {len(names)} columns for names={names}{hint}")
+    return a.tolist()
+
+
 def _axis(net, name, spec):
     """One grid axis in SI: "FROM:TO:COUNT" or (FROM, TO, COUNT) as `pneumo sweep --grid`, or the values."""
-    if isinstance(spec, tuple) and len(spec) == 3 and isinstance(spec[2], int):
-        spec = f"{_value_text(spec[0])}:{_value_text(spec[1])}:{spec[2]}"
+    if isinstance(spec, tuple) and len(spec) == 3:
+        spec = f"{_value_text(spec[0])}:{_value_text(spec[1])}:{_count(name, spec[2])}"
     if isinstance(spec, str):
         return _core.grid_axis(net._core, name, spec)
     return [float(v) for v in np.asarray(spec, dtype=float).ravel()]
@@ -208,7 +233,7 @@ def sweep(net, grid=None, samples=None, names=None, metrics=None, threads=1, set
         if names is None:
             raise ValueError("pneumo.sweep: a samples array needs names= (one per column)")
         names = list(names)
-        rows = np.asarray(samples, dtype=float).reshape(-1, len(names)).tolist()
+        rows = _rows(samples, names)
     raw = _core.sweep(net._core, names, rows, list(metrics or []), _assignments(set), int(threads))
     return SweepResult(raw)
 

@@ -2,6 +2,9 @@
 //   1 built against another pneumo version     2 an unknown plugin API version
 //   3 a type layout that differs from the host  4 a type named like a built-in
 //   5 a register function that throws
+//   6 null strings in its ABI description      7 a register function that throws
+//     (strcmp(NULL) crashed the loader)           something not a std::exception
+//   8 an entry point that throws something not a std::exception
 #include <stdexcept>
 
 #include "framework/model/component.hpp"
@@ -38,6 +41,9 @@ void register_sink(Registry& registry) {
 #if PNEUMO_TEST_DEFECT == 5
   (void)registry;
   throw std::runtime_error("the sink's license file is missing");
+#elif PNEUMO_TEST_DEFECT == 7
+  registry.add<Sink>();
+  throw 42;
 #else
   registry.add<Sink>();
 #endif
@@ -46,6 +52,9 @@ void register_sink(Registry& registry) {
 }  // namespace
 
 extern "C" __attribute__((visibility("default"))) const PluginInfo* pneumo_plugin_info() {
+#if PNEUMO_TEST_DEFECT == 8
+  throw 42;
+#endif
   static PluginInfo info{kPluginApiVersion, "defective test plugin", plugin_abi(), &register_sink};
 #if PNEUMO_TEST_DEFECT == 1
   info.abi.pneumo_version = "0.0.1";  // as compiled against an older pneumo's headers
@@ -53,6 +62,10 @@ extern "C" __attribute__((visibility("default"))) const PluginInfo* pneumo_plugi
   info.api_version = kPluginApiVersion + 41;
 #elif PNEUMO_TEST_DEFECT == 3
   info.abi.sizes[0] += 64;  // as if its Dual had other kMaxLocal slots
+#elif PNEUMO_TEST_DEFECT == 6
+  info.abi.pneumo_version = nullptr;
+  info.abi.stdlib = nullptr;
+  info.abi.compiler = nullptr;
 #endif
   return &info;
 }

@@ -5,7 +5,7 @@ set(PNEUMO_TEST_PLUGIN_DIR ${CMAKE_CURRENT_BINARY_DIR}/plugins)
 pneumo_add_plugin(pneumo_test_seal_leakage ${PROJECT_SOURCE_DIR}/examples/custom_component/seal_leakage.cpp)
 set_target_properties(pneumo_test_seal_leakage PROPERTIES
   OUTPUT_NAME seal_leakage LIBRARY_OUTPUT_DIRECTORY ${PNEUMO_TEST_PLUGIN_DIR})
-foreach(defect IN ITEMS 1 2 3 4 5)
+foreach(defect IN ITEMS 1 2 3 4 5 6 7 8)
   pneumo_add_plugin(pneumo_test_defective_${defect} ${CMAKE_CURRENT_SOURCE_DIR}/plugins/defective_plugin.cpp)
   target_compile_definitions(pneumo_test_defective_${defect} PRIVATE PNEUMO_TEST_DEFECT=${defect})
   set_target_properties(pneumo_test_defective_${defect} PROPERTIES
