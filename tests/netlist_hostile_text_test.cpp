@@ -121,7 +121,7 @@ TEST(NetlistHostileText, ADeviceIsRefusedNotReadForever) {
     (void)load_netlist("/dev/zero");
     ADD_FAILURE() << "/dev/zero was read as a netlist";
   } catch (const InputError& e) {
-    EXPECT_TRUE(has(e.what(), "this is a device")) << e.what();
+    EXPECT_TRUE(has(e.what(), "not a regular file")) << e.what();
   }
 }
 
