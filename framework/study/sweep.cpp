@@ -153,6 +153,9 @@ std::vector<RunRecord> read_journals(const std::string& output, const std::strin
   for (const auto& path : journal_files(output)) {
     std::string text;
     try {
+      if (fs::is_symlink(path))  // pneumo makes journals itself, never as links
+        throw std::invalid_argument("sweep journal " + path.string() +
+                                    ": this is a symbolic link pneumo did not make; remove it or write elsewhere (-o)");
       text = read_input_file(path.string(), "sweep journal");
     } catch (const std::invalid_argument& e) {
       throw InputError(SourceLocation{path.string(), 0, 0}, "", "", e.what());
