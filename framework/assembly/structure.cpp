@@ -173,6 +173,7 @@ void System::build_nodes() {
   add_node_variables(l);
   int mode = 0, root = 0;
   for (std::size_t ci = 0; ci < c.components.size(); ++ci) add_component_block(static_cast<int>(ci), l, mode, root);
+  guess_junction_pressures(l);
   modes_.assign(mode, 0.0);
   n_roots_ = root;
   reset_modes();
@@ -298,6 +299,45 @@ void System::add_internal_variables(const Component& comp, Block& b) {
       start_value_[g] = local_start[local];
       start_kind_[g] = kind;
       nominal_[g] = std::max(nominal_[g], std::abs(local_start[local]));
+    }
+  }
+}
+
+// A junction without a volume (no component gives its pressure a start
+// value) starts at the mean of the start pressures at the far ends of the
+// two-port elements it joins (throttles, flow controls, check valves),
+// passed on along chains of such junctions; ambient where it joins none.
+// Started at ambient, a junction between a supply and a charged chamber
+// chokes every path into it, so no equation depends on its pressure and the
+// Newton matrix of the consistent-start search is singular; between its
+// neighbours the paths are subsonic and the flow balance decides. (Across a
+// valve of more ports the far end is not known before its position is.)
+void System::guess_junction_pressures(const NodeLayout& l) {
+  const Circuit& c = circuit_;
+  std::vector<char> known(n_, 0);
+  for (int v = 0; v < n_; ++v) known[v] = start_kind_[v] != 0;
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (std::size_t ni = 0; ni < l.nodes.size(); ++ni) {
+      const int p = l.across[ni];
+      if (p < 0 || known[p] || l.nodes[ni].empty() || spec(c, l.nodes[ni][0]).domain != Domain::pneumatic) continue;
+      double sum = 0.0;
+      int count = 0;
+      for (const auto& port : l.nodes[ni]) {
+        const auto& ports = c.components[port.component]->info().ports;
+        const auto pneumatic = std::count_if(ports.begin(), ports.end(),
+                                             [](const PortSpec& q) { return q.domain == Domain::pneumatic; });
+        if (pneumatic != 2) continue;
+        for (std::size_t q = 0; q < ports.size(); ++q) {
+          if (ports[q].domain != Domain::pneumatic || static_cast<int>(q) == port.port) continue;
+          const int other = l.across[l.node({port.component, static_cast<int>(q)})];
+          if (other != p && known[other]) sum += start_value_[other], ++count;
+        }
+      }
+      if (count == 0) continue;
+      start_value_[p] = sum / count;
+      known[p] = 1;
+      changed = true;
     }
   }
 }

@@ -179,6 +179,7 @@ class System {
   void add_internal_variables(const Component& comp, Block& b);
   void add_node_block(std::unique_ptr<Block> b, std::string label, std::vector<std::string> row_names, NodeLayout& l,
                       int node);
+  void guess_junction_pressures(const NodeLayout& l);
   void route_streams(NodeLayout& l);
   void add_node_balances(NodeLayout& l);
   void build_pattern();
