@@ -31,3 +31,22 @@ grid meter_out "$here/meter_out_grid.yaml" \
 # 0.05-1 dm3/(s*bar): 7 x 8 x 8 = 448 points.
 grid sequence_ab "$here/../netlists/sequence_ab.yaml" \
   --grid p_supply=3e5:9e5:7 --grid load_A.m=0.5:30:8 --grid flow_A_rod.C=0.5e-9:1e-8:8
+
+# the cushion rig with the full cylinder model: p_supply 3-9 bar, load
+# 1-20 kg, cushion throttle 0.2-3 rev, wall heat 10-200 W/(m2 K):
+# 7 x 6 x 6 x 2 = 504 points.
+grid cushion_rig_full "$here/../netlists/cushion_rig_full.yaml" \
+  --grid "p_supply=3 bar:9 bar:7" --grid "m_load=1 kg:20 kg:6" --grid "z_EC=0.2 rev:3 rev:6" \
+  --grid "wall_alpha=10 W/(m2*K):200 W/(m2*K):2"
+
+# the five-cylinder assembly line: p_supply 4-8 bar, loads of A and C,
+# flow controls of A and D: 5 x 4 x 4 x 3 x 3 = 720 points.
+grid assembly_line "$here/../netlists/assembly_line.yaml" \
+  --grid "p_supply=5 bar:9 bar:5" --grid "load_A.m=0.2 kg:5 kg:4" --grid "load_C.m=1 kg:20 kg:4" \
+  --grid "flow_A_rod.C=0.03 dm3/(s*bar):0.3 dm3/(s*bar):3" --grid "flow_D_rod.C=0.1 dm3/(s*bar):1 dm3/(s*bar):3"
+
+# the meter-out cylinder drawn as in FluidSIM, valve ports straight into the
+# flow controls (junctions without volume): the grid of meter_out above.
+grid meter_out_direct "$here/meter_out_direct_grid.yaml" \
+  --grid p_s=501325:801325:7 --grid m_load=1:10:6 \
+  --grid C_cap=0.5e-9:3e-9:6 --grid C_rod=0.5e-9:3e-9:6
