@@ -37,7 +37,7 @@ using Clock = std::chrono::steady_clock;
 
 // CPU time of this thread, in ms: on a machine shared with other jobs the
 // wall time of a run includes waiting for a core; the CPU time does not.
-// Both are reported; the figures the README quotes are CPU time.
+// Both are reported; the figures docs/benchmarks.md quotes are CPU time.
 double cpu_ms() {
   timespec ts{};
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);

@@ -2,7 +2,7 @@
 // 1.5 s) and netlists/assembly_line.yaml (6 cylinders, 2.5 s), each run
 // elaborated and solved on one thread. Prints the median and least CPU and
 // wall time over the runs, the cycle (takt) time the sequencer reports, and
-// the solver's counts - the figures the README quotes for the takt.
+// the solver's counts - the figures docs/benchmarks.md quotes for the takt.
 //
 //   sequence_benchmark [runs]       (default 10)
 #include <algorithm>

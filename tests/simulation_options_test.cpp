@@ -1,5 +1,5 @@
 // The solver settings are declared once (framework/model/simulation_options.cpp):
-// the netlist reader, `pneumo simulate --help` and README's table must say
+// the netlist reader, `pneumo simulate --help` and the table in docs/reference/netlist.md must say
 // what the table says - every key, its unit, default and range.
 #include <gtest/gtest.h>
 
@@ -123,9 +123,9 @@ TEST(SimulationOptions, CliRejectsABadValueWithFileLineAndStatus2) {
   EXPECT_NE(out.find("simulation.rtol"), std::string::npos) << out;
 }
 
-// README's table of `simulation:` keys: | `key` | unit | default | valid | meaning |
-TEST(SimulationOptions, ReadmeTableAgreesWithTheDeclaration) {
-  const std::string readme = test_support::read_file(std::string(PNEUMO_SOURCE_DIR) + "/README.md");
+// docs/reference/netlist.md's table of `simulation:` keys: | `key` | unit | default | valid | meaning |
+TEST(SimulationOptions, ReferenceTableAgreesWithTheDeclaration) {
+  const std::string readme = test_support::read_file(std::string(PNEUMO_SOURCE_DIR) + "/docs/reference/netlist.md");
   for (const auto& o : simulation_options()) {
     SCOPED_TRACE(o.spec.name);
     const std::string head = "| `" + o.spec.name + "` |";
