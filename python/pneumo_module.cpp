@@ -77,7 +77,8 @@ Simulation simulate(const LoadedNetlist& loaded, const std::vector<std::string>&
     add_metric_outputs(nl, all);
     if (metrics_read_audit(nl, all)) audits = prepare_energy_audit(nl, loaded.registry());
     system = std::make_unique<System>(elaborate(nl, loaded.registry()));
-    s.metric_units = metric_units(nl, system->circuit());
+    for (const auto& d : metric_dimensions(nl, system->circuit())) s.metric_units.push_back(units::si_unit_name(d));
+    (void)metric_units(nl, system->circuit());  // a declared unit that does not fit is an error here too
   }
   s.run = run_system(*system, solver_options(nl.simulation));
   if (s.run.solver.ok)
@@ -195,7 +196,7 @@ py::dict sweep_dict(const study::Design& d, const std::vector<study::Metric>& me
     py::array_t<double> a(n);
     auto v = a.mutable_unchecked<1>();
     for (py::ssize_t k = 0; k < n; ++k) v(k) = records[k].ok ? records[k].metrics[m] : std::nan("");
-    ms.append(py::make_tuple(metrics[m].name, metrics[m].unit, a));
+    ms.append(py::make_tuple(metrics[m].name, metrics[m].si_unit, a));  // Python keeps SI
   }
   py::array_t<bool> ok(n);
   py::array_t<long> steps(n);

@@ -178,31 +178,83 @@ void add_metric_outputs(Netlist& nl, const std::vector<bool>& marked) {
 
 void drop_metric_columns(ResultsTable& table) { table.drop_columns(kPrefix); }
 
-std::vector<std::string> metric_units(const Netlist& nl, const Circuit& circuit) {
-  std::map<std::string, std::string> unit_of;
-  for (const auto& p : circuit.probes) unit_of[p.name] = p.unit;
-  std::vector<std::string> out;
+namespace {
+
+// The SI dimension of each metric; expressions from the metrics they name.
+std::vector<units::Dimension> dimensions_of(const Netlist& nl, const std::map<std::string, const Probe*>& probe) {
+  std::vector<units::Dimension> out;
+  auto output_dim = [&](const std::string& name) {
+    const auto it = probe.find(name);
+    return it == probe.end() ? units::Dimension{} : units::dimension_of(it->second->unit);
+  };
   for (const auto& m : nl.metrics) {
     switch (m.kind) {
       case Kind::max:
       case Kind::min:
       case Kind::value:
-      case Kind::final_value: out.push_back(unit_of[m.output]); break;
+      case Kind::final_value: out.push_back(output_dim(m.output)); break;
       case Kind::crossing: {
-        const units::Dimension d = units::dimension_of(unit_of[m.output]);
+        const units::Dimension d = output_dim(m.output);
         if (m.level.had_unit && !(m.level.dim == d))
           throw InputError(m.where, "", "metrics." + m.name,
                            "metric '" + m.name + "': the level has dimension " + m.level.dim.to_string() +
-                               " but output '" + m.output + "' is in " + unit_of[m.output]);
-        out.push_back("s");
+                               " but output '" + m.output + "' is in " + units::si_unit_name(d));
+        out.push_back(units::dims::time);
         break;
       }
-      case Kind::event_time: out.push_back("s"); break;
-      case Kind::integral:  // the hidden column holds the integral already
-        out.push_back(unit_of.count(kPrefix + m.name) ? unit_of[kPrefix + m.name] : "");
+      case Kind::event_time: out.push_back(units::dims::time); break;
+      case Kind::integral: out.push_back(output_dim(kPrefix + m.name)); break;
+      case Kind::audit:
+        out.push_back(m.output.substr(m.output.find('.') + 1) == "residual" ? units::dims::none : units::dims::energy);
         break;
-      case Kind::audit: out.push_back(m.output.substr(m.output.find('.') + 1) == "residual" ? "1" : "J"); break;
-      case Kind::expression: out.push_back(m.unit.empty() ? "1" : m.unit); break;
+      case Kind::expression: out.push_back(units::dims::none); break;
+    }
+  }
+  // Expressions name other metrics, declared before or after them (no cycles:
+  // checked when read), so as many passes as metrics settle every dimension.
+  for (std::size_t pass = 0; pass < nl.metrics.size(); ++pass)
+    for (std::size_t i = 0; i < nl.metrics.size(); ++i) {
+      const MetricDecl& m = nl.metrics[i];
+      if (m.kind != Kind::expression) continue;
+      const auto d = Expression(m.expression).dimension([&](const std::string& n) {
+        const int j = index_of(nl, n);
+        return j >= 0 ? out[j] : units::dims::time;  // otherwise an event COMPONENT.TAG
+      });
+      if (!d && !m.unit.empty() && pass + 1 == nl.metrics.size())
+        throw InputError(m.where, "", "metrics." + m.name,
+                         "metric '" + m.name + "': the expression adds values of different dimensions, so unit '" +
+                             m.unit + "' cannot be checked; make each sum one kind of quantity");
+      out[i] = d.value_or(units::dims::none);
+    }
+  return out;
+}
+
+}  // namespace
+
+std::vector<units::Dimension> metric_dimensions(const Netlist& nl, const Circuit& circuit) {
+  std::map<std::string, const Probe*> probe;
+  for (const auto& p : circuit.probes) probe[p.name] = &p;
+  return dimensions_of(nl, probe);
+}
+
+std::vector<units::DisplayUnit> metric_units(const Netlist& nl, const Circuit& circuit) {
+  std::map<std::string, const Probe*> probe;
+  for (const auto& p : circuit.probes) probe[p.name] = &p;
+  const std::vector<units::Dimension> dims = dimensions_of(nl, probe);
+  std::vector<units::DisplayUnit> out;
+  for (std::size_t i = 0; i < nl.metrics.size(); ++i) {
+    const MetricDecl& m = nl.metrics[i];
+    const bool of_output = m.kind == Kind::max || m.kind == Kind::min || m.kind == Kind::value || m.kind == Kind::final_value;
+    if (m.unit.empty() && of_output && probe.count(m.output) && !probe[m.output]->display.unit.empty()) {
+      out.push_back(probe[m.output]->display);  // the unit the output is shown in
+      continue;
+    }
+    try {
+      out.push_back(units::display_unit(m.unit, dims[i], nl.gas.p_ambient));
+    } catch (const std::exception& e) {  // ParseError was caught when reading; a dimension that does not fit
+      throw InputError(m.where, "", "metrics." + m.name,
+                       "metric '" + m.name + "': unit " + e.what() + "; give a unit of " + units::si_unit_name(dims[i]) +
+                           " or leave unit out");
     }
   }
   return out;

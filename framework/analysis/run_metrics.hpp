@@ -25,10 +25,14 @@ void add_metric_outputs(Netlist& netlist, const std::vector<bool>& marked);
 // Removes those columns from a results table.
 void drop_metric_columns(ResultsTable& table);
 
-// The unit of each netlist metric, from the units of the circuit's outputs
-// (elaborated with add_metric_outputs() for every integral metric).
-// Throws InputError when a crossing level's dimension is not its output's.
-std::vector<std::string> metric_units(const Netlist& netlist, const Circuit& circuit);
+// The SI dimension of each netlist metric (expressions: from what they name).
+std::vector<units::Dimension> metric_dimensions(const Netlist& netlist, const Circuit& circuit);
+// The unit each netlist metric is shown in (values stay SI; DisplayUnit::shown
+// converts): its declared `unit:`, else the unit its output is shown in, else
+// SI. From the circuit's outputs (elaborated with add_metric_outputs() for
+// every integral metric). Throws InputError naming the metric when a declared
+// unit or a crossing level does not fit the metric's dimension.
+std::vector<units::DisplayUnit> metric_units(const Netlist& netlist, const Circuit& circuit);
 
 // Values of the marked metrics (NaN for the others). `audits`: the run's
 // energy audits if any marked metric reads one.

@@ -102,7 +102,7 @@ int sensitivity_command(const SensitivityArgs& a) {
   }
   for (std::size_t m = 0; m < metrics.size(); ++m) {
     std::vector<double> f;
-    for (const auto& r : s.records) f.push_back(r.ok ? r.metrics[m] : NAN);
+    for (const auto& r : s.records) f.push_back(r.ok ? metrics[m].display.shown(r.metrics[m]) : NAN);
     table << "  " << metrics[m].name << " [" << metrics[m].unit << "]\n";
     if (a.method == "morris") {
       const MorrisIndices ix = morris_indices(morris, f);

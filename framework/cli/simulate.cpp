@@ -62,17 +62,18 @@ void write_energy_audit(const std::vector<EnergyAudit>& audits, const std::strin
   }
 }
 
-void print_metrics(const Netlist& nl, const std::vector<double>& values, const std::vector<std::string>& units) {
+void print_metrics(const Netlist& nl, const std::vector<double>& values, const std::vector<units::DisplayUnit>& units) {
   for (std::size_t i = 0; i < nl.metrics.size(); ++i)
-    std::cout << "metric " << nl.metrics[i].name << " = " << std::setprecision(6) << values[i]
-              << (units[i].empty() ? "" : " ") << units[i] << "\n";
+    std::cout << "metric " << nl.metrics[i].name << " = " << std::setprecision(6) << units[i].shown(values[i])
+              << (units[i].unit == "1" ? "" : " " + units[i].unit) << "\n";
 }
 
 void write_metrics_csv(const std::string& path, const Netlist& nl, const std::vector<double>& values,
-                       const std::vector<std::string>& units) {
+                       const std::vector<units::DisplayUnit>& units) {
   std::ostringstream csv;
   csv << "metric,value,unit\n" << std::setprecision(17);
-  for (std::size_t i = 0; i < nl.metrics.size(); ++i) csv << nl.metrics[i].name << "," << values[i] << "," << units[i] << "\n";
+  for (std::size_t i = 0; i < nl.metrics.size(); ++i)
+    csv << nl.metrics[i].name << "," << units[i].shown(values[i]) << "," << units[i].unit << "\n";
   write_text_atomic(path, csv.str());
 }
 
@@ -102,8 +103,10 @@ void print_written(const ResultsTable& table, const std::string& output) {
   if (!table.rows.empty()) {
     const auto& last = table.rows.back();
     std::cout << "final:";
-    for (std::size_t i = 0; i < last.size(); ++i)
-      std::cout << " " << table.names[i] << "=" << last[i] << (table.units[i].empty() ? "" : " ") << table.units[i];
+    for (std::size_t i = 0; i < last.size(); ++i) {
+      const units::DisplayUnit d = table.shown_as(i);
+      std::cout << " " << table.names[i] << "=" << d.shown(last[i]) << (d.unit.empty() || d.unit == "1" ? "" : " " + d.unit);
+    }
     std::cout << "\n";
   }
 }
@@ -137,7 +140,7 @@ int simulate_command(const SimulateArgs& a) {
   if (!user_outputs)
     throw InputError(SourceLocation{nl.file, 1, 1}, "", "",
                      "the netlist has no 'outputs:' (name: component.variable); nothing would be written");
-  const std::vector<std::string> metric_unit = metric_units(nl, circuit);
+  const std::vector<units::DisplayUnit> metric_unit = metric_units(nl, circuit);
   RunResult run = run_circuit(std::move(circuit), solver_options(nl.simulation));
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::vector<EnergyAudit> audits;

@@ -192,4 +192,32 @@ double Expression::evaluate(const std::function<double(const std::string&)>& loo
   return stack.back();
 }
 
+std::optional<units::Dimension> Expression::dimension(
+    const std::function<units::Dimension(const std::string&)>& dimension_of) const {
+  struct Term {
+    units::Dimension dim;
+    bool number;  // a bare number: fits any dimension in a sum
+  };
+  std::vector<Term> stack;
+  for (const Node& n : *program_) {
+    if (n.op == 0) {
+      stack.push_back({{}, true});
+    } else if (n.op == 'n') {
+      stack.push_back({dimension_of(names_[n.name]), false});
+    } else if (n.op != 'u') {
+      const Term b = stack.back();
+      stack.pop_back();
+      Term& a = stack.back();
+      if (n.op == '*' || n.op == '/') {
+        a = {n.op == '*' ? a.dim * b.dim : a.dim / b.dim, a.number && b.number};
+      } else if (a.number) {
+        a = b;
+      } else if (!b.number && !(a.dim == b.dim)) {
+        return std::nullopt;
+      }
+    }
+  }
+  return stack.back().dim;
+}
+
 }  // namespace pneumo

@@ -7,9 +7,12 @@
 
 #include <functional>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+#include "framework/core/units.hpp"
 
 namespace pneumo {
 
@@ -22,6 +25,11 @@ class Expression {
   static constexpr std::size_t kMaxDepth = 200;      // nested parentheses and signs
   explicit Expression(const std::string& text);
   double evaluate(const std::function<double(const std::string&)>& lookup) const;
+  // The dimension of the value, given each name's. A number takes the
+  // dimension of what it is added to (`t_done - 0.1`) and is dimensionless in
+  // a product; nullopt when a sum mixes dimensions (a time plus a pressure).
+  std::optional<units::Dimension> dimension(
+      const std::function<units::Dimension(const std::string&)>& dimension_of) const;
   std::vector<std::string> names() const { return names_; }  // in order of first use (a copy: safe on temporaries)
 
   struct Node;

@@ -670,6 +670,14 @@ std::string format_si(double si_value, Dimension dim) {
   return number + " " + si_unit_name(dim);
 }
 
+DisplayUnit display_unit(std::string_view unit_text, Dimension dim, double ambient_pressure_pa) {
+  if (unit_text.empty()) return {si_unit_name(dim), 1.0, 0.0};
+  const Unit u = parse_unit(unit_text);
+  if (!(u.dim == dim))
+    throw DimensionMismatch("'" + std::string(unit_text) + "' measures " + si_unit_name(u.dim) + ", not " + si_unit_name(dim));
+  return {std::string(unit_text), u.scale, u.offset + (u.gauge ? ambient_pressure_pa : 0.0)};
+}
+
 std::vector<std::string> known_unit_names() {
   std::vector<std::string> names;
   for (const auto& [name, unit] : unit_table()) names.push_back(name);

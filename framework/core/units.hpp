@@ -92,6 +92,7 @@ struct Unit {
 struct DisplayUnit {
   std::string unit;
   double scale = 1.0, offset = 0.0;
+  double shown(double si) const { return (si - offset) / scale; }
 };
 
 // Thrown for every malformed unit or quantity. what() is a human readable
@@ -139,6 +140,16 @@ std::string si_unit_name(Dimension dim);
 // SI unit, e.g. (5e5, pressure) -> "500000 Pa", (0.032, length) -> "0.032 m".
 // Uses the shortest representation that parses back to the same double.
 std::string format_si(double si_value, Dimension dim);
+
+// The one way a value of dimension `dim` meets a unit it is shown in: `unit_text`
+// ("ms", "barg", "mm", "degC") or, when empty, the SI unit (si_unit_name).
+// Throws ParseError for an unknown unit and DimensionMismatch when the unit is
+// not of `dim` (what() names both, e.g. "'bar' is a pressure (kg m^-1 s^-2),
+// not s").
+struct DimensionMismatch : std::invalid_argument {
+  using std::invalid_argument::invalid_argument;
+};
+DisplayUnit display_unit(std::string_view unit_text, Dimension dim, double ambient_pressure_pa = 101325.0);
 
 // Every unit name parse_unit() accepts as a single token (for docs/completion).
 std::vector<std::string> known_unit_names();

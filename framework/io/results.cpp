@@ -31,6 +31,11 @@ int ResultsTable::column(const std::string& name) const {
   return -1;
 }
 
+units::DisplayUnit ResultsTable::shown_as(std::size_t i) const {
+  if (i < display.size() && !display[i].unit.empty()) return display[i];
+  return {i < units.size() ? units[i] : "", 1.0, 0.0};
+}
+
 namespace {
 
 void write_table(std::ostream& out, const ResultsTable& table) {
@@ -46,7 +51,7 @@ void write_table(std::ostream& out, const ResultsTable& table) {
   for (const auto& row : table.rows) {
     for (std::size_t i = 0; i < row.size(); ++i) {
       const units::DisplayUnit* d = shown(i);
-      out << (i ? "," : "") << (d ? (row[i] - d->offset) / d->scale : row[i]);
+      out << (i ? "," : "") << (d ? d->shown(row[i]) : row[i]);
     }
     out << "\n";
   }

@@ -23,6 +23,8 @@ struct ResultsTable {
 
   void add_row(std::vector<double> row) { rows.push_back(std::move(row)); }
   int column(const std::string& name) const;
+  // How column i is shown: its display unit, else its SI unit as is.
+  units::DisplayUnit shown_as(std::size_t i) const;
   // Removes every column whose name starts with `prefix` (hidden outputs).
   void drop_columns(const std::string& prefix);
 };

@@ -244,13 +244,13 @@ Probe make_probe(const Netlist& nl, const Circuit& circuit, const std::map<std::
     probe.unit = probe.unit == "W" ? "J" : probe.unit == "kg/s" ? "kg" : probe.unit + "*s";
   }
   if (!o.unit.empty()) {
-    const units::Unit u = units::parse_unit(o.unit);
-    if (!(u.dim == units::dimension_of(probe.unit)))
+    try {
+      probe.display = units::display_unit(o.unit, units::dimension_of(probe.unit), nl.gas.p_ambient);
+    } catch (const units::DimensionMismatch& e) {
       throw InputError(o.unit_where, o.component, "",
-                       "output '" + o.name + "': unit '" + o.unit + "' (" + u.dim.to_string() + ") does not fit '" +
-                           o.quantity + "' in " + probe.unit + " (" + units::dimension_of(probe.unit).to_string() +
-                           ")");
-    probe.display = {o.unit, u.scale, u.offset + (u.gauge ? nl.gas.p_ambient : 0.0)};
+                       "output '" + o.name + "': unit '" + o.unit + "' does not fit '" + o.quantity + "' in " + probe.unit +
+                           ": " + e.what());
+    }
   }
   return probe;
 }

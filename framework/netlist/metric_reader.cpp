@@ -169,16 +169,14 @@ class MetricReader {
       } catch (const ExpressionError& e) {
         fail(v, "cannot read the expression " + excerpt(m.expression, e.column) + ": " + e.what());
       }
-      if (keys.count("unit")) {
-        m.unit = text(keys["unit"], "unit");
-        try {
-          (void)units::parse_unit(m.unit);
-        } catch (const units::ParseError& e) {
-          fail(keys["unit"], "unit '" + m.unit + "': " + e.what());
-        }
+    }
+    if (keys.count("unit")) {
+      m.unit = text(keys["unit"], "unit");
+      try {
+        (void)units::parse_unit(m.unit);
+      } catch (const units::ParseError& e) {
+        fail(keys["unit"], "unit '" + m.unit + "': " + e.what());
       }
-    } else if (keys.count("unit")) {
-      fail(keys["unit"], "unit is declared only for expressions; the others take their output's unit");
     }
   }
 

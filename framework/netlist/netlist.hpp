@@ -123,7 +123,7 @@ struct MetricDecl {
   int occurrence = 1;
   TimeRef event;
   std::string expression;
-  std::string unit;  // declared unit of an expression ("" = dimensionless)
+  std::string unit;  // declared display unit ("" = its output's, else SI)
   SourceLocation where;
 };
 

@@ -47,9 +47,12 @@ std::vector<Metric> available_metrics(const Netlist& nl, const Registry& registr
   if (!nl.metrics.empty()) {
     Netlist with_outputs = nl;
     add_metric_outputs(with_outputs, std::vector<bool>(nl.metrics.size(), true));
-    const auto units = metric_units(nl, elaborate(with_outputs, registry));
+    const Circuit circuit = elaborate(with_outputs, registry);
+    const auto units = metric_units(nl, circuit);
+    const auto dims = metric_dimensions(nl, circuit);
     for (std::size_t i = 0; i < nl.metrics.size(); ++i)
-      out.push_back({nl.metrics[i].name, units[i], description_of(nl.metrics[i]), {}, nullptr, static_cast<int>(i)});
+      out.push_back({nl.metrics[i].name, units[i].unit, description_of(nl.metrics[i]), {}, nullptr,
+                     static_cast<int>(i), units[i], units::si_unit_name(dims[i])});
   }
   std::lock_guard<std::mutex> lock(registered_mutex());
   for (const auto& m : registered()) {
@@ -57,7 +60,9 @@ std::vector<Metric> available_metrics(const Netlist& nl, const Registry& registr
       return std::any_of(nl.outputs.begin(), nl.outputs.end(), [&](const OutputDecl& o) { return o.name == need; });
     });
     const bool shadowed = std::any_of(out.begin(), out.end(), [&](const Metric& o) { return o.name == m.name; });
-    if (has_outputs && !shadowed) out.push_back(m);
+    if (!has_outputs || shadowed) continue;
+    out.push_back(m);
+    if (out.back().si_unit.empty()) out.back().si_unit = m.unit;
   }
   return out;
 }

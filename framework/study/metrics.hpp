@@ -17,11 +17,13 @@ namespace pneumo::study {
 
 struct Metric {
   std::string name;
-  std::string unit;
+  std::string unit;  // what result files show the metric in (display.unit for netlist metrics)
   std::string description;
   std::vector<std::string> needs;                   // output columns used (registered metrics)
   std::function<double(const RunResult&)> compute;  // registered metrics
   int netlist_index = -1;                           // a metric of the netlist's `metrics:`
+  units::DisplayUnit display;  // values are computed in SI (si_unit) and shown with display.shown()
+  std::string si_unit;
 };
 
 // The metrics available for a netlist: its own, then the registered ones

@@ -424,7 +424,7 @@ class Search {
     if (ev_.resumed() > 0) line << " (+" << ev_.resumed() << " from the journal)";
     if (b && feasible(*b)) {
       line << ", best " << ev_.metrics()[objective_].name << " " << std::setprecision(4) << b->robust[objective_]
-           << " " << ev_.metrics()[objective_].unit << " at";
+           << " " << ev_.metrics()[objective_].si_unit << " at";
       for (std::size_t i = 0; i < b->x.size(); ++i)
         line << " " << p_.design[i].parameter.name << "=" << p_.design[i].parameter.shown(b->x[i]);
     }
@@ -643,7 +643,7 @@ OptimizeResult optimize(const std::string& netlist_path, const OptimizeProblem& 
   OptimizeResult r;
   for (const auto& m : ev.metrics()) {
     r.metric_names.push_back(m.name);
-    r.metric_units.push_back(m.unit);
+    r.metric_units.push_back(m.si_unit);
   }
   const int f1 = ev.index_of(p.objectives[0]);
   Search s(ev, p, o, f1, p.constraints);
@@ -691,7 +691,7 @@ OptimizeResult evaluate_design(const std::string& netlist_path, const OptimizePr
   OptimizeResult r;
   for (const auto& m : ev.metrics()) {
     r.metric_names.push_back(m.name);
-    r.metric_units.push_back(m.unit);
+    r.metric_units.push_back(m.si_unit);
   }
   r.best = ev.evaluate(x);
   r.found = s.feasible(r.best);

@@ -133,12 +133,11 @@ void set_display_unit(StudyParameter& p, const std::string& unit_text, double am
   }
   if (unit_text.empty()) return;
   try {
-    const units::Unit u = units::parse_unit(unit_text);
-    if (!(u.dim == dim)) return;
-    p.display_unit = unit_text;
-    p.display_scale = u.scale;
-    p.display_offset = u.offset + (u.gauge ? ambient : 0.0);
-  } catch (const units::ParseError&) {
+    const units::DisplayUnit d = units::display_unit(unit_text, dim, ambient);
+    p.display_unit = d.unit;
+    p.display_scale = d.scale;
+    p.display_offset = d.offset;
+  } catch (const std::exception&) {  // not a unit of this parameter: SI
   }
 }
 

@@ -256,7 +256,7 @@ void write_results(const std::string& output, const Design& d, const std::vector
   for (const auto& r : records) {
     out << r.index << (r.ok ? ",ok" : ",failed");
     for (std::size_t j = 0; j < d.parameters.size(); ++j) out << "," << shortest(d.parameters[j].shown(d.samples[r.index][j]));
-    for (std::size_t k = 0; k < metrics.size(); ++k) out << "," << (r.ok ? shortest(r.metrics[k]) : "");
+    for (std::size_t k = 0; k < metrics.size(); ++k) out << "," << (r.ok ? shortest(metrics[k].display.shown(r.metrics[k])) : "");
     out << "," << r.steps << "," << quoted(r.reason) << "\n";
   }
   write_text_atomic(output, out.str());
