@@ -36,8 +36,10 @@ class PressureSource final : public ComponentT<PressureSource> {
   void equations(const Eval<T>& e, T* r) const {
     const auto port = e.gas_port(kPort);
     const T p = e.connected(kPressure) ? e.signal(kPressure) : T(p_);
-    // m_flow is into the source: the delivered flow is -m_flow.
-    r[0] = port.p - (p + R_ * port.m_flow);
+    // m_flow is into the source: the delivered flow is -m_flow. Without the
+    // fault the row reads no flow at all: the structure (a source joined to
+    // a source is singular, the port's pressure an alias) stays the sound one.
+    r[0] = R_ > 0 ? T(port.p - (p + R_ * port.m_flow)) : T(port.p - p);
     r[1] = port.T_out - T_;
   }
   void start(StartValues& s, const GasModel&) const override {

@@ -123,13 +123,13 @@ TEST(DiagnoseDeclared, ATransducerOffsetIsNamedWithoutACatalogue) {
   TempDir dir;
   const std::string model = dir.write("two.yaml", kTwoCylinders);
   std::string truth = kTwoCylinders;
-  truth.replace(truth.find("outputs:"), 8,
-                "  sensor_b: {type: pressure_sensor, fault_offset: 0.2 bar}\noutputs:");
+  truth.replace(truth.find("connections:"), 12,
+                "  sensor_b: {type: pressure_sensor, fault_offset: 0.2 bar}\nconnections:");
   truth.replace(truth.find("  - [cyl_a.flange"), 0, "  - [cyl_b.rod, sensor_b.port]\n");
   truth.replace(truth.find("p_b: cyl_b.p_rod"), 16, "p_b: sensor_b.p");
   make_runs(dir.path() / "runs", truth, {"x_a", "p_a", "x_b", "p_b"});
   const auto rep = diagnose::diagnose(model, (dir.path() / "runs").string(), "", builtin_registry(),
-                                      declared({"p_a", "p_b", "x_a", "x_b", "cyl_b"}));
+                                      declared({"p_a", "p_b", "cyl_b"}));
   ASSERT_FALSE(rep.verdict.empty());
   EXPECT_EQ(rep.verdict[0], "p_b.offset");
   for (const auto& [name, values] : rep.final_values)
