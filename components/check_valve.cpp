@@ -2,6 +2,7 @@
 // cracking pressure difference, opening over `ramp` to a full ISO 6358
 // conductance C, b; blocks reverse flow (law in check_valve_flow.hpp).
 #include "components/builtin.hpp"
+#include "components/faults.hpp"
 #include "components/check_valve_flow.hpp"
 
 namespace pneumo::components {
@@ -29,6 +30,8 @@ class CheckValve final : public ComponentT<CheckValve> {
                {"out", Domain::pneumatic, Causality::acausal, "outlet"}};
     i.observables = {{"m_flow", "kg/s", "mass flow from in to out"}, {"opening", "1", "open fraction of C"}};
     i.equations = {"check valve mass flow", "mass balance", "stream temperature in", "stream temperature out"};
+    i.faults = {fault("leak", "not closing tight: a fraction of its conductance always open",
+                      {fault_amount("leak", "leakage", "1", 0.0, 0.2, 0.02)})};
     return i;
   }
 

@@ -114,6 +114,19 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
     for (auto& f : FrictionLaw::parameters(true)) i.parameters.push_back(std::move(f));
     for (auto& s : initial_parameters()) i.parameters.push_back(std::move(s));
     add_parts(i, true, true, true);
+    i.faults = {
+        {"friction_running", "friction off (seal wear, lubrication, side load), as a factor on the friction",
+         {{"k", "friction_scale", "1", true, 1.0, 0.25, 4.0, 1.3, true}}},
+        {"cushion_needle_misadjusted", "cushion needle opening off its setting (turned, clogged)",
+         {{"k", "z_EC", "1", true, 1.0, 0.2, 5.0, 1.3, true}}},
+        {"cushion_check_off", "cushion check valve conductance off (sticking, leaking)",
+         {{"k", "check_C", "1", true, 1.0, 0.1, 10.0, 2.0, true}}},
+        {"bore_opening_off", "bore opening conductance off (worn or tight cushion seal)",
+         {{"k", "bore_opening_C", "1", true, 1.0, 0.2, 5.0, 1.5, true}}},
+    };
+    for (const char* v : {"dead_volume_rod_side", "dead_volume_cushion", "dead_volume_channel"})
+      i.faults.push_back({std::string(v) + "_off", std::string("volume ") + v + " off (fittings, machining)",
+                          {{"k", v, "1", true, 1.0, 0.3, 3.0, 1.5, true}}});
     return i;
   }
 

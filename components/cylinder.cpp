@@ -110,6 +110,11 @@ class Cylinder final : public ComponentT<Cylinder> {
                      {"P_pdV_cap_channel", "W", "p dV/dt of the cap-side channel gas (0 without cushioning)"},
                      {"P_pdV_rod_channel", "W", "p dV/dt of the rod-side channel gas (0 without cushioning)"}};
     add_parts(i, true, true, true);
+    i.faults = Piston::faults({"dead_volume_cap", "dead_volume_rod"});
+    for (const char* end : {"cap", "rod"})
+      i.faults.push_back({std::string(end) + "_cushion_misadjusted",
+                          std::string("cushion needle at the ") + end + " end off its setting (turned, clogged)",
+                          {{"k", std::string(end) + "_cushion_C", "1", true, 1.0, 0.1, 10.0, 1.5, true}}});
     return i;
   }
 
@@ -163,6 +168,7 @@ class Cylinder final : public ComponentT<Cylinder> {
                p_.rod.gas(e, T(p_.stroke - fl.s)), T(0.0), T(0.0), T(0.0)};
     s.F_pressure = p_.cap.force(s.cap) - p_.rod.force(s.rod) - p_amb * p_.A_rod;
     s.F_fric = piston_friction(p_.friction, s.v, s.z, s.rod.p_piston, s.cap.p_piston, s.cap.p_piston, p_amb);
+    if (p_.breakaway_F > 0) s.F_fric += p_.breakaway(s.v);
     s.F_stop = p_.stops.force(s.x, s.v, p_.stroke);
     return s;
   }
@@ -170,9 +176,13 @@ class Cylinder final : public ComponentT<Cylinder> {
   template <class T>
   void equations(const Eval<T>& e, T* r) const {
     const State<T> s = state(e);
-    p_.cap.equations(e, e.gas_port(kCap), e.heat_port(kHeatCap), s.cap, s.x, s.v, p_.wall_alpha, r);
+    const bool faulty = p_.has_fault_flows();
+    const auto ff = faulty ? p_.fault_flows(s.cap, &s.rod, e.gas()) : Piston::FaultFlows<T>{};
+    p_.cap.equations(e, e.gas_port(kCap), e.heat_port(kHeatCap), s.cap, s.x, s.v, p_.wall_alpha, r,
+                     faulty ? &ff.cap : nullptr);
     r += p_.cap.rows();
-    p_.rod.equations(e, e.gas_port(kRod), e.heat_port(kHeatRod), s.rod, T(p_.stroke - s.x), T(-s.v), p_.wall_alpha, r);
+    p_.rod.equations(e, e.gas_port(kRod), e.heat_port(kHeatRod), s.rod, T(p_.stroke - s.x), T(-s.v), p_.wall_alpha, r,
+                     faulty ? &ff.rod : nullptr);
     r += p_.rod.rows();
     // The flange pulls on the cylinder with f = -F.
     r[0] = e.flange(kFlange).f + s.F_pressure + s.F_fric + s.F_stop;

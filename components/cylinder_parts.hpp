@@ -143,6 +143,13 @@ T piston_friction(const FrictionLaw& law, const T& v, const T& z, const T& p_A, 
   return law.force(law.main, v, z, T(0.0 * v));
 }
 
+// Mass and energy flowing into a chamber besides its port's (a fault's
+// leaks and wall heat; components/faults.hpp): H includes heat.
+template <class T>
+struct ExtraInflow {
+  T m, H;
+};
+
 // One side of a piston: a gas chamber whose volume grows with the piston's
 // distance d from that side's end, V = V0 + A d, behind a port. With
 // cushioning the chamber splits into the cushion annulus at the piston,
@@ -348,7 +355,8 @@ class CylinderSide {
   // the wall heat row; with cushioning the annulus' balances (and tap).
   template <class T>
   void equations(const Eval<T>& e, const GasPortView<T>& port, const HeatPortView<T>& heat, const Gas<T>& g,
-                 const T& d, const T& d_dot, double wall_alpha, T* r) const {
+                 const T& d, const T& d_dot, double wall_alpha, T* r,
+                 const ExtraInflow<T>* extra = nullptr) const {
     const GasModel& gas = e.gas();
     e.reject_unless_positive(e.var(k_));
     e.reject_unless_positive(e.var(k_ + 1));
@@ -357,9 +365,11 @@ class CylinderSide {
     T* c = r + rows_.chamber;
     if (!cushioned_) {
       c[0] = e.der(k_) - port.m_flow;
+      if (extra) c[0] -= extra->m;
       // p dV/dt with the port's pressure, which the gas-law row below makes
       // U's: the form the cushion rig's solver figures are measured with.
       c[1] = e.der(k_ + 1) - H_port + port.p * A_ * d_dot - heat.Q;
+      if (extra) c[1] -= extra->H;
       c[2] = port.p - g.p;
       // With the heat port at the gas temperature the port's T_out is its
       // alias, which alias elimination folds into one unknown.
@@ -367,6 +377,10 @@ class CylinderSide {
     } else {
       c[0] = e.der(k_) - g.m_x - port.m_flow;
       c[1] = e.der(k_ + 1) - g.H_x - H_port + g.p * A_col_ * d_dot;
+      if (extra) {
+        c[0] -= extra->m;
+        c[1] -= extra->H;
+      }
       c[2] = port.p - g.p;
       c[3] = port.T_out - g.T_gas;
       annulus_equations(e, heat, g, d_dot, walls_at_gas_T, r);
@@ -450,6 +464,11 @@ struct Piston {
   double wall_alpha;
   FrictionLaw friction;
   double x0, p0_cap, p0_rod, T0;
+  // Faults (diagnosis), all 0 in a sound cylinder: leak conductances across
+  // the piston seal and past the rod seal, heat exchange of each chamber's
+  // gas with the surroundings, and a breakaway force apart from the rest of
+  // the friction.
+  double leak_piston_C, leak_rod_C, wall_kA, breakaway_F;
 
   explicit Piston(const ParameterValues& p)
       : A(circle_area(p["bore"])),
@@ -463,7 +482,11 @@ struct Piston {
         x0(p["x0"]),
         p0_cap(p["p0_cap"]),
         p0_rod(p["p0_rod"]),
-        T0(p["T0"]) {
+        T0(p["T0"]),
+        leak_piston_C(p["fault_piston_leak_C"]),
+        leak_rod_C(p["fault_rod_leak_C"]),
+        wall_kA(p["fault_wall_kA"]),
+        breakaway_F(p["fault_breakaway_F"]) {
     if (p["rod"] >= p["bore"]) throw ParameterError("rod", "rod diameter must be smaller than the bore");
   }
 
@@ -486,7 +509,86 @@ struct Piston {
         P::scalar("T0", "K", "initial gas temperature", 293.15).positive(),
     };
     out.insert(out.end(), initial.begin(), initial.end());
+    const std::vector<ParameterSpec> faults = {
+        P::scalar("fault_piston_leak_C", "m3/(s*Pa)",
+                  "fault (diagnosis): conductance of a leak across the piston seal, cap <-> rod side; 0 = none", 0.0)
+            .non_negative(),
+        P::scalar("fault_rod_leak_C", "m3/(s*Pa)",
+                  "fault (diagnosis): conductance of a leak past the rod seal to the atmosphere; 0 = none", 0.0)
+            .non_negative(),
+        P::scalar("fault_wall_kA", "W/K",
+                  "fault (diagnosis): heat exchange of each chamber's gas with surroundings at ambient temperature; "
+                  "0 = none",
+                  0.0)
+            .non_negative(),
+        P::scalar("fault_breakaway_F", "N",
+                  "fault (diagnosis): breakaway force beyond the friction law, fading above 5 mm/s; 0 = none", 0.0)
+            .non_negative(),
+    };
+    out.insert(out.end(), faults.begin(), faults.end());
     return out;
+  }
+
+  // What can fail in a piston (an FMEA of the seals, friction and walls);
+  // `volumes`: the dead-volume parameters, a factor each.
+  static std::vector<FaultSpec> faults(const std::vector<std::string>& volumes) {
+    std::vector<FaultSpec> out = {
+        {"piston_seal_leak", "leak across the piston seal between the chambers (worn or damaged seal)",
+         {{"C", "fault_piston_leak_C", "m3/(s*Pa)", false, 0.0, 0.0, 2e-9, 1e-10, false}}},
+        {"rod_seal_leak", "leak past the rod seal to the atmosphere (worn rod seal, scored rod)",
+         {{"C", "fault_rod_leak_C", "m3/(s*Pa)", false, 0.0, 0.0, 2e-9, 1e-10, false}}},
+        {"friction_running", "running friction off (seal wear, lubrication, side load), as a factor on the friction",
+         {{"k", "friction_scale", "1", true, 1.0, 0.25, 4.0, 1.3, true}}},
+        {"friction_breakaway", "breakaway (stiction) force beyond the running friction (dry seals, long standstill)",
+         {{"F", "fault_breakaway_F", "N", false, 0.0, 0.0, 200.0, 10.0, false}}},
+        {"wall_heat", "heat exchange of the chamber gas with the walls and surroundings (unmodelled)",
+         {{"kA", "fault_wall_kA", "W/K", false, 0.0, 0.0, 2.0, 0.1, false}}},
+    };
+    for (const auto& v : volumes)
+      out.push_back({v + "_off", "dead volume " + v + " off (other fittings, tubing inside the end cap)",
+                     {{"k", v, "1", true, 1.0, 0.2, 10.0, 2.0, true}}});
+    return out;
+  }
+
+  // The fault flows into each chamber: the piston-seal leak between them
+  // (`rod` null: a vented spring side, where the leak goes to the
+  // atmosphere), the rod-seal leak from the rod side and the wall heat.
+  // Null when the cylinder has none of these faults: the sound cylinder's
+  // rows are untouched.
+  template <class T>
+  struct FaultFlows {
+    ExtraInflow<T> cap, rod;
+  };
+  bool has_fault_flows() const { return leak_piston_C > 0 || leak_rod_C > 0 || wall_kA > 0; }
+  template <class T>
+  FaultFlows<T> fault_flows(const CylinderSide::Gas<T>& cap, const CylinderSide::Gas<T>* rod, const GasModel& gas) const {
+    const T zero = 0.0 * cap.p;
+    FaultFlows<T> f{{zero, zero}, {zero, zero}};
+    const T p_amb = zero + gas.p_ambient, T_amb = zero + gas.T_ambient;
+    const T& p_other = rod ? rod->p : p_amb;
+    const T& T_other = rod ? rod->T_gas : T_amb;
+    if (leak_piston_C > 0) {
+      const T m = iso6358_mass_flow(cap.p, p_other, cap.T_gas, T_other, T(zero + leak_piston_C), 0.3, 0.999, gas);
+      f.cap.m -= m;
+      f.cap.H += enthalpy_inflow(T(-m), T_other, cap.T_gas, gas);
+      f.rod.m += m;
+      f.rod.H += enthalpy_inflow(m, cap.T_gas, T_other, gas);
+    }
+    if (rod && leak_rod_C > 0) {
+      const T m = iso6358_mass_flow(rod->p, p_amb, rod->T_gas, T_amb, T(zero + leak_rod_C), 0.3, 0.999, gas);
+      f.rod.m -= m;
+      f.rod.H += enthalpy_inflow(T(-m), T_amb, rod->T_gas, gas);
+    }
+    if (wall_kA > 0) {
+      f.cap.H += wall_kA * (T_amb - cap.T_gas);
+      if (rod) f.rod.H += wall_kA * (T_amb - rod->T_gas);
+    }
+    return f;
+  }
+  // The breakaway force on the piston (+x), opposing v, fading over 5 mm/s.
+  template <class T>
+  T breakaway(const T& v) const {
+    return T(-breakaway_F * exp(-(v / 5e-3) * (v / 5e-3)) * tanh(v / friction.v_reg));
   }
 
   // Roots 0 and 1: the stops at x = 0 and x = stroke.

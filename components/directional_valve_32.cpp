@@ -28,6 +28,8 @@ class DirectionalValve32 final : public SpoolValve<DirectionalValve32> {
     i.equations = {
         "flow at P",   "flow at A", "flow at R", "temperature out of P", "temperature out of A", "temperature out of R",
         "spool motion"};
+    i.faults = SpoolDrive::faults();
+    i.faults.push_back(ValvePath::leakage_fault());
     return i;
   }
 

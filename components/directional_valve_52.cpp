@@ -26,6 +26,8 @@ class DirectionalValve52 final : public SpoolValve<DirectionalValve52> {
         {"command", Domain::signal, Causality::input, "commanded state 0/1 (overrides 'schedule')", true, 0.0});
     i.variables = {{"x", "1", "spool position: 0 rest (P -> B, A -> R), 1 actuated (P -> A, B -> R)", 1.0}};
     i.modes = 1;  // schedule events passed
+    i.faults = SpoolDrive::faults();
+    i.faults.push_back(ValvePath::leakage_fault());
     return i;
   }
 

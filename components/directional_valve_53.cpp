@@ -49,6 +49,8 @@ class DirectionalValve53 final : public SpoolValve<DirectionalValve53> {
     i.ports.push_back({"command_12", Domain::signal, Causality::input, "solenoid 12 energised (1) or not (0)", true});
     i.variables = {{"y", "1", "spool position: -1 solenoid 12, 0 centre, 1 solenoid 14", 1.0}};
     i.modes = 1;  // schedule events passed
+    i.faults = SpoolDrive::faults();
+    i.faults.push_back(ValvePath::leakage_fault());
     return i;
   }
 

@@ -30,6 +30,7 @@
 #include <numbers>
 
 #include "components/builtin.hpp"
+#include "components/faults.hpp"
 #include "components/enthalpy_flow.hpp"
 
 namespace pneumo::components {
@@ -60,6 +61,8 @@ class Hose final : public ComponentT<Hose> {
                {"b", Domain::pneumatic, Causality::acausal, "end b"}};
     i.variables = variables(1);
     i.observables = {{"m_flow", "kg/s", "mass flow into end a"}, {"m_flow_b", "kg/s", "mass flow out of end b"}};
+    i.faults = {fault("resistance", "flow resistance off (kinked, partly blocked or longer line), as a factor on the viscous resistance",
+                      {fault_factor("mu", 0.25, 20.0, 2.0)})};
     return i;
   }
 

@@ -4,6 +4,7 @@
 // so the mass flow is a smooth function of p_a - p_b through zero and the
 // Jacobian stays finite there.
 #include "components/builtin.hpp"
+#include "components/faults.hpp"
 #include "components/iso6358_flow.hpp"
 #include "components/signal_watch.hpp"
 
@@ -32,6 +33,8 @@ class Iso6358Throttle final : public ComponentT<Iso6358Throttle> {
     i.observables = {{"m_flow", "kg/s", "mass flow from a to b"}};
     i.equations = {"ISO 6358 mass flow", "mass balance", "stream temperature a", "stream temperature b"};
     SignalWatch::declare(i);
+    i.faults = {fault("misadjusted", "conductance off its setting (throttle misadjusted, silencer or filter clogged)",
+                      {fault_factor("C", 0.1, 4.0, 0.7)})};
     return i;
   }
 

@@ -8,6 +8,7 @@
 #include <numbers>
 
 #include "components/builtin.hpp"
+#include "components/faults.hpp"
 #include "components/signal_watch.hpp"
 #include "components/nozzle_flow.hpp"
 
@@ -41,6 +42,8 @@ class Nozzle final : public ComponentT<Nozzle> {
     i.observables = {{"m_flow", "kg/s", "mass flow from a to b"}};
     i.equations = {"isentropic nozzle mass flow", "mass balance", "stream temperature a", "stream temperature b"};
     SignalWatch::declare(i);
+    i.faults = {fault("clogged", "discharge coefficient off (nozzle partly clogged or worn)",
+                      {fault_factor("Cd", 0.1, 1.05, 0.7)})};
     return i;
   }
 

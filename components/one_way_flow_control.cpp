@@ -3,6 +3,7 @@
 // (ISO 6358 C, b, optional `opening` signal); flow b -> a through the
 // throttle and, above its cracking pressure, the check valve (free flow).
 #include "components/builtin.hpp"
+#include "components/faults.hpp"
 #include "components/check_valve_flow.hpp"
 
 namespace pneumo::components {
@@ -31,6 +32,8 @@ class OneWayFlowControl final : public ComponentT<OneWayFlowControl> {
         ParameterSpec::scalar("check_ramp", "Pa", "pressure difference above cracking for a fully open check valve",
                               2e4)
             .positive(),
+        fault_parameter("check_leakage", "1", "fraction of the check valve's C always open, both directions")
+            .range(0.0, 1.0),
     };
     i.ports = {{"a", Domain::pneumatic, Causality::acausal, "port a (throttled outflow a -> b)"},
                {"b", Domain::pneumatic, Causality::acausal, "port b (free flow b -> a)"},
@@ -39,6 +42,10 @@ class OneWayFlowControl final : public ComponentT<OneWayFlowControl> {
     i.observables = {{"m_flow", "kg/s", "mass flow from a to b"},
                      {"m_flow_check", "kg/s", "part of it through the check valve"}};
     i.equations = {"throttle + check valve mass flow", "mass balance", "stream temperature a", "stream temperature b"};
+    i.faults = {fault("misadjusted", "throttle conductance off its setting (needle misadjusted or clogged)",
+                      {fault_factor("C", 0.1, 4.0, 0.7)}),
+                fault("check_leak", "check valve not closing tight (a fraction of its conductance always open)",
+                      {fault_amount("leak", "check_leakage", "1", 0.0, 0.2, 0.02)})};
     return i;
   }
 
@@ -50,14 +57,15 @@ class OneWayFlowControl final : public ComponentT<OneWayFlowControl> {
         check_C_(c.params["check_C"]),
         check_b_(c.params["check_b"]),
         cracking_(c.params["check_cracking"]),
-        ramp_(c.params["check_ramp"]) {
+        ramp_(c.params["check_ramp"]),
+        leakage_(c.params["check_leakage"]) {
     if (laminar_ <= b_) throw ParameterError("laminar_ratio", "laminar_ratio must be larger than b");
   }
 
   template <class T>
   T check_flow(const Eval<T>& e) const {  // a -> b, i.e. <= 0
     const auto a = e.gas_port(kA), b = e.gas_port(kB);
-    return -check_valve_mass_flow(b.p, a.p, b.T_in, a.T_in, check_C_, check_b_, cracking_, ramp_, 0.0, e.gas());
+    return -check_valve_mass_flow(b.p, a.p, b.T_in, a.T_in, check_C_, check_b_, cracking_, ramp_, leakage_, e.gas());
   }
 
   template <class T>
@@ -75,7 +83,7 @@ class OneWayFlowControl final : public ComponentT<OneWayFlowControl> {
   double observe(int k, const Eval<double>& e) const override { return k == 0 ? e.gas_port(kA).m_flow : check_flow(e); }
 
  private:
-  double C_, b_, laminar_, check_C_, check_b_, cracking_, ramp_;
+  double C_, b_, laminar_, check_C_, check_b_, cracking_, ramp_, leakage_;
 };
 
 void register_one_way_flow_control(Registry& r) { r.add<OneWayFlowControl>(); }

@@ -9,6 +9,7 @@
 // a larger flow needs a wider opening, so the outlet droops with flow.
 // p_set is absolute: write `p_set: 4 barg` for 4 bar above ambient.
 #include "components/builtin.hpp"
+#include "components/faults.hpp"
 #include "components/check_valve_flow.hpp"
 #include "components/valve_command.hpp"
 
@@ -51,6 +52,8 @@ class PressureRegulator final : public ComponentT<PressureRegulator> {
                      {"opening_relief", "1", "open fraction of the relief path"},
                      {"p_out", "Pa", "outlet pressure, absolute"}};
     i.equations = series_port_equations("in", "out", "exhaust");
+    i.faults = {fault("supply_sag", "outlet pressure sags under flow (throttled supply path, worn spring)",
+                      {fault_factor("C", 0.05, 2.0, 0.5), fault_factor("droop", 0.25, 10.0, 2.0)})};
     return i;
   }
 

@@ -22,17 +22,20 @@ class PressureSensor final : public ComponentT<PressureSensor> {
             .positive()
             .optional(),
     };
+    for (auto& p : SensorCalibration::parameters("Pa")) i.parameters.push_back(std::move(p));
     i.ports = {{"port", Domain::pneumatic, Causality::acausal, "gas port (tapped, no flow)"},
                {"p", Domain::signal, Causality::output, "measured pressure, Pa absolute", true}};
     // The output again as an observable, so that result columns carry the unit.
     i.observables = {{"p", "Pa", "measured pressure, absolute"}};
     i.equations = {"no flow", "stream temperature", "measured pressure"};
+    i.faults = SensorCalibration::faults("Pa", 1e5);
     return i;
   }
 
   explicit PressureSensor(const Construction& c)
       : ComponentT(c),
         tau_(c.params["tau"]),
+        cal_(c.params),
         p0_(c.params.has("p0") ? c.params["p0"] : std::numeric_limits<double>::quiet_NaN()) {}
 
   template <class T>
@@ -40,7 +43,7 @@ class PressureSensor final : public ComponentT<PressureSensor> {
     const auto port = e.gas_port(kPort);
     r[0] = port.m_flow;
     r[1] = port.T_out - port.T_in;
-    r[2] = pt1_residual(e, kP, port.p, tau_);
+    r[2] = pt1_residual(e, kP, cal_.reading(port.p), tau_);
   }
 
   double observe(int, const Eval<double>& e) const override { return e.signal(kP); }
@@ -51,7 +54,9 @@ class PressureSensor final : public ComponentT<PressureSensor> {
   }
 
  private:
-  double tau_, p0_;
+  double tau_;
+  SensorCalibration cal_;
+  double p0_;
 };
 
 void register_pressure_sensor(Registry& r) { r.add<PressureSensor>(); }

@@ -2,6 +2,7 @@
 // delivers gas at a given temperature, whatever the flow. An optional signal
 // input replaces the pressure parameter (e.g. a supply pressure schedule).
 #include "components/builtin.hpp"
+#include "components/faults.hpp"
 #include "components/signal_watch.hpp"
 
 namespace pneumo::components {
@@ -16,20 +17,29 @@ class PressureSource final : public ComponentT<PressureSource> {
     i.parameters = {
         ParameterSpec::scalar("p", "Pa", "pressure, absolute (write '6 barg' for gauge)").positive(),
         ParameterSpec::scalar("T", "K", "temperature of the delivered gas", 293.15).positive(),
+        fault_parameter("fault_resistance", "Pa*s/kg",
+                        "the port's pressure falls by this times the delivered mass flow (a long or throttled supply "
+                        "line, an undersized compressor)")
+            .non_negative(),
     };
     i.ports = {{"port", Domain::pneumatic, Causality::acausal, "gas port"},
                {"p_in", Domain::signal, Causality::input, "pressure in Pa abs; replaces p when connected", true}};
     i.equations = {"pressure", "delivered temperature"};
     SignalWatch::declare(i);
+    i.faults = {fault("supply_sag", "supply pressure sags under flow (resistance of the supply line or compressor)",
+                      {fault_amount("R", "fault_resistance", "Pa*s/kg", 0.0, 3e7, 3e6)})};
     return i;
   }
-  explicit PressureSource(const Construction& c) : ComponentT(c), p_(c.params["p"]), T_(c.params["T"]) {}
+  explicit PressureSource(const Construction& c) : ComponentT(c), p_(c.params["p"]), T_(c.params["T"]), R_(c.params["fault_resistance"]) {}
 
   template <class T>
   void equations(const Eval<T>& e, T* r) const {
     const auto port = e.gas_port(kPort);
     const T p = e.connected(kPressure) ? e.signal(kPressure) : T(p_);
-    r[0] = port.p - p;
+    // m_flow is into the source: the delivered flow is -m_flow. Without the
+    // fault the row reads no flow at all: the structure (a source joined to
+    // a source is singular, the port's pressure an alias) stays the sound one.
+    r[0] = R_ > 0 ? T(port.p - (p + R_ * port.m_flow)) : T(port.p - p);
     r[1] = port.T_out - T_;
   }
   void start(StartValues& s, const GasModel&) const override {
@@ -44,7 +54,7 @@ class PressureSource final : public ComponentT<PressureSource> {
   EventResult on_inputs_changed(const Eval<double>& e, double*) const override { return watch_.check(e); }
 
  private:
-  double p_, T_;
+  double p_, T_, R_;
   // No absolute pressure is 0 or negative; flows toward such a "pressure"
   // are those into a vacuum (choked), whatever the value.
   const SignalWatch watch_{kPressure, "p_in", "Pa", 1.0, "an absolute pressure, at least 1 Pa",

@@ -7,6 +7,7 @@
 // pressure difference exceeds `cracking`; both are shut in between, so the
 // disc never leaves both paths open at once. ISO 6358 paths.
 #include "components/builtin.hpp"
+#include "components/faults.hpp"
 #include "components/check_valve_flow.hpp"
 #include "components/valve_command.hpp"
 
@@ -35,6 +36,8 @@ class QuickExhaustValve final : public ComponentT<QuickExhaustValve> {
                {"R", Domain::pneumatic, Causality::acausal, "exhaust (3)"}};
     i.observables = {{"m_flow_PA", "kg/s", "mass flow P -> A"}, {"m_flow_AR", "kg/s", "mass flow A -> R"}};
     i.equations = series_port_equations("P", "A", "R");
+    i.faults = {fault("exhaust_misadjusted", "exhaust path conductance off (silencer clogged, worn disc)",
+                      {fault_factor("C_AR", 0.1, 4.0, 0.7)})};
     return i;
   }
 

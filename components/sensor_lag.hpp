@@ -6,6 +6,9 @@
 // the consistent initialisation.
 #pragma once
 
+#include <string>
+#include <vector>
+
 #include "framework/model/component.hpp"
 
 namespace pneumo::components {
@@ -31,5 +34,30 @@ inline ParameterSpec pt1_tau_parameter(const std::string& what) {
   return ParameterSpec::scalar("tau", "s", "time constant of the first-order lag of " + what + " (0 = ideal)", 0.0)
       .non_negative();
 }
+
+// A sensor's calibration fault (diagnosis): it reads gain x + offset. At the
+// nulls (1, 0) the reading is x itself, bit for bit.
+struct SensorCalibration {
+  double gain = 1.0, offset = 0.0;
+  explicit SensorCalibration(const ParameterValues& p) : gain(p["fault_gain"]), offset(p["fault_offset"]) {}
+  template <class T>
+  T reading(const T& x) const {
+    return gain * x + offset;
+  }
+  // Its parameters, `unit` the reading's.
+  static std::vector<ParameterSpec> parameters(const std::string& unit) {
+    return {ParameterSpec::scalar("fault_gain", "1", "fault (diagnosis): gain error of the reading; 1 = none", 1.0),
+            ParameterSpec::scalar("fault_offset", unit, "fault (diagnosis): zero offset of the reading; 0 = none", 0.0)};
+  }
+  // Offset, gain and lag faults; `span` a plausible offset bound in `unit`.
+  static std::vector<FaultSpec> faults(const std::string& unit, double span) {
+    return {{"offset", "zero offset of the reading (transducer drift, wrong zero)",
+             {{"offset", "fault_offset", unit, false, 0.0, -span, span, 0.1 * span, false}}},
+            {"gain", "gain error of the reading (transducer calibration)",
+             {{"gain", "fault_gain", "1", false, 1.0, 0.8, 1.25, 1.02, false}}},
+            {"lag", "slow reading (first-order lag, e.g. a long tube or a damped transducer)",
+             {{"tau", "tau", "s", false, 0.0, 0.0, 0.1, 0.01, false}}}};
+  }
+};
 
 }  // namespace pneumo::components

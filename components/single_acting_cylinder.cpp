@@ -47,6 +47,9 @@ class SingleActingCylinder final : public ComponentT<SingleActingCylinder> {
     };
     for (auto& s : Piston::parameters("spring chamber (closed chamber)")) i.parameters.push_back(std::move(s));
     add_parts(i, true, true);
+    i.faults = Piston::faults({"dead_volume_cap"});
+    i.faults.push_back({"spring_weak", "return spring weaker or stiffer than its data sheet (fatigue, wrong spring)",
+                        {{"k", "spring_rate", "1", true, 1.0, 0.25, 2.0, 0.8, true}}});
     return i;
   }
 
@@ -120,6 +123,7 @@ class SingleActingCylinder final : public ComponentT<SingleActingCylinder> {
     const T z = p_.friction.has_state() ? e.var(z_var_) : T(0.0 * fl.v);
     const T& p_rod = closed_ ? s.rod.p_piston : spring_side;
     s.F_fric = piston_friction(p_.friction, fl.v, z, p_rod, s.cap.p, s.cap.p, p_amb);
+    if (p_.breakaway_F > 0) s.F_fric += p_.breakaway(fl.v);
     s.F_stop = p_.stops.force(fl.s, fl.v, p_.stroke);
     return s;
   }
@@ -128,12 +132,15 @@ class SingleActingCylinder final : public ComponentT<SingleActingCylinder> {
   void equations(const Eval<T>& e, T* r) const {
     const State<T> s = state(e);
     const auto fl = e.flange(kFlange);
-    p_.cap.equations(e, e.gas_port(kCap), e.heat_port(kHeatCap), s.cap, fl.s, fl.v, p_.wall_alpha, r);
+    const bool faulty = p_.has_fault_flows();
+    const auto ff = faulty ? p_.fault_flows(s.cap, closed_ ? &s.rod : nullptr, e.gas()) : Piston::FaultFlows<T>{};
+    p_.cap.equations(e, e.gas_port(kCap), e.heat_port(kHeatCap), s.cap, fl.s, fl.v, p_.wall_alpha, r,
+                     faulty ? &ff.cap : nullptr);
     r[5] = fl.f + s.F_pressure - s.F_spring + s.F_fric + s.F_stop;  // f = -F on the cylinder
     int row = 6;
     if (closed_) {
       p_.rod.equations(e, e.gas_port(kRod), e.heat_port(kHeatRod), s.rod, T(p_.stroke - fl.s), T(-fl.v), p_.wall_alpha,
-                     r + row);
+                     r + row, faulty ? &ff.rod : nullptr);
       row += p_.rod.rows();
     }
     if (p_.friction.has_state()) r[row] = e.der(z_var_) - p_.friction.lugre_zdot(fl.v, e.var(z_var_));

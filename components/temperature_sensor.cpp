@@ -32,17 +32,20 @@ class TemperatureSensor final : public ComponentT<TemperatureSensor> {
             .positive()
             .optional(),
     };
+    for (auto& p : SensorCalibration::parameters("K")) i.parameters.push_back(std::move(p));
     i.ports = {{"port", Domain::pneumatic, Causality::acausal, "gas port (tapped, no flow)"},
                {"T", Domain::signal, Causality::output, "measured temperature, K", true}};
     // The output again as an observable, so that result columns carry the unit.
     i.observables = {{"T", "K", "measured temperature"}};
     i.equations = {"no flow", "stream temperature", "measured temperature"};
+    i.faults = SensorCalibration::faults("K", 10.0);
     return i;
   }
 
   explicit TemperatureSensor(const Construction& c)
       : ComponentT(c),
         tau_(c.params["tau"]),
+        cal_(c.params),
         T0_(c.params.has("T0") ? c.params["T0"] : std::numeric_limits<double>::quiet_NaN()) {}
 
   template <class T>
@@ -50,7 +53,7 @@ class TemperatureSensor final : public ComponentT<TemperatureSensor> {
     const auto port = e.gas_port(kPort);
     r[0] = port.m_flow;
     r[1] = port.T_out - port.T_in;
-    r[2] = pt1_residual(e, kT, port.T_in, tau_);
+    r[2] = pt1_residual(e, kT, cal_.reading(port.T_in), tau_);
   }
 
   double observe(int, const Eval<double>& e) const override { return e.signal(kT); }
@@ -61,7 +64,9 @@ class TemperatureSensor final : public ComponentT<TemperatureSensor> {
   }
 
  private:
-  double tau_, T0_;
+  double tau_;
+  SensorCalibration cal_;
+  double T0_;
 };
 
 void register_temperature_sensor(Registry& r) { r.add<TemperatureSensor>(); }

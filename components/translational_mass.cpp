@@ -4,6 +4,7 @@
 #include <limits>
 
 #include "components/builtin.hpp"
+#include "components/faults.hpp"
 
 namespace pneumo::components {
 
@@ -24,6 +25,8 @@ class TranslationalMass final : public ComponentT<TranslationalMass> {
                      {"v", "m/s", "velocity"},
                      {"E_kin", "J", "kinetic energy 1/2 m v^2", "kinetic_energy"}};
     i.equations = {"Newton's law"};
+    i.faults = {fault("mass_off", "moved mass off its value (other tooling, payload)",
+                      {fault_factor("m", 0.25, 4.0, 1.3)})};
     return i;
   }
   explicit TranslationalMass(const Construction& c)

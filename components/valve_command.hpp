@@ -56,7 +56,23 @@ class SpoolDrive {
                              "[[t, state], ...]: at time t the spool is commanded to a state (" + states +
                                  "; increasing t)",
                              false),
+        ParameterSpec::scalar("fault_delay_actuate", "s",
+                              "fault (diagnosis): a scheduled command away from rest acts this late; 0 = none", 0.0)
+            .non_negative(),
+        ParameterSpec::scalar("fault_delay_release", "s",
+                              "fault (diagnosis): a scheduled command back toward rest acts this late; 0 = none", 0.0)
+            .non_negative(),
     };
+  }
+
+  // The spool's faults: late switching per direction, a slow stroke.
+  static std::vector<FaultSpec> faults() {
+    return {{"delay_actuate", "switches late when actuated (sticky spool, slow pilot, solenoid)",
+             {{"delay", "fault_delay_actuate", "s", false, 0.0, 0.0, 0.1, 0.01, false}}},
+            {"delay_release", "switches late when released (weak return spring, sticky spool)",
+             {{"delay", "fault_delay_release", "s", false, 0.0, 0.0, 0.1, 0.01, false}}},
+            {"slow_switching", "spool stroke slower (or faster) than its data sheet",
+             {{"k", "t_switch_time", "1", true, 1.0, 0.25, 20.0, 2.0, true}}}};
   }
 
   SpoolDrive(const ParameterValues& p, std::string actuated, std::string rest)
@@ -75,16 +91,17 @@ class SpoolDrive {
     if (!p.has("schedule")) return;
     const Table& rows = p.table("schedule");
     require_increasing(rows, "schedule", "times");
+    const std::vector<double> acts = acting_times(rows, x0_, p["fault_delay_actuate"], p["fault_delay_release"]);
     double x = x0_;
     for (std::size_t i = 0; i < rows.size(); ++i) {
-      const double t = rows[i][0], s = rows[i][1];
+      const double t = acts[i], s = rows[i][1];
       const SpoolState* st = state(s);
       if (!st) {
         std::ostringstream msg;
         msg << "schedule states must be one of " << allowed << ", row " << i + 1 << " has " << s;
         throw ParameterError("schedule", msg.str());
       }
-      const double t_next = i + 1 < rows.size() ? rows[i + 1][0] : std::numeric_limits<double>::infinity();
+      const double t_next = i + 1 < rows.size() ? acts[i + 1] : std::numeric_limits<double>::infinity();
       const double rate = s == x ? 0.0 : (s > x ? 1.0 : -1.0) / t_switch_;
       add(t, rate, "command " + std::to_string(static_cast<int>(s)) + " (" + st->name + ")", "command_" + st->word);
       const double t_end = t + std::abs(s - x) * t_switch_;
@@ -147,6 +164,20 @@ class SpoolDrive {
   }
 
  private:
+  // When each scheduled command acts: its time, later by the delay of its
+  // direction (away from rest or toward it), never before the one before.
+  // Without delays, the schedule's own times.
+  static std::vector<double> acting_times(const Table& rows, double x0, double delay_actuate, double delay_release) {
+    std::vector<double> out;
+    double x = x0;
+    for (const auto& row : rows) {
+      const double delay = std::abs(row[1]) > std::abs(x) ? delay_actuate : row[1] != x ? delay_release : 0.0;
+      out.push_back(out.empty() ? row[0] + delay : std::max(row[0] + delay, out.back()));
+      x = row[1];
+    }
+    return out;
+  }
+
   void add(double t, double rate_after, std::string message, std::string tag) {
     times_.push_back(t);
     rates_.push_back(rate_after);
@@ -201,7 +232,7 @@ class SpoolValve : public ComponentT<Derived> {
 // One flow path of a valve: an ISO 6358 resistance. Parameters C and b are
 // common to all paths; C_XY and b_XY override them for path X -> Y.
 struct ValvePath {
-  double C, b;
+  double C, b, leakage;
 
   static std::vector<ParameterSpec> parameters(const std::vector<std::string>& paths) {
     std::vector<ParameterSpec> out{
@@ -217,15 +248,28 @@ struct ValvePath {
                         .range(0.0, 0.99)
                         .optional());
     }
+    out.push_back(ParameterSpec::scalar("fault_leakage", "1",
+                                        "fault (diagnosis): fraction of each path's C open whatever the spool (worn "
+                                        "spool or seals); 0 = none",
+                                        0.0)
+                      .range(0.0, 1.0));
     return out;
   }
+  static FaultSpec leakage_fault() {
+    return {"internal_leak", "leaks across the spool (worn spool or seals): every path a little open",
+            {{"leak", "fault_leakage", "1", false, 0.0, 0.0, 0.1, 0.01, false}}};
+  }
   ValvePath(const ParameterValues& v, const std::string& path)
-      : C(v.has("C_" + path) ? v["C_" + path] : v["C"]), b(v.has("b_" + path) ? v["b_" + path] : v["b"]) {}
+      : C(v.has("C_" + path) ? v["C_" + path] : v["C"]),
+        b(v.has("b_" + path) ? v["b_" + path] : v["b"]),
+        leakage(v["fault_leakage"]) {}
 
-  // Mass flow from `from` to `to` with the fraction `open` of C open.
+  // Mass flow from `from` to `to` with the fraction `open` of C open (and
+  // the leakage fraction whatever `open`: at 0, C open exactly).
   template <class T>
   T mass_flow(const GasPortView<T>& from, const GasPortView<T>& to, const T& open, const GasModel& gas) const {
-    return iso6358_mass_flow(from.p, to.p, from.T_in, to.T_in, T(C * open), b, 0.999, gas);
+    return iso6358_mass_flow(from.p, to.p, from.T_in, to.T_in, T(C * (leakage + (1.0 - leakage) * open)), b, 0.999,
+                             gas);
   }
 };
 

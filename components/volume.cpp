@@ -9,6 +9,7 @@
 // on T; T stays an output as an observable. The port temperatures remain
 // unknowns (the connected components read them), all aliases of one.
 #include "components/builtin.hpp"
+#include "components/faults.hpp"
 #include "components/enthalpy_flow.hpp"
 
 namespace pneumo::components {
@@ -38,6 +39,8 @@ class Volume final : public ComponentT<Volume> {
                    "gas law p = (kappa - 1) U / V",
                    "outflow temperature", "wall temperature seen by the heat port",
                    "pressure at port_b",  "outflow temperature at port_b"};
+    i.faults = {fault("volume_off", "volume off its value (a larger line or reservoir, a dent)",
+                      {fault_factor("V", 0.25, 4.0, 1.5)})};
     return i;
   }
 

@@ -236,7 +236,7 @@ TEST(Diagnose, CommandLineWritesAReportThatRendersInHeadlessChromium) {
   const fs::path dir = temp_dir("cli_ok");
   const auto cat = small_catalogue(dir, {"heat_transfer", "leakage_piston_seal", "end_stop_elasticity"});
   const std::string cmd = std::string(PNEUMO_BINARY) + " diagnose " + kModel + " --runs " + leak_runs().string() +
-                          " --effects " + cat + " --out " + (dir / "out").string() + " > " + (dir / "log").string() +
+                          " --effects " + cat + " --effects-only --out " + (dir / "out").string() + " > " + (dir / "log").string() +
                           " 2>&1";
   ASSERT_EQ(std::system(cmd.c_str()), 0) << slurp(dir / "log");
   EXPECT_NE(slurp(dir / "log").find("fit 1 /"), std::string::npos);  // the progress display

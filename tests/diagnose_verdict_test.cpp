@@ -58,12 +58,15 @@ const std::string kLeakEffect = R"(
 
 // A leak whose critical pressure ratio may be fitted beyond what a throttle
 // accepts (b < 0.999): its runs there fail, for a reason the report keeps.
+// At its initial value, null and bounds b is one the throttle accepts (the
+// catalogue is read), just past the initial value it is not (b = 0.998 at
+// x = 0.5, 0.9995 at x = 0.503, 0.448 and 0.948 at the bounds).
 const std::string kSloppyEffect = R"(
   sloppy_leak:
     parameters:
-      b: {initial: 0.998, lower: 0.05, upper: 1.5, null: 0.998, unit: "1"}
+      x: {initial: 0.5, lower: 0, upper: 1, null: 0.5, unit: "1"}
     add_components:
-      leak2: {type: iso6358_throttle, C: 1.0e-10, b: "${b}"}
+      leak2: {type: iso6358_throttle, C: 1.0e-10, b: "${0.998 + 0.5 * (x - 0.5) - 1.2 * (x - 0.5) * (x - 0.5)}"}
       air2: {type: atmosphere}
     connect:
       - [tank.port, leak2.a]
@@ -151,7 +154,7 @@ TEST(DiagnoseVerdict, EmptyVerdictWithAGapIsNotCalledWithinNoise) {
   make_runs(dir.path() / "runs", kModel, 0.3e5, "t,p,T", si_row);
   const fs::path out = dir.path() / "report";
   const auto [status, text] = run_cli("diagnose '" + model + "' --runs '" + (dir.path() / "runs").string() +
-                                      "' --effects '" + catalogue + "' --out '" + out.string() + "' --quiet");
+                                      "' --effects '" + catalogue + "' --effects-only --out '" + out.string() + "' --quiet");
   ASSERT_EQ(status, 0) << text;
   EXPECT_NE(text.find("verdict: none: no candidate effect explains the gap of"), std::string::npos) << text;
   EXPECT_EQ(text.find("within noise"), std::string::npos) << text;

@@ -38,6 +38,9 @@ class SealLeakage final : public ComponentT<SealLeakage> {
                {"b", Domain::pneumatic, Causality::acausal, "low-pressure side"}};
     i.observables = {{"m_flow", "kg/s", "leakage mass flow from a to b"}};
     i.equations = {"gap mass flow", "mass balance", "stream temperature a", "stream temperature b"};
+    // What can fail, for `pneumo diagnose` without a catalogue: a worn seal's
+    // gap grows (the flow grows with h^3), as a factor on h.
+    i.faults = {{"worn", "seal gap wider than built (wear)", {{"k", "h", "1", true, 1.0, 0.5, 3.0, 1.2, true}}}};
     return i;
   }
 

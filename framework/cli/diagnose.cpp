@@ -1,4 +1,7 @@
-// pneumo diagnose MODEL.yaml --runs DIR --effects CATALOGUE.yaml --out REPORT_DIR
+// pneumo diagnose MODEL.yaml --runs DIR [--effects CATALOGUE.yaml] [--faults A,B] --out REPORT_DIR
+// Candidates: the faults the circuit's components declare and the measured
+// signals' measurement faults, plus (or, with --effects-only, instead) the
+// catalogue's effects.
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -14,8 +17,9 @@ namespace {
 
 struct DiagnoseArgs {
   std::string model, runs, effects, out;
+  std::vector<std::string> faults;
   int threads = 2, max_effects = 2;
-  bool quiet = false;
+  bool quiet = false, effects_only = false;
 };
 
 bool is_report_json(const std::string& first_line) { return first_line == "{"; }
@@ -27,7 +31,8 @@ bool is_report_html(const std::string& first_line) { return first_line == "<!DOC
 void check_report_folder(const DiagnoseArgs& a) {
   namespace fs = std::filesystem;
   std::error_code ec;
-  const std::vector<std::string> inputs{a.model, a.effects};
+  std::vector<std::string> inputs{a.model};
+  if (!a.effects.empty()) inputs.push_back(a.effects);
   try {
     if (fs::equivalent(a.out, a.runs, ec))
       throw std::invalid_argument("--out " + a.out + ": this is the runs folder; write the report to a folder of its own");
@@ -45,6 +50,10 @@ int diagnose_command(const DiagnoseArgs& a) {
   opt.threads = std::max(1, a.threads);
   opt.max_effects = std::max(1, a.max_effects);
   opt.progress = !a.quiet;
+  if (a.effects_only && a.effects.empty())
+    throw InputError(SourceLocation{"--effects-only", 0, 0}, "", "", "--effects-only needs --effects CATALOGUE.yaml");
+  opt.declared_faults = !a.effects_only;
+  opt.faults = a.faults;
   const auto rep = diagnose::diagnose(a.model, a.runs, a.effects, builtin_registry(), opt);
   std::filesystem::create_directories(a.out);
   diagnose::write_report_json(rep, (std::filesystem::path(a.out) / "report.json").string());
@@ -63,7 +72,14 @@ Command add_diagnose_command(CLI::App& app) {
       "diagnose", "find which unmodelled effect explains the gap between a model and measured runs");
   cmd->add_option("model", a->model, "model netlist (YAML)")->required();
   cmd->add_option("--runs", a->runs, "directory of measured runs (NAME.yaml + NAME.csv)")->required();
-  cmd->add_option("--effects", a->effects, "catalogue of candidate effects (YAML)")->required();
+  cmd->add_option("--effects", a->effects,
+                  "catalogue of candidate effects (YAML), added to the components' declared faults (one of the same "
+                  "name replaces it)");
+  cmd->add_flag("--effects-only", a->effects_only, "the catalogue's effects alone, without the declared faults");
+  cmd->add_option("--faults", a->faults,
+                  "only these candidates: COMPONENT.FAULT, a component, a measured output or a fault name "
+                  "(comma-separated)")
+      ->delimiter(',');
   cmd->add_option("--out", a->out, "report directory (report.json, report.html)")->required();
   cmd->add_option("--threads", a->threads, "parallel simulations (default 2)");
   cmd->add_option("--max-effects", a->max_effects, "forward selection depth (default 2)");

@@ -160,17 +160,18 @@ std::string name_text(const std::string& file, const YAML::Node& n, const std::s
   return plain_text(file, n, "", param, (effect.empty() ? "" : "effect '" + effect + "': ") + what);
 }
 
-// A measurement lag after substitution: an SI number.
-double lag_seconds(const ValueDecl& v, const std::string& effect, const std::string& output) {
+// A measurement model's value (`key`: lag, offset, gain) after
+// substitution: an SI number.
+double measure_number(const ValueDecl& v, const std::string& effect, const std::string& output, const char* key) {
   if (v.si) return *v.si;
-  if (v.shape != ValueDecl::Shape::scalar) fail(v.where, effect, output, "'lag' must be an SI number");
+  if (v.shape != ValueDecl::Shape::scalar) fail(v.where, effect, output, std::string("'") + key + "' must be an SI number");
   try {
     std::size_t used = 0;
     const double x = std::stod(v.text, &used);
     if (used == v.text.size()) return x;
   } catch (const std::exception&) {
   }
-  fail(v.where, effect, output, "'lag': '" + v.text + "' is not a number (SI values)");
+  fail(v.where, effect, output, std::string("'") + key + "': '" + v.text + "' is not a number (SI values)");
 }
 
 // Every ${...} in the patch must name the effect's parameters (or be an
@@ -280,7 +281,10 @@ void apply_effect(Netlist& out, const EffectInstance& inst, MeasurementModel* me
   out.connections.insert(out.connections.end(), e.connect.begin(), e.connect.end());
   if (measurement)
     for (const auto& m : e.measure)
-      measurement->lag[m.output] = lag_seconds(substitute(m.lag, e, inst.values), e.name, m.output);
+      for (const auto& [key, value, into] :
+           {std::tuple{"lag", &m.lag, &measurement->lag}, {"offset", &m.offset, &measurement->offset},
+            {"gain", &m.gain, &measurement->gain}})
+        if (*value) (*into)[m.output] = measure_number(substitute(**value, e, inst.values), e.name, m.output, key);
 }
 
 }  // namespace
@@ -299,7 +303,9 @@ bool effects_conflict(const Effect& a, const Effect& b) {
     for (const auto& c : e.replace_components) k.insert("replace:" + c.name);
     for (const auto& d : e.disconnect)
       for (const auto& p : d.ports) k.insert("disconnect:" + p.component + "." + p.port);
-    for (const auto& m : e.measure) k.insert("measure:" + m.output);
+    for (const auto& m : e.measure)
+      for (const auto& [key, value] : {std::pair{"lag", &m.lag}, {"offset", &m.offset}, {"gain", &m.gain}})
+        if (*value) k.insert("measure:" + m.output + "." + key);
     return k;
   };
   const auto ka = keys(a), kb = keys(b);
@@ -463,20 +469,34 @@ InputError does_not_apply(const Effect& e, const std::string& model_file, const 
                     "effect '" + e.name + "' does not apply to " + model_file + ": " + ex.message());
 }
 
-// The patch applied at the initial values, elaborated and assembled (its
-// ports all connected, its equations structurally solvable), so that a
-// broken patch - a dangling port, two sources joined - is an error at load
-// time with the catalogue's file:line, not a candidate whose every run fails.
+// The patch applied at the initial values, at the null and at every
+// parameter's lower and upper bound (the others at their initial values),
+// elaborated and assembled (its ports all connected, its equations
+// structurally solvable, every value in its component's range), so that a
+// broken patch - a dangling port, two sources joined, a bound the component
+// refuses - is an error at load time with the catalogue's file:line, not a
+// candidate whose runs fail there.
 void check_applies(const Effect& e, const Netlist& model, const Registry& registry) {
-  MeasurementModel mm;
-  const Netlist patched = apply_effects(model, {EffectInstance{&e, e.initial_values()}}, &mm);
-  try {
-    const System assembled(elaborate(patched, registry));
-  } catch (const InputError& ex) {
-    throw does_not_apply(e, model.file, ex);
-  } catch (const StructureError& ex) {
-    throw InputError(e.where, "", "",
-                     "effect '" + e.name + "' does not apply to " + model.file + ": " + ex.what());
+  std::vector<std::pair<std::string, std::vector<double>>> points = {{"initial values", e.initial_values()}};
+  if (const auto null = e.null_values(); !null.empty()) points.push_back({"null", null});
+  for (std::size_t k = 0; k < e.parameters.size(); ++k)
+    for (const bool upper : {false, true}) {
+      auto values = e.initial_values();
+      values[k] = upper ? e.parameters[k].upper : e.parameters[k].lower;
+      points.push_back({std::string(upper ? "upper" : "lower") + " bound of " + e.parameters[k].name, values});
+    }
+  for (const auto& [what, values] : points) {
+    MeasurementModel mm;
+    const Netlist patched = apply_effects(model, {EffectInstance{&e, values}}, &mm);
+    const std::string at = points.size() > 1 ? " (at the " + what + ")" : "";
+    try {
+      const System assembled(elaborate(patched, registry));
+    } catch (const InputError& ex) {
+      throw InputError(e.where, ex.component(), ex.parameter(),
+                       "effect '" + e.name + "' does not apply to " + model.file + at + ": " + ex.message());
+    } catch (const StructureError& ex) {
+      throw InputError(e.where, "", "", "effect '" + e.name + "' does not apply to " + model.file + at + ": " + ex.what());
+    }
   }
 }
 
@@ -518,8 +538,13 @@ std::optional<InputError> read_patch(const Reader& r, const YAML::Node& body, Ef
     for (auto it = body["set"].begin(); it != body["set"].end(); ++it)
       e.set.push_back({r.scalar_text(it->first, "", "", "a set: key"), r.at(it->first), r.value(it->second)});
   if (body["measure"])
-    for (auto m = body["measure"].begin(); m != body["measure"].end(); ++m)
-      e.measure.push_back({m->first.Scalar(), r.value(m->second["lag"])});
+    for (auto m = body["measure"].begin(); m != body["measure"].end(); ++m) {
+      MeasurePatch mp{m->first.Scalar(), {}, {}, {}};
+      if (m->second["lag"]) mp.lag = r.value(m->second["lag"]);
+      if (m->second["offset"]) mp.offset = r.value(m->second["offset"]);
+      if (m->second["gain"]) mp.gain = r.value(m->second["gain"]);
+      e.measure.push_back(std::move(mp));
+    }
   return refused;
 }
 
@@ -591,8 +616,11 @@ void check_patch_shape(const std::string& path, const YAML::Node& body, const st
       const auto out = name_text(path, m->first, effect, "", "a measured output's name");
       if (std::none_of(model.outputs.begin(), model.outputs.end(), [&](const OutputDecl& o) { return o.name == out; }))
         fail(path, m->first, effect, out, "measure: the model has no output '" + out + "'");
-      if (!m->second.IsMap() || !m->second["lag"])
-        fail(path, m->first, effect, out, "measure: only {lag: SECONDS} is supported");
+      if (!m->second.IsMap() || m->second.size() == 0)
+        fail(path, m->first, effect, out, "measure: write {lag: SECONDS, offset: SI VALUE, gain: FACTOR} (any of them)");
+      for (auto k = m->second.begin(); k != m->second.end(); ++k)
+        if (const auto key = name_text(path, k->first, effect, out, "a key"); key != "lag" && key != "offset" && key != "gain")
+          fail(path, k->first, effect, out, "measure: unknown key '" + key + "' (lag, offset, gain)");
     }
 }
 
@@ -709,6 +737,183 @@ Catalogue load_catalogue(const std::string& path, const Netlist& model, const Re
     throw InputError(SourceLocation{path, ex.mark.line + 1, ex.mark.column + 1}, "", "",
                      "unexpected YAML shape: " + ex.msg);
   }
+}
+
+namespace {
+
+// The SI value the netlist gives component parameter `spec` of `decl` (its
+// default when left out); nullopt, with `why`, when a factor cannot act on
+// it: no value, not a positive number, or a top-level parameter a run's
+// operating point sets (the run would override the factor).
+std::optional<double> factor_base(const Netlist& nl, const ComponentDecl& decl, const ParameterSpec& spec,
+                                  const std::vector<std::string>& per_run, std::string& why) {
+  const auto written = std::find_if(decl.parameters.begin(), decl.parameters.end(),
+                                    [&](const auto& p) { return p.first == spec.name; });
+  double v = 0;
+  if (written != decl.parameters.end()) {
+    const ValueDecl& given = written->second;
+    if (given.shape == ValueDecl::Shape::scalar && !given.si &&
+        std::find(per_run.begin(), per_run.end(), given.text) != per_run.end()) {
+      why = spec.name + " is the top-level parameter '" + given.text + "', which the runs' operating points set";
+      return std::nullopt;
+    }
+    v = parameter_value(nl, decl, spec, given);
+  } else if (spec.default_value) {
+    v = *spec.default_value;
+  } else {
+    why = "the netlist gives no value for " + spec.name;
+    return std::nullopt;
+  }
+  if (!(v > 0) || !std::isfinite(v)) {
+    why = spec.name + " is " + format_number(v) + ", which a factor cannot move";
+    return std::nullopt;
+  }
+  return v;
+}
+
+// A declared fault parameter as the effect's: the range kept within what the
+// component accepts (an exclusive limit kept off by a hair), and the `set`
+// that writes it (a factor: its product with the netlist's value).
+void add_fault_parameter(Effect& e, const FaultParameterSpec& fp, const ParameterSpec& spec, double base) {
+  EffectParameter ep;
+  ep.name = fp.name;
+  ep.unit = fp.unit;
+  ep.where = e.where;
+  ep.null_value = fp.null_value;
+  ep.log_scale = fp.log_scale;
+  const double lo = fp.factor ? spec.min / base : spec.min, hi = fp.factor ? spec.max / base : spec.max;
+  ep.lower = std::max(fp.lower, spec.min_exclusive ? lo + 1e-6 * (fp.upper - lo) : lo);
+  ep.upper = std::min(fp.upper, spec.max_exclusive ? hi - 1e-6 * (hi - fp.lower) : hi);
+  ep.initial = std::clamp(fp.initial, ep.lower, ep.upper);
+  if (!(ep.lower < ep.upper) || *ep.null_value < ep.lower || *ep.null_value > ep.upper ||
+      (ep.log_scale && !(ep.lower > 0))) {
+    if (e.unavailable.empty()) e.unavailable = "unavailable: " + fp.parameter + "'s range leaves the fault no room";
+    return;
+  }
+  ValueDecl value;
+  value.text = fp.factor ? "${" + fp.name + " * " + format_number(base) + "}" : "${" + fp.name + "}";
+  value.where = e.where;
+  e.set.push_back({e.component + "." + fp.parameter, e.where, value});
+  e.parameters.push_back(ep);
+}
+
+Effect component_fault(const Netlist& nl, const ComponentDecl& decl, const ComponentInfo& info, const FaultSpec& f,
+                       const std::vector<std::string>& per_run) {
+  Effect e;
+  e.name = decl.name + "." + f.name;
+  e.description = f.description;
+  e.where = decl.where;
+  e.component = decl.name;
+  e.fault = f.name;
+  for (const auto& fp : f.parameters) {
+    const ParameterSpec* spec = info.parameter(fp.parameter);
+    std::string why;
+    std::optional<double> base = 1.0;
+    if (!spec || spec->kind != ParameterKind::scalar)
+      why = "type " + info.type + " declares it on '" + fp.parameter + "', which is not one of its scalar parameters";
+    else if (fp.factor)
+      base = factor_base(nl, decl, *spec, per_run, why);
+    if (!why.empty() || !base) {
+      if (e.unavailable.empty()) e.unavailable = "unavailable: " + why;
+      continue;
+    }
+    add_fault_parameter(e, fp, *spec, *base);
+  }
+  return e;
+}
+
+// OUTPUT.offset, OUTPUT.gain, OUTPUT.lag of a measured signal.
+std::vector<Effect> measurement_faults(const MeasuredSignal& s, const SourceLocation& where, double t_span) {
+  struct Kind {
+    const char* name;
+    const char* description;
+    EffectParameter p;
+  };
+  const double span = s.span > 0 ? s.span : 1.0;
+  const double tau_max = std::clamp(t_span / 20, 1e-3, 0.2);
+  const std::vector<Kind> kinds = {
+      {"offset", "zero offset of the measured signal (transducer drift, wrong zero)",
+       {"offset", 0.02 * span, -0.2 * span, 0.2 * span, 0.0, s.unit, false, where}},
+      {"gain", "gain error of the measured signal (transducer calibration)",
+       {"gain", 1.02, 0.8, 1.25, 1.0, "1", true, where}},
+      {"lag", "measured signal lags (a slow transducer, a long tube, a filter)",
+       {"tau", 0.1 * tau_max, 0.0, tau_max, 0.0, "s", false, where}},
+  };
+  std::vector<Effect> out;
+  for (const auto& k : kinds) {
+    Effect e;
+    e.name = s.name + "." + k.name;
+    e.description = k.description;
+    e.where = where;
+    e.component = s.name;
+    e.fault = k.name;
+    e.parameters.push_back(k.p);
+    ValueDecl value;
+    value.text = "${" + k.p.name + "}";
+    value.where = where;
+    MeasurePatch m{s.name, {}, {}, {}};
+    (k.name[0] == 'o' ? m.offset : k.name[0] == 'g' ? m.gain : m.lag) = value;
+    e.measure.push_back(std::move(m));
+    out.push_back(std::move(e));
+  }
+  return out;
+}
+
+}  // namespace
+
+Catalogue declared_faults(const Netlist& model, const Registry& registry, const std::vector<MeasuredSignal>& signals,
+                          const std::vector<std::string>& per_run) {
+  Catalogue cat;
+  cat.file = "(declared faults)";
+  std::set<std::string> own_offset;  // components whose readings have an offset fault of their own
+  for (const auto& decl : model.components) {
+    const auto* entry = registry.find(decl.type);
+    if (!entry) continue;
+    for (const auto& f : entry->info->faults) {
+      if (f.name == "offset") own_offset.insert(decl.name);
+      Effect e = component_fault(model, decl, *entry->info, f, per_run);
+      if (e.unavailable.empty()) {
+        try {
+          check_applies(e, model, registry);
+        } catch (const InputError& ex) {
+          e.unavailable = "unavailable: " + ex.message();
+        }
+      }
+      cat.effects.push_back(std::move(e));
+    }
+  }
+  const double t_span = model.simulation.t_end - model.simulation.t_start;
+  for (const auto& s : signals) {
+    const auto o = std::find_if(model.outputs.begin(), model.outputs.end(), [&](const OutputDecl& d) { return d.name == s.name; });
+    if (o == model.outputs.end() || own_offset.count(o->component)) continue;
+    for (auto& e : measurement_faults(s, o->where, t_span)) cat.effects.push_back(std::move(e));
+  }
+  return cat;
+}
+
+Catalogue merge_catalogues(Catalogue base, const Catalogue& extra) {
+  for (const auto& e : extra.effects) {
+    const auto same = std::find_if(base.effects.begin(), base.effects.end(), [&](const Effect& b) { return b.name == e.name; });
+    if (same != base.effects.end()) *same = e;
+    else base.effects.push_back(e);
+  }
+  if (!extra.phases.empty()) base.phases = extra.phases;
+  base.file = extra.file.empty() ? base.file : base.file + " + " + extra.file;
+  return base;
+}
+
+Catalogue narrow_catalogue(Catalogue cat, const std::vector<std::string>& keep) {
+  auto matches = [](const Effect& e, const std::string& k) { return e.name == k || e.component == k || e.fault == k; };
+  for (const auto& k : keep)
+    if (std::none_of(cat.effects.begin(), cat.effects.end(), [&](const Effect& e) { return matches(e, k); }))
+      throw InputError(SourceLocation{"--faults", 0, 0}, "", k,
+                       "'" + k + "' names no candidate (write COMPONENT.FAULT, a component, an output or a fault name)");
+  std::vector<Effect> kept;
+  for (auto& e : cat.effects)
+    if (std::any_of(keep.begin(), keep.end(), [&](const std::string& k) { return matches(e, k); }))
+      kept.push_back(std::move(e));
+  cat.effects = std::move(kept);
+  return cat;
 }
 
 }  // namespace pneumo::diagnose

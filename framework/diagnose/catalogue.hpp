@@ -15,7 +15,8 @@
 //       set: {COMPONENT.PARAM: VALUE, parameters.NAME: VALUE}       # one parameter changed
 //       disconnect: [[a.port, b.port]]   # removes the connection list with exactly these ports
 //       connect:    [[a.port, b.port]]   # adds a connection list
-//       measure:    {OUTPUT: {lag: ${tau}}}  # measurement model: first-order sensor lag (s)
+//       measure:    {OUTPUT: {lag: ${tau}, offset: ${o}, gain: ${g}}}  # measurement model: the reading is
+//                   # gain * (the output through a first-order lag tau, s) + offset (SI unit of the output)
 // `${name}` in any value is replaced by the parameter's SI value; `${...}`
 // may also hold arithmetic of the parameters and numbers (+ - * /,
 // parentheses), e.g. "${(1 - w) * 2.776 + w * 9.66}". `null` is
@@ -69,10 +70,11 @@ struct SetPatch {
   ValueDecl value;
 };
 
-// `measure: {OUTPUT: {lag: SECONDS}}`; the lag may be a ${...} template.
+// `measure: {OUTPUT: {lag: SECONDS, offset: SI, gain: FACTOR}}`; each may
+// be a ${...} template, each may be left out.
 struct MeasurePatch {
   std::string output;
-  ValueDecl lag;
+  std::optional<ValueDecl> lag, offset, gain;
 };
 
 struct Effect {
@@ -88,6 +90,9 @@ struct Effect {
   std::vector<MeasurePatch> measure;
   std::string unavailable;  // non-empty: why the effect cannot be used with this registry
   std::string recalibrates;  // a `recalibrate:` entry: the netlist parameter (NAME or COMPONENT.PARAMETER)
+  // A fault a component declares (ComponentInfo::faults) or a measured
+  // signal's measurement fault: the component (or output) and the fault.
+  std::string component, fault;
 
   int parameter_index(const std::string& n) const;
   // The parameters' initial values, in the catalogue's order.
@@ -124,9 +129,10 @@ struct EffectInstance {
   std::vector<double> values;
 };
 
-// Measurement model per output: first-order lag time constants (s).
+// Measurement model per output: the reading is gain * (the output through a
+// first-order lag, time constant s) + offset (the output's SI unit).
 struct MeasurementModel {
-  std::map<std::string, double> lag;
+  std::map<std::string, double> lag, offset, gain;
 };
 
 // Reads and checks a catalogue; each effect is applied at its initial values
@@ -134,6 +140,35 @@ struct MeasurementModel {
 // patch is reported at load time with the catalogue's file:line, the effect
 // and the parameter.
 Catalogue load_catalogue(const std::string& path, const Netlist& model, const Registry& registry);
+
+// A measured signal: its name (a model output) and the span of its
+// measured values (max - min over the runs), which bounds a plausible offset.
+struct MeasuredSignal {
+  std::string name;
+  double span = 0;
+  std::string unit;  // SI unit of the model output
+};
+
+// The faults the circuit's components declare (ComponentInfo::faults) as
+// effects named COMPONENT.FAULT, each setting the component's own
+// parameters (a factor fault: a factor on the netlist's value, within the
+// component's range), plus for each measured signal whose component
+// declares no offset of its own the measurement faults OUTPUT.offset,
+// OUTPUT.gain and OUTPUT.lag. A fault that cannot be used here - a factor on
+// a parameter the netlist leaves without value or gives as a top-level
+// parameter that a run's operating point sets (`per_run`), a patch the
+// model does not accept - is unavailable, with the reason, not an error.
+Catalogue declared_faults(const Netlist& model, const Registry& registry, const std::vector<MeasuredSignal>& signals,
+                          const std::vector<std::string>& per_run);
+
+// `extra`'s effects added to `base`'s, one of the same name replacing it;
+// `extra`'s phases when it has any.
+Catalogue merge_catalogues(Catalogue base, const Catalogue& extra);
+
+// Only the effects named in `keep` as NAME, COMPONENT or FAULT (a
+// component's or output's faults, one fault of every component); an entry
+// matching none is an error naming it (the `--faults` option).
+Catalogue narrow_catalogue(Catalogue cat, const std::vector<std::string>& keep);
 
 // The model with the effects applied in order (later `set`s win). A value
 // that is exactly ${expr} becomes its SI number (ValueDecl::number); patched

@@ -10,6 +10,7 @@
 #include <iostream>
 #include <numeric>
 #include <optional>
+#include <set>
 
 #include "framework/analysis/run_metrics.hpp"
 #include "framework/core/parallel.hpp"
@@ -149,7 +150,7 @@ class Diagnosis {
             const Registry& registry, const DiagnoseOptions& opt)
       : opt_(opt), eng_(model_file, registry, opt) {
     eng_.runs = load_runs(runs_dir, eng_.base(), eng_.base_probes());
-    cat_ = load_catalogue(catalogue_file, eng_.base(), registry);
+    cat_ = candidates(catalogue_file, registry);
     refuse_recalibrating_operating_points();
     rep_.model_file = model_file;
     rep_.catalogue_file = catalogue_file;
@@ -217,6 +218,34 @@ class Diagnosis {
     return nullptr;
   }
 
+  // The candidates: the declared faults and the catalogue's effects (or
+  // either alone), narrowed to the options' `faults`.
+  Catalogue candidates(const std::string& catalogue_file, const Registry& registry) const {
+    if (!opt_.declared_faults && catalogue_file.empty())
+      throw InputError(SourceLocation{"--effects", 0, 0}, "", "", "no candidates: give a catalogue or use the declared faults");
+    Catalogue cat;
+    if (opt_.declared_faults) {
+      std::map<std::string, std::pair<double, double>> range;
+      std::vector<std::string> per_run;
+      for (const auto& run : eng_.runs) {
+        for (std::size_t s = 0; s < run.signals.size(); ++s)
+          for (double y : run.y[s]) {
+            auto [it, fresh] = range.try_emplace(run.signals[s], y, y);
+            it->second.first = std::min(it->second.first, y);
+            it->second.second = std::max(it->second.second, y);
+          }
+        for (const auto& op : run.operating_point) per_run.push_back(op.first);
+      }
+      std::vector<MeasuredSignal> signals;
+      for (const Probe& p : eng_.base_probes())
+        if (range.count(p.name)) signals.push_back({p.name, range[p.name].second - range[p.name].first, p.unit});
+      cat = declared_faults(eng_.base(), registry, signals, per_run);
+    }
+    if (!catalogue_file.empty()) cat = merge_catalogues(std::move(cat), load_catalogue(catalogue_file, eng_.base(), registry));
+    if (!opt_.faults.empty()) cat = narrow_catalogue(std::move(cat), opt_.faults);
+    return cat;
+  }
+
   // A run's operating point would override the re-calibrated value.
   void refuse_recalibrating_operating_points() const {
     for (const auto& e : cat_.effects)
@@ -270,10 +299,13 @@ class Diagnosis {
       EffectResult er;
       er.name = e.name;
       er.description = e.description;
+      er.component = e.component;
+      er.fault = e.fault;
       er.unavailable = e.unavailable;
       for (const auto& p : e.parameters) {
         er.parameter_names.push_back(p.name);
         er.parameter_units.push_back(p.unit);
+        er.parameter_nulls.push_back(p.null_value ? *p.null_value : NAN);
         er.values.push_back(p.null_value ? *p.null_value : p.initial);
       }
       if (!e.recalibrates.empty() && e.parameters.size() == 1) er.netlist_value = e.parameters[0].null_value;
@@ -342,19 +374,27 @@ class Diagnosis {
     }
   }
 
+  // Validation runs the solver failed on (their residuals are the sentinel).
+  int failed_runs_in(const std::vector<double>& r_val) const {
+    int n = 0;
+    for (const auto& seg : val_.segments)
+      if (seg.signal == 0 && seg.n > 0 && r_val[seg.offset] == kFailedResidual) ++n;
+    return n;
+  }
+
   void judge(EffectResult& er, const Engine::Fit& f, const std::vector<double>& r_val) const {
     er.values = f.effects[0].values;
     er.fit_evaluations = f.evaluations;
     er.validation_after = eng_.gaps(r_val, val_);
     er.gap_after = er.validation_after.total.rms;
-    for (const auto& seg : val_.segments)
-      if (seg.signal == 0 && r_val[seg.offset] == kFailedResidual) ++er.failed_validation_runs;
+    er.failed_validation_runs = failed_runs_in(r_val);
     const auto s = eng_.significance(r_val0_, r_val, val_, static_cast<int>(f.effects[0].values.size()));
     er.lr_eff = s.lr;
     er.delta_bic = s.delta_bic;
     er.p_value = s.p;
     er.n_eff = s.n_eff;
-    er.significant = s.delta_bic > opt_.significance_bic && !explains_the_data(rep_.validation_before, opt_) &&
+    er.significant = er.failed_validation_runs == 0 && s.delta_bic > opt_.significance_bic &&
+                     !explains_the_data(rep_.validation_before, opt_) &&
                      practically_significant(rep_.validation_before, er.validation_after, opt_);
   }
 
@@ -426,10 +466,16 @@ class Diagnosis {
     r_cal_cur_ = best->fit.r_cal;
     log("  polishing " + best->e->name + fmt("  [%.1f s]", elapsed()));
     auto polished = eng_.fit(chosen_, cal_, r_cal_cur_, opt_.max_iterations);
-    if (ssr(polished.r_cal) < ssr(r_cal_cur_)) {
+    auto r_val_polished = ssr(polished.r_cal) < ssr(r_cal_cur_) ? eng_.residuals({eng_.model(polished.effects)}, val_)[0]
+                                                                 : std::vector<double>{};
+    // A polished model the solver fails on is not the verdict's: the single
+    // fit, which ran, stays.
+    if (!r_val_polished.empty() && failed_runs_in(r_val_polished) > 0)
+      log("  the polished model fails on a validation run: the single fit is kept");
+    if (!r_val_polished.empty() && failed_runs_in(r_val_polished) == 0) {
       chosen_ = polished.effects;
       r_cal_cur_ = polished.r_cal;
-      r_val_cur_ = eng_.residuals({eng_.model(chosen_)}, val_)[0];
+      r_val_cur_ = std::move(r_val_polished);
       for (auto& er : results_)
         if (er.name == best->e->name) {
           er.values = chosen_[0].values;
@@ -464,6 +510,7 @@ class Diagnosis {
       for (const auto& ch : chosen_) skip = skip || ch.effect == e || effects_conflict(*ch.effect, *e);
       for (const auto& g : rep_.verdict_groups)
         for (const auto& n : g) skip = skip || n == e->name;
+      skip = skip || dropped_.count(e->name) > 0;
       if (skip) continue;
       double gain = -INFINITY;
       EffectInstance from{e, e->initial_values()};
@@ -520,7 +567,10 @@ class Diagnosis {
       log("    + " + e->name +
           fmt(": validation gap %.3g -> %.3g, dBIC %.3g", gap_cur.total.rms, st.gap.total.rms, s.delta_bic) +
           (practical ? ", removes enough of the gap of " + why : ", not practically significant"));
-      if (s.delta_bic > opt_.significance_bic && practical && adds_its_own(st)) passed.push_back(std::move(st));
+      if (failed_runs_in(st.r_val) > 0)
+        log("    the solver fails on a validation run with it: not a fit");
+      else if (s.delta_bic > opt_.significance_bic && practical && adds_its_own(st))
+        passed.push_back(std::move(st));
     }
     if (passed.empty()) return false;
     const auto bs = std::min_element(passed.begin(), passed.end(), [](const Step& a, const Step& b) {
@@ -537,7 +587,45 @@ class Diagnosis {
     r_val_cur_ = bs->r_val;
     r_cal_cur_ = bs->fit.r_cal;
     name_in_verdict(group, std::move(fits));
+    drop_effects_without_their_own_share();
     return true;
+  }
+
+  // Every effect named before the last is re-tested in the joint fit: set
+  // back to its null (the others at their joint values), is the model
+  // significantly worse on the validation runs? An effect named first
+  // because it mimicked a little of what the right one explains - a needle
+  // at k = 1.00002 beside the leak - is not, and is dropped from the verdict
+  // (the model without it, at the others' joint values, becomes the current
+  // one). An effect without a null (a structural switch) stays.
+  void drop_effects_without_their_own_share() {
+    for (std::size_t i = 0; i + 1 < chosen_.size();) {
+      const auto null = chosen_[i].effect->null_values();
+      if (null.empty()) {
+        ++i;
+        continue;
+      }
+      auto without = chosen_;
+      without[i].values = null;
+      const auto r_without = eng_.residuals({eng_.model(without)}, val_)[0];
+      const auto s = eng_.significance(r_without, r_val_cur_, val_, static_cast<int>(null.size()));
+      if (failed_runs_in(r_without) > 0 || s.delta_bic > opt_.significance_bic) {
+        ++i;
+        continue;
+      }
+      log("  re-test: " + chosen_[i].effect->name +
+          fmt(" adds nothing significant beside the others (dBIC %.3g against it at its null): dropped", s.delta_bic));
+      const std::string name = chosen_[i].effect->name;
+      dropped_.insert(name);
+      without.erase(without.begin() + static_cast<long>(i));
+      chosen_ = std::move(without);
+      r_val_cur_ = r_without;
+      r_cal_cur_ = eng_.residuals({eng_.model(chosen_)}, cal_)[0];
+      const auto slot = std::find(rep_.verdict.begin(), rep_.verdict.end(), name) - rep_.verdict.begin();
+      rep_.verdict.erase(rep_.verdict.begin() + slot);
+      rep_.verdict_groups.erase(rep_.verdict_groups.begin() + slot);
+      if (slot < static_cast<long>(slot_fits_.size())) slot_fits_.erase(slot_fits_.begin() + slot);
+    }
   }
 
   // A joint fit may gain by re-fitting the chosen effects alone: the added
@@ -618,6 +706,7 @@ class Diagnosis {
   std::vector<SlotFits> slot_fits_;  // per verdict slot, parallel to rep_.verdict_groups
   std::vector<int> order_;
   std::vector<EffectInstance> chosen_;
+  std::set<std::string> dropped_;  // named, then dropped on re-test: not offered again
 };
 
 }  // namespace

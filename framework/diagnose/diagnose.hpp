@@ -81,6 +81,12 @@ struct DiagnoseOptions {
   // `adequate_gap`.
   double adequate_gap = 1.3;
   double noise_uncertainty = 0.1;
+  // Candidates: the faults the circuit's components declare and the
+  // measurement faults of the measured signals (declared_faults(), as
+  // COMPONENT.FAULT), the catalogue's effects added to them or replacing
+  // one of the same name. Off: the catalogue's alone.
+  bool declared_faults = false;
+  std::vector<std::string> faults;  // non-empty: only these candidates (narrow_catalogue())
   bool progress = true;
   std::function<void(const std::string&)> log;  // progress lines (default: stderr)
 };
@@ -101,10 +107,12 @@ struct GapTable {
 
 struct EffectResult {
   std::string name, description;
+  std::string component, fault;  // a declared fault: its component (or measured output) and fault
   std::string unavailable;  // non-empty: not evaluated
   bool screened_out = false;
   double screening_improvement = 0;  // linearised share of the calibration SSR removed
   std::vector<std::string> parameter_names, parameter_units;
+  std::vector<double> parameter_nulls;  // where each vanishes (NaN: a structural switch has none)
   std::vector<double> values;
   std::optional<double> netlist_value;   // a re-calibration candidate: the netlist's value of its parameter
   double gap_before = 0, gap_after = 0;  // validation, normalised RMS
@@ -186,6 +194,7 @@ struct DiagnosisReport {
   long simulations = 0;
 };
 
+// `catalogue_file` may be empty when options.declared_faults is set.
 DiagnosisReport diagnose(const std::string& model_file, const std::string& runs_dir,
                          const std::string& catalogue_file, const Registry& registry, const DiagnoseOptions& options);
 

@@ -165,12 +165,21 @@ class Engine {
       if (auto it = m.measurement.lag.find(s); it != m.measurement.lag.end() && it->second > 0) {
         ys = lag_filter(ts, ys, it->second);
       }
+      read_through(m.measurement, s, ys);
       std::vector<double> at;
       at.reserve(run.t.size());
       for (double t : run.t) at.push_back(interp(ts, ys, t));
       out.push_back(std::move(at));
     }
     return out;
+  }
+
+  // The reading gain * y + offset of a signal whose measurement model has them.
+  static void read_through(const MeasurementModel& mm, const std::string& signal, std::vector<double>& ys) {
+    const auto g = mm.gain.find(signal), o = mm.offset.find(signal);
+    const double gain = g == mm.gain.end() ? 1.0 : g->second, offset = o == mm.offset.end() ? 0.0 : o->second;
+    if (gain == 1.0 && offset == 0.0) return;
+    for (double& y : ys) y = gain * y + offset;
   }
 
   static std::vector<double> lag_filter(const std::vector<double>& ts, const std::vector<double>& u, double tau) {

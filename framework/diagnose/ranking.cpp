@@ -48,6 +48,9 @@ std::vector<int> rank_effects(std::vector<EffectResult>& results) {
     const auto &A = results[a], &B = results[b];
     if (A.screened_out != B.screened_out) return !A.screened_out;
     if (A.screened_out) return A.screening_improvement > B.screening_improvement;
+    // A fit whose model the solver could not run on every validation run is
+    // no fit: its gap is a sentinel's, ranked after every fit that ran.
+    if ((A.failed_validation_runs > 0) != (B.failed_validation_runs > 0)) return A.failed_validation_runs == 0;
     if (A.significant != B.significant) return A.significant;
     return excess_reduction(A.gap_before, A.gap_after) > excess_reduction(B.gap_before, B.gap_after);
   });

@@ -311,6 +311,8 @@ void write_report_json(const DiagnosisReport& r, const std::string& path) {
   for (std::size_t i = 0; i < r.effects.size(); ++i) {
     const auto& e = r.effects[i];
     o << (i ? ",\n  " : "\n  ") << "{\"name\": " << str(e.name) << ", \"rank\": " << e.rank;
+    if (!e.component.empty()) o << ", \"component\": " << str(e.component) << ", \"fault\": " << str(e.fault);
+    o << ", \"description\": " << str(e.description);
     if (!e.unavailable.empty()) o << ", \"status\": " << str(e.unavailable);
     else if (e.screened_out && e.failed_runs)
       o << ", \"status\": \"screened out: " << e.failed_runs << " run(s) of it failed\"";
@@ -323,6 +325,8 @@ void write_report_json(const DiagnosisReport& r, const std::string& path) {
     for (std::size_t j = 0; j < e.parameter_names.size(); ++j)
       o << (j ? ", " : "") << str(e.parameter_names[j]) << ": {\"value\": " << num(e.values[j])
         << ", \"unit\": " << str(e.parameter_units[j])
+        << (j < e.parameter_nulls.size() && std::isfinite(e.parameter_nulls[j]) ? ", \"null\": " + num(e.parameter_nulls[j])
+                                                                                 : "")
         << (e.netlist_value ? ", \"netlist_value\": " + num(*e.netlist_value) : "") << "}";
     o << "}, \"validation_gap_before\": " << num(e.gap_before) << ", \"validation_gap_after\": " << num(e.gap_after)
       << ", \"screening_improvement\": " << num(e.screening_improvement) << ", \"significance\": {\"significant\": "
@@ -372,16 +376,35 @@ std::string from_netlist(double si, const std::optional<double>& netlist, const 
   return " (netlist " + parameter(*netlist, unit) + ", " + (pct >= 0 ? "+" : "") + rounded(pct, 2) + " %)";
 }
 
-// A verdict slot's re-calibrated value at the verdict's joint fit: " = 0.357
-// dm3/(s*bar) (netlist 0.35 dm3/(s*bar), +2.2 %)"; empty for an effect.
+// A value beside its null: " (null 1, +32 %)", or " (null 0)" where no
+// relative change means anything.
+std::string from_null(double si, double null, const std::string& unit) {
+  if (!std::isfinite(null)) return "";
+  if (null == 0) return " (null 0)";
+  const double pct = 100 * (si / null - 1);
+  return " (null " + parameter(null, unit) + ", " + (pct >= 0 ? "+" : "") + rounded(pct, 2) + " %)";
+}
+
+// A verdict slot's values at the verdict's joint fit - what the verdict
+// model was simulated with, not the effect's single fit: " = 0.357
+// dm3/(s*bar) (netlist 0.35 dm3/(s*bar), +2.2 %)" for a re-calibration,
+// ": k = 1.32 (null 1, +32 %), C = ..." for an effect.
 std::string recalibrated(const DiagnosisReport& r, std::size_t slot) {
   const std::string& name = r.verdict_groups[slot][0];
-  for (const auto& e : r.effects)
-    if (e.name == name && e.netlist_value)
-      for (const auto& [n, values] : r.final_values)
-        if (n == name && values.size() == 1)
-          return " = " + parameter(values[0], e.parameter_units[0]) +
-                 from_netlist(values[0], e.netlist_value, e.parameter_units[0]);
+  for (const auto& e : r.effects) {
+    if (e.name != name) continue;
+    for (const auto& [n, values] : r.final_values) {
+      if (n != name) continue;
+      if (e.netlist_value && values.size() == 1)
+        return " = " + parameter(values[0], e.parameter_units[0]) +
+               from_netlist(values[0], e.netlist_value, e.parameter_units[0]);
+      std::string out;
+      for (std::size_t j = 0; j < values.size() && j < e.parameter_names.size(); ++j)
+        out += (j ? ", " : ": ") + e.parameter_names[j] + " = " + parameter(values[j], e.parameter_units[j]) +
+               (j < e.parameter_nulls.size() ? from_null(values[j], e.parameter_nulls[j], e.parameter_units[j]) : "");
+      return out;
+    }
+  }
   return "";
 }
 

@@ -148,6 +148,28 @@ struct ObservableSpec {
   std::string role = {};
 };
 
+// A fault mode an FMEA of the component would list (a leaking seal, a slow
+// valve, a clogged throttle), for diagnosis without a hand-written
+// catalogue. Each fault parameter sets one of the component's own
+// parameters, which its equations read; at the null the fault vanishes and
+// the model is the fault-free one, bit for bit (a fault-only parameter
+// defaults to its null; a factor fault at 1 multiplies by 1).
+struct FaultParameterSpec {
+  std::string name;       // the fault's name for it ("C", "k")
+  std::string parameter;  // the component parameter it sets
+  std::string unit;       // of the fault's value (a factor: "1")
+  // The value is a factor on the instance's own value of `parameter`
+  // (misadjusted, clogged, mass off), else the parameter's SI value.
+  bool factor = false;
+  double null_value = 0, lower = 0, upper = 0, initial = 0;  // plausible range, SI (or factors)
+  bool log_scale = false;
+};
+struct FaultSpec {
+  std::string name;         // e.g. "piston_seal_leak"; diagnosis names it COMPONENT.FAULT
+  std::string description;  // what fails, in the words of a maintenance list
+  std::vector<FaultParameterSpec> parameters;
+};
+
 struct ComponentInfo {
   std::string type;
   std::string description;
@@ -161,6 +183,7 @@ struct ComponentInfo {
   // The modes follow the inputs: on_inputs_changed is called after every
   // re-initialisation (event iteration).
   bool follows_inputs = false;
+  std::vector<FaultSpec> faults;  // what can fail in this component (none: nothing declared)
 
   int port_index(const std::string& name) const;
   const ParameterSpec* parameter(const std::string& name) const;

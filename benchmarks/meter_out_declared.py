@@ -1,0 +1,166 @@
+"""Catalogue-free diagnosis benchmark on the meter-out cylinder (issue #37).
+
+Generates measured runs of netlists/meter_out_cylinder.yaml with withheld
+faults written in forms of their own - extra components, other parameters,
+edits of the CSV - never the declared fault's own parameter, diagnoses
+each case with `pneumo diagnose` WITHOUT --effects (the components'
+declared faults and the measurement faults only) and reports:
+  named first  - single cases whose verdict starts with the expected fault
+  flagged      - cases whose effect no component declares, reported as
+                 unexplained (or with an empty verdict)
+  nulls clean  - cases without any withheld effect that name nothing
+Run by hand, not in CI (minutes per case):
+
+    python3 benchmarks/meter_out_declared.py [--seed N] [--cases K] [--pneumo build/pneumo] [--work DIR]
+
+Each case: three runs (supply 5, 6, 7 bar g; two calibration, one
+validation), 200 Hz, noise x 0.05 mm, p 3 kPa; magnitudes drawn
+log-uniformly per form between a weak and a strong value.
+"""
+import argparse
+import csv
+import json
+import math
+import random
+import re
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+BASE = (ROOT / "netlists" / "meter_out_cylinder.yaml").read_text()
+# The runs' operating point: the supply pressure (and the rod side's start).
+MODEL = (BASE.replace("components:", "parameters:\n  p_supply: 6 bar g\n\ncomponents:", 1)
+         .replace("supply:   {type: pressure_source, p: 6 bar g", "supply:   {type: pressure_source, p: p_supply")
+         .replace("p0_rod: 6 bar g", "p0_rod: p_supply"))
+SIGNALS = ["x", "v", "p_cap", "p_rod"]
+NOISE = {"x": 5e-5, "v": 2e-3, "p_cap": 3e3, "p_rod": 3e3}
+
+
+def add_components(text, comps, conns):
+    text = text.replace("\nconnections:", "\n" + "".join("  %s\n" % c for c in comps) + "\nconnections:", 1)
+    return text.replace("\noutputs:", "\n" + "".join("  - %s\n" % c for c in conns) + "\noutputs:", 1)
+
+
+def set_param(text, comp, key, value):
+    """Sets (or adds) KEY of component COMP in its flow map."""
+    m = re.search(r"^  %s:\s*\{" % re.escape(comp), text, re.M)
+    start = m.end()
+    depth, i = 1, start
+    while depth:
+        depth += {"{": 1, "}": -1}.get(text[i], 0)
+        i += 1
+    body = text[start:i - 1]
+    if re.search(r"(^|[\s,])%s:" % re.escape(key), body):
+        body = re.sub(r"((?:^|[\s,])%s:\s*)([^,}]+(?:\[[^\]]*\])?[^,}]*)" % re.escape(key), r"\g<1>%s" % value, body, count=1)
+    else:
+        body = body + ", %s: %s" % (key, value)
+    return text[:start] + body + text[i - 1:]
+
+
+# name: (expected candidate or None for undeclared, lo, hi, apply(text, k) -> text, csv edit or None)
+FORMS = {
+    "piston_leak_laminar": ("cyl.piston_seal_leak", 0.003, 0.03, lambda t, k: add_components(
+        t, ["seal_gap: {type: iso6358_throttle, C: %g dm3/(s*bar), b: 0.05}" % k], ["[cyl.cap, seal_gap.a]", "[seal_gap.b, cyl.rod]"]), None),
+    "rod_leak_nozzle": ("cyl.rod_seal_leak", 0.05, 0.4, lambda t, k: add_components(
+        t, ["rod_gap: {type: nozzle, d: %g mm}" % k, "rod_air: {type: atmosphere}"], ["[cyl.rod, rod_gap.a]", "[rod_gap.b, rod_air.port]"]), None),
+    "needle_turned": ("flow_cap.misadjusted", 0.5, 1.8, lambda t, k: set_param(set_param(t, "flow_cap", "C", "%g dm3/(s*bar)" % (0.1 * k)), "flow_cap", "b", "0.4"), None),
+    "silencer_dirt": ("silencer.misadjusted", 0.3, 2.0, lambda t, k: add_components(
+        set_param(t, "silencer", "b", "0.4"), ["dirt: {type: iso6358_throttle, C: %g dm3/(s*bar), b: 0.2}" % k, "dirt_air: {type: atmosphere}"], []).replace(
+        "  - [silencer.b, air.port]", "  - [silencer.b, dirt.a]\n  - [dirt.b, dirt_air.port]"), None),
+    "supply_line": ("supply.supply_sag", 0.3, 1.5, lambda t, k: add_components(
+        t, ["line_S: {type: iso6358_throttle, C: %g dm3/(s*bar), b: 0.3}" % k, "tank_S: {type: volume, V: 20 cm3, p0: 6 bar g}"], []).replace(
+        "  - [supply.port, valve.P]", "  - [supply.port, line_S.a]\n  - [line_S.b, tank_S.port, valve.P]"), None),
+    "seal_friction": ("cyl.friction_running", 1.4, 3.0, lambda t, k: set_param(set_param(t, "cyl", "friction_FC", "%g N" % (20 * k)), "cyl", "friction_viscous", "%g N*s/m" % (100 * math.sqrt(k))), None),
+    "heavier_tool": ("load.mass_off", 2.0, 6.0, lambda t, k: set_param(t, "load", "m", "%g kg" % (2 * k)), None),
+    "sluggish_spool": ("valve.slow_switching", 3.0, 12.0, lambda t, k: set_param(t, "valve", "t_switch_time", "%g ms" % (10 * k)), None),
+    "transducer_zero": ("p_cap.offset", 0.05e5, 0.3e5, lambda t, k: t, ("p_cap", "offset")),
+    # undeclared: a load force on the rod (a spring-back, a process force)
+    "process_force": (None, 15.0, 60.0, lambda t, k: add_components(
+        t, ["push: {type: force_source, F: %g N}" % -k], ["[load.flange, push.flange]"]), None),
+}
+
+
+def simulate(pneumo, netlist, p_supply, out_csv, work):
+    path = work / "truth.yaml"
+    path.write_text(netlist)
+    subprocess.run([pneumo, "simulate", str(path), "--set", "p_supply=%s bar g" % p_supply, "-o", str(out_csv), "-q"],
+                   check=True)
+
+
+def write_runs(pneumo, truth, runs_dir, rng, csv_edit, k):
+    runs_dir.mkdir(parents=True)
+    for name, role, ps in (("cal1", "calibration", 5), ("cal2", "calibration", 7), ("val", "validation", 6)):
+        raw = runs_dir.parent / ("%s_raw.csv" % name)
+        simulate(pneumo, truth, ps, raw, runs_dir.parent)
+        # Result columns are "NAME [UNIT]" (SI): keyed by NAME.
+        rows = [{k.split(" [")[0]: v for k, v in r.items()} for r in csv.DictReader(raw.open())]
+        raw.unlink()
+        with (runs_dir / (name + ".csv")).open("w") as f:
+            f.write("t," + ",".join(SIGNALS) + "\n")
+            for i, r in enumerate(rows):
+                vals = []
+                for s in SIGNALS:
+                    y = float(r[s])
+                    if csv_edit and csv_edit[0] == s:
+                        y += k
+                    vals.append("%.10g" % (y + rng.gauss(0, NOISE[s])))
+                f.write("%s,%s\n" % (r["t"], ",".join(vals)))
+        (runs_dir / (name + ".yaml")).write_text(
+            "data: %s.csv\nrole: %s\noperating_point:\n  p_supply: %d bar g\n" % (name, role, ps))
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--cases", type=int, default=0, help="first K cases only (0: all)")
+    ap.add_argument("--pneumo", default=str(ROOT / "build" / "pneumo"))
+    ap.add_argument("--work", default="/tmp/pneumo_meter_out_declared")
+    a = ap.parse_args()
+    rng = random.Random(a.seed)
+    work = Path(a.work)
+    work.mkdir(parents=True, exist_ok=True)
+    (work / "model.yaml").write_text(MODEL)
+    plan = [(f,) for f in FORMS] + [("null",), ("null",)]
+    rng.shuffle(plan)
+    if a.cases:
+        plan = plan[:a.cases]
+    stats = {"single": [0, 0], "undeclared": [0, 0], "null": [0, 0]}
+    for i, (form,) in enumerate(plan):
+        case = work / ("seed%d_%02d_%s" % (a.seed, i, form))
+        subprocess.run(["rm", "-rf", str(case)], check=True)
+        case.mkdir(parents=True)
+        if form == "null":
+            expected, k, truth, edit = "", 0.0, MODEL, None
+        else:
+            expected, lo, hi, apply, edit = FORMS[form]
+            k = math.exp(rng.uniform(math.log(lo), math.log(hi)))
+            truth = apply(MODEL, k)
+        write_runs(a.pneumo, truth, case / "runs", rng, edit, k)
+        t0 = time.time()
+        r = subprocess.run([a.pneumo, "diagnose", str(work / "model.yaml"), "--runs", str(case / "runs"), "--out",
+                            str(case / "report"), "-q"], capture_output=True, text=True)
+        secs = time.time() - t0
+        if r.returncode:
+            print("%-34s diagnose failed: %s" % (case.name, r.stdout[-300:] + r.stderr[-300:]))
+            continue
+        rep = json.loads((case / "report" / "report.json").read_text())
+        verdict, unexplained = rep["verdict"], rep["unexplained"] is not None
+        if form == "null":
+            kind, ok = "null", not verdict
+        elif expected is None:
+            kind, ok = "undeclared", unexplained or not verdict
+        else:
+            kind, ok = "single", bool(verdict) and verdict[0] == expected
+        stats[kind][0] += ok
+        stats[kind][1] += 1
+        print("%-34s k=%-9.3g -> %-44s %-4s %s (%.0f s)" % (
+            case.name, k, "+".join(verdict) or "(none)", "ok" if ok else "MISS",
+            "unexplained flagged;" if unexplained else "", secs), flush=True)
+    for kind, (ok, n) in stats.items():
+        print("%-11s %d of %d" % (kind, ok, n))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,35 @@
+// Builders for the fault modes components declare (FaultSpec in
+// framework/model/component.hpp), so that a describe() lists them like a
+// maintenance table.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "framework/model/component.hpp"
+
+namespace pneumo::components {
+
+// A factor on the instance's own value of `parameter` (null 1): a throttle
+// misadjusted or clogged, a mass or volume off its data sheet.
+inline FaultParameterSpec fault_factor(const std::string& parameter, double lower, double upper, double initial) {
+  return {"k", parameter, "1", true, 1.0, lower, upper, initial, true};
+}
+
+// An amount of a fault-only parameter whose null is 0 (a leak's conductance,
+// a delay, an offset): the range [lower, upper] in the parameter's unit.
+inline FaultParameterSpec fault_amount(const std::string& name, const std::string& parameter, const std::string& unit,
+                                       double lower, double upper, double initial) {
+  return {name, parameter, unit, false, 0.0, lower, upper, initial, false};
+}
+
+inline FaultSpec fault(std::string name, std::string description, std::vector<FaultParameterSpec> parameters) {
+  return {std::move(name), std::move(description), std::move(parameters)};
+}
+
+// A fault-only parameter the equations read; its default is the null (0).
+inline ParameterSpec fault_parameter(const std::string& name, const std::string& unit, const std::string& what) {
+  return ParameterSpec::scalar(name, unit, "fault (diagnosis): " + what + "; 0 = none", 0.0);
+}
+
+}  // namespace pneumo::components
