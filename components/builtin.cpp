@@ -2,6 +2,12 @@
 
 namespace pneumo {
 
+namespace components {
+// Replaying measured inputs (data_signal.cpp, position_source.cpp).
+void register_position_source(Registry& r);
+void register_data_signal(Registry& r);
+}  // namespace components
+
 void register_builtin_components(Registry& r) {
   using namespace components;
   register_volume(r);
@@ -19,6 +25,8 @@ void register_builtin_components(Registry& r) {
   register_friction_element(r);
   register_spring_damper(r);
   register_velocity_source(r);
+  register_position_source(r);
+  register_data_signal(r);
   register_nozzle(r);
   register_hose(r);
   register_check_valve(r);

@@ -153,6 +153,24 @@ connections:
 )",
        0.3,
        {"friction_element", "spring_damper", "velocity_source"}},
+      {"replayed_position",
+       // A measured position (TU Delft excerpt) replayed through a servo
+       // that pulls a mass on a spring-damper (second point mid-stroke).
+       R"(
+components:
+  pos:    {type: data_signal, file: )" + std::string(PNEUMO_SOURCE_DIR) + R"(/tests/data/tudelft/O-ring_3bar_head.csv,
+           separator: whitespace, header: no, time_column: "1", time_unit: ms, column: "5", unit: mm}
+  servo:  {type: position_source, tau: 2 ms}
+  spring: {type: spring_damper, k: 2000 N/m, d: 5 N*s/m, L0: 0.01 m}
+  body:   {type: translational_mass, m: 0.5 kg, s0: 0.01 m, v0: 0}
+connections:
+  - [pos.y, servo.s_in]
+  - [pos.dy, servo.v_in]
+  - [servo.flange, spring.a]
+  - [spring.b, body.flange]
+)",
+       3.0,
+       {"data_signal", "position_source"}},
       {"cylinder_rod_cushion_lugre",
        // The rig mirrored: an extending stroke into the rod-end cushion
        // (second point inside it), LuGre friction, gas-to-wall heat with

@@ -10,6 +10,7 @@
 
 #include "framework/core/text.hpp"
 #include "framework/core/units.hpp"
+#include "framework/diagnose/data_spec.hpp"
 #include "framework/diagnose/diagnose.hpp"
 #include "framework/diagnose/yaml_file.hpp"
 #include "framework/netlist/yaml_location.hpp"
@@ -221,6 +222,41 @@ void read_csv_into(MeasuredRun& run, const std::string& path, const Netlist& mod
   for (const auto& y : run.y) run.sigma.push_back(estimate_noise(y));
 }
 
+// A run whose `data:` describes a lab file as it comes (data_spec.hpp): a
+// column 't' and columns named as the model's outputs.
+void read_described_into(MeasuredRun& run, const DataFileSpec& spec, const Netlist& model,
+                         const std::vector<Probe>& probes) {
+  const DataColumns d = read_data_file(spec, model.gas.p_ambient);
+  const int ct = d.column("t");
+  if (ct < 0) throw InputError(spec.described_at, "", "columns", "the data description needs a time column 't'");
+  std::string valid;
+  for (const auto& o : model.outputs) valid += (valid.empty() ? "" : ", ") + o.name;
+  for (std::size_t k = 0; k < d.names.size(); ++k) {
+    if (static_cast<int>(k) == ct) continue;
+    if (si_unit_of(probes, d.names[k]).empty() &&
+        std::none_of(model.outputs.begin(), model.outputs.end(), [&](const auto& o) { return o.name == d.names[k]; }))
+      throw InputError(spec.described_at, "", d.names[k],
+                       "column '" + d.names[k] + "' is no output of the model (its outputs: " + valid + ")");
+    run.signals.push_back(d.names[k]);
+    run.y.push_back(d.values[k]);
+  }
+  if (run.signals.empty())
+    throw InputError(spec.described_at, "", "columns", "no measured signal: the description names only 't'");
+  run.t = d.values[static_cast<std::size_t>(ct)];
+  for (std::size_t i = 1; i < run.t.size(); ++i)
+    if (!(run.t[i] > run.t[i - 1]))
+      throw InputError(SourceLocation{spec.file, d.lines[i], 1}, "", "t",
+                       "time must increase strictly: t = " + rounded(run.t[i], 9) + " s follows t = " +
+                           rounded(run.t[i - 1], 9) + " s (check the time column's unit and thousands separator)");
+  if (run.t.size() < 10)
+    throw InputError(SourceLocation{spec.file, d.lines.back(), 1}, "", "", "fewer than 10 samples: nothing to diagnose");
+  units::Unit t_unit;
+  for (const auto& c : spec.columns)
+    if (c.name == "t") t_unit = units::parse_unit(c.unit);
+  check_time_span(run, model, spec.file, d.lines.front(), d.lines.back(), t_unit);
+  for (const auto& y : run.y) run.sigma.push_back(estimate_noise(y));
+}
+
 // The data file a run file's `data:` names: a relative path that stays
 // inside the runs folder once links and '..' are resolved, and a regular
 // file (a device or FIFO would be read forever). Returns its resolved path.
@@ -301,8 +337,14 @@ std::vector<MeasuredRun> load_runs(const std::string& dir, const Netlist& model,
         }
       }
     }
-    run.csv_file = data_file(fs::path(dir), path, y["data"]);
-    read_csv_into(run, run.csv_file, model, probes);
+    if (y["data"].IsMap()) {
+      DataFileSpec spec = data_spec_from_yaml(path, y["data"]);
+      spec.file = run.csv_file = data_file(fs::path(dir), path, y["data"]["file"]);
+      read_described_into(run, spec, model, probes);
+    } else {
+      run.csv_file = data_file(fs::path(dir), path, y["data"]);
+      read_csv_into(run, run.csv_file, model, probes);
+    }
     runs.push_back(std::move(run));
   }
   int ncal = 0, nval = 0;
