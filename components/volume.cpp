@@ -10,6 +10,7 @@
 // unknowns (the connected components read them), all aliases of one.
 #include "components/builtin.hpp"
 #include "components/enthalpy_flow.hpp"
+#include "components/symbols.hpp"
 
 namespace pneumo::components {
 
@@ -24,6 +25,7 @@ class Volume final : public ComponentT<Volume> {
     i.type = "volume";
     i.description = "Rigid gas volume with mass and energy balance (ideal gas); optional heat port to a wall and optional second gas "
         "port (through-flow volume).";
+    i.symbol = symbols::volume();
     i.parameters = {
         ParameterSpec::scalar("V", "m3", "volume").positive(),
         ParameterSpec::scalar("p0", "Pa", "initial pressure, absolute", 101325.0).positive(),

@@ -42,6 +42,7 @@
 
 #include "framework/core/scalar.hpp"
 #include "framework/model/gas.hpp"
+#include "framework/model/symbol.hpp"
 
 namespace pneumo {
 
@@ -161,6 +162,9 @@ struct ComponentInfo {
   // The modes follow the inputs: on_inputs_changed is called after every
   // re-initialisation (event iteration).
   bool follows_inputs = false;
+  // Its ISO 1219-1 symbol (framework/model/symbol.hpp); empty: `pneumo
+  // draw` draws a box with the ports named.
+  Symbol symbol;
 
   int port_index(const std::string& name) const;
   const ParameterSpec* parameter(const std::string& name) const;
