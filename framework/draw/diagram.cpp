@@ -113,7 +113,15 @@ std::string parameter_text(const Netlist& nl, const ComponentDecl& c, const std:
   for (const auto& [key, v] : c.parameters) {
     if (key != name || v.shape != ValueDecl::Shape::scalar) continue;
     if (v.si) return key + " " + units::format_si(*v.si, {});
-    if (const TopParameter* t = nl.parameter(v.text)) return key + " " + units::format_si(t->si_value, t->dim);
+    if (const TopParameter* t = nl.parameter(v.text)) {
+      // a netlist parameter: its value, pressures in bar (absolute) as people write them
+      if (t->dim == units::dimension_of("Pa")) {
+        std::ostringstream o;
+        o << t->si_value / 1e5 << " bar";
+        return key + " " + o.str() + " (" + v.text + ")";
+      }
+      return key + " " + units::format_si(t->si_value, t->dim) + " (" + v.text + ")";
+    }
     return key + " " + v.text;
   }
   return "";
@@ -317,7 +325,9 @@ class Placer {
     std::vector<std::pair<double, int>> order;
     for (std::size_t k = 0; k < row.size(); ++k) {
       const auto want = desired_x(row[k]);
-      order.push_back({want ? *want : left + 1e-3 * static_cast<double>(k), row[k]});
+      // the actuator heads its row, what it moves follows
+      const double first = nodes_[row[k]].tier == Tier::actuator ? -1e-2 : 0.0;
+      order.push_back({want ? *want : left + first + 1e-3 * static_cast<double>(k), row[k]});
     }
     std::stable_sort(order.begin(), order.end());
     double x = left, right = left;
@@ -790,9 +800,9 @@ std::string to_svg(const Diagram& d) {
       for (const auto* sh : shapes) shape_svg(o, *sh);
       o << "</g>";
     }
-    for (const auto& a : s.anchors)
+    for (const auto& a : s.anchors)  // a free port shows no dot
       o << "<circle class=\"anchor\" data-port=\"" << esc(a.port) << "\" cx=\"" << num(a.x) << "\" cy=\"" << num(a.y)
-        << "\" r=\"1.5\"/>";
+        << "\" r=\"" << (p.connected.empty() || p.connected.count(a.port) ? "1.5" : "0") << "\"/>";
     o << "</g>\n";
     for (std::size_t l = 0; l < p.label.size(); ++l)
       o << "<text class=\"label\" x=\"" << num(p.label_x) << "\" y=\"" << num(p.label_y + 13.0 * static_cast<double>(l))
