@@ -818,16 +818,20 @@ std::string symbol_svg(const ComponentInfo& info) {
   p.name = info.type;
   p.type = info.type;
   p.symbol = complete_symbol(info);
-  p.x = 60;
+  // room for the port names beside the anchors
+  std::size_t longest = 0;
+  for (const auto& a : p.symbol.anchors) longest = std::max(longest, a.port.size());
+  const double margin = snap_up(static_cast<double>(longest) * 6.5 + 20);
+  p.x = margin;
   p.y = 30;
-  d.width = p.symbol.width + 120;
+  d.width = p.symbol.width + 2 * margin;
   d.height = p.symbol.height + 60;
   d.symbols.push_back(std::move(p));
   std::string svg = to_svg(d);
   // the port names outside the anchors
   std::ostringstream names;
   for (const auto& a : d.symbols[0].symbol.anchors) {
-    const double x = 60 + a.x + (a.side == 'l' ? -4 : a.side == 'r' ? 4 : 3);
+    const double x = margin + a.x + (a.side == 'l' ? -4 : a.side == 'r' ? 4 : 3);
     const double y = 30 + a.y + (a.side == 't' ? -5 : a.side == 'b' ? 12 : -3);
     names << "<text class=\"port" << (a.side == 'l' ? " end" : "") << "\" x=\"" << num(x) << "\" y=\"" << num(y)
           << "\">" << esc(a.port) << "</text>\n";
