@@ -2,6 +2,7 @@
 // modes), so the output jumps at the event where an input jumps.
 #include "components/builtin.hpp"
 #include "components/logic_gates.hpp"
+#include "components/symbols.hpp"
 
 namespace pneumo::components {
 
@@ -11,6 +12,7 @@ class AndGate final : public ComponentT<AndGate> {
     ComponentInfo i;
     i.type = "and";
     i.description = "Logic AND of 0/1 signals: y = in1 in2 in3 in4 (in3, in4 optional, 1 when unconnected).";
+    i.symbol = symbols::function_block("&");
     i.ports = gate_ports(1.0);
     i.equations = {"y = in1 in2 in3 in4"};
     return i;

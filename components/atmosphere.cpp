@@ -1,6 +1,7 @@
 // The atmosphere: a pressure source at the network's ambient pressure and
 // temperature (netlist section `ambient:`), so exhausts need no numbers.
 #include "components/builtin.hpp"
+#include "components/symbols.hpp"
 
 namespace pneumo::components {
 
@@ -10,6 +11,7 @@ class Atmosphere final : public ComponentT<Atmosphere> {
     ComponentInfo i;
     i.type = "atmosphere";
     i.description = "Ambient air: pressure and temperature from the netlist's 'ambient' section.";
+    i.symbol = symbols::atmosphere();
     i.ports = {{"port", Domain::pneumatic, Causality::acausal, "gas port"}};
     i.equations = {"ambient pressure", "ambient temperature"};
     return i;

@@ -4,6 +4,7 @@
 #include "components/builtin.hpp"
 #include "components/faults.hpp"
 #include "components/check_valve_flow.hpp"
+#include "components/symbols.hpp"
 
 namespace pneumo::components {
 
@@ -17,6 +18,7 @@ class CheckValve final : public ComponentT<CheckValve> {
     i.description =
         "Check valve in -> out: closed for p_in - p_out <= cracking, ISO 6358 conductance C opening C1-smoothly "
         "(smoothstep) over 'ramp' above cracking; reverse flow blocked; isenthalpic.";
+    i.symbol = symbols::check_valve();
     i.parameters = {
         ParameterSpec::scalar("C", "m3/(s*Pa)", "sonic conductance when fully open, e.g. 1 dm3/(s*bar)").positive(),
         ParameterSpec::scalar("b", "1", "critical pressure ratio when open", 0.3).range(0.0, 0.99),

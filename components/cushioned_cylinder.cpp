@@ -62,6 +62,7 @@
 
 #include "components/builtin.hpp"
 #include "components/cylinder_parts.hpp"
+#include "components/symbols.hpp"
 
 namespace pneumo::components {
 
@@ -95,6 +96,7 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
         "cushion annulus, needle throttle, check valve), mass and energy balance in each chamber, friction (seed 000 "
         "eq. 4/7/8 presets, Coulomb + viscous, LuGre), optional gas-to-wall heat transfer, elastic end stops. x = 0 "
         "extended, x = stroke at the cap; port A rod side, port B cap-side outlet (both closed if unconnected).";
+    i.symbol = symbols::cushioned_cylinder();
     using P = ParameterSpec;
     i.parameters = {
         P::scalar("bore", "m", "piston diameter").positive(),

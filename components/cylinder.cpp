@@ -34,6 +34,7 @@
 
 #include "components/builtin.hpp"
 #include "components/cylinder_parts.hpp"
+#include "components/symbols.hpp"
 
 namespace pneumo::components {
 
@@ -54,6 +55,7 @@ class Cylinder final : public ComponentT<Cylinder> {
         "Double-acting cylinder: x = 0 retracted, x = stroke extended; ports cap (extends) and rod (retracts), closed "
         "if unconnected; mass and energy balance per chamber, friction (presets, Coulomb + viscous, LuGre), elastic "
         "end stops, optional wall heat and optional end-position cushioning at either end.";
+    i.symbol = symbols::cylinder("cap", "rod");
     using P = ParameterSpec;
     i.parameters = {
         P::scalar("bore", "m", "piston diameter").positive(),

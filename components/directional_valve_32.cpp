@@ -2,6 +2,7 @@
 // A -> R; each path an ISO 6358 resistance; the spool follows a schedule or
 // a command signal with a linear ramp (valve_command.hpp).
 #include "components/builtin.hpp"
+#include "components/symbols.hpp"
 #include "components/valve_command.hpp"
 
 namespace pneumo::components {
@@ -17,6 +18,7 @@ class DirectionalValve32 final : public SpoolValve<DirectionalValve32> {
     i.description =
         "3/2 directional valve: state 1 P -> A, state 0 A -> R; each path ISO 6358 (C, b); the spool ramps linearly "
         "over t_switch_time after each command from 'schedule' (time events) or the signal 'command'.";
+    i.symbol = symbols::valve_32();
     i.parameters = ValvePath::parameters({"PA", "AR"});
     for (auto& p : SpoolDrive::parameters()) i.parameters.push_back(std::move(p));
     i.ports = {{"P", Domain::pneumatic, Causality::acausal, "supply"},

@@ -3,6 +3,7 @@
 // ISO 6358 resistance; the spool follows a schedule or a command signal with
 // a linear ramp (valve_command.hpp).
 #include "components/builtin.hpp"
+#include "components/symbols.hpp"
 #include "components/valve_command.hpp"
 
 namespace pneumo::components {
@@ -19,6 +20,7 @@ class DirectionalValve52 final : public SpoolValve<DirectionalValve52> {
         "5/2 directional valve: state 1 P -> A and B -> R, state 0 P -> B and A -> R (exhausts joined in R); each "
         "path ISO 6358 (C, b); the spool ramps linearly over t_switch_time after each command from 'schedule' (time "
         "events) or the signal 'command'.";
+    i.symbol = symbols::valve_52();
     i.parameters = ValvePath::parameters({"PA", "PB", "AR", "BR"});
     for (auto& p : SpoolDrive::parameters()) i.parameters.push_back(std::move(p));
     five_port_valve_info(i);

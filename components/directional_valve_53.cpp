@@ -17,6 +17,7 @@
 // an ISO 6358 resistance.
 #include "components/builtin.hpp"
 #include "components/check_valve_flow.hpp"
+#include "components/symbols.hpp"
 #include "components/valve_command.hpp"
 
 namespace pneumo::components {
@@ -33,6 +34,7 @@ class DirectionalValve53 final : public SpoolValve<DirectionalValve53> {
         "5/3 directional valve, spring-centred: solenoid 14 P -> A, B -> R; solenoid 12 P -> B, A -> R; centre "
         "closed, exhausted or pressurised (exhausts joined in R); ISO 6358 paths; spool from 'schedule' (-1/0/1) or "
         "the signals command_14 / command_12.";
+    i.symbol = symbols::valve_53();
     i.parameters = ValvePath::parameters({"PA", "PB", "AR", "BR"});
     i.parameters.push_back(ParameterSpec::text(
         "centre", {"closed", "exhausted", "pressurised"},

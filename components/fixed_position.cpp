@@ -1,5 +1,6 @@
 // A flange held in place (the frame).
 #include "components/builtin.hpp"
+#include "components/symbols.hpp"
 
 namespace pneumo::components {
 
@@ -9,6 +10,7 @@ class FixedPosition final : public ComponentT<FixedPosition> {
     ComponentInfo i;
     i.type = "fixed_position";
     i.description = "Flange fixed at position s0 (the machine frame).";
+    i.symbol = symbols::mechanical("fixed", {{"flange", 0, 20, 'l'}});
     i.parameters = {ParameterSpec::scalar("s0", "m", "position", 0.0)};
     i.ports = {{"flange", Domain::translational, Causality::acausal, "flange"}};
     i.equations = {"fixed position"};

@@ -1,5 +1,6 @@
 // Ideal heat reservoir: holds its port at a fixed temperature.
 #include "components/builtin.hpp"
+#include "components/symbols.hpp"
 
 namespace pneumo::components {
 
@@ -9,6 +10,7 @@ class FixedTemperature final : public ComponentT<FixedTemperature> {
     ComponentInfo i;
     i.type = "fixed_temperature";
     i.description = "Heat reservoir at a fixed temperature (default: ambient).";
+    i.symbol = symbols::thermal_box("T");
     i.parameters = {ParameterSpec::scalar("T", "K", "temperature; 0 = the netlist's ambient temperature", 0.0)
                         .non_negative()};
     i.ports = {{"port", Domain::thermal, Causality::acausal, "heat port"}};

@@ -4,6 +4,7 @@
 // iteration (an input that jumps at another component's event).
 #include "components/builtin.hpp"
 #include "components/switching.hpp"
+#include "components/symbols.hpp"
 
 namespace pneumo::components {
 
@@ -17,6 +18,7 @@ class FlipFlop final : public ComponentT<FlipFlop> {
     i.description =
         "SR flip-flop: S = 1 sets Q = 1, R = 1 resets Q = 0, both high: the dominant input wins; Qn = 1 - Q. "
                     "Events: set, reset.";
+    i.symbol = symbols::function_block("SR");
     i.parameters = {
         ParameterSpec::text("dominant", {"reset", "set"}, "which input wins when both are high", "reset"),
         ParameterSpec::scalar("initial", "1", "Q before any input: 0 or 1", 0.0).range(0.0, 1.0),

@@ -1,5 +1,6 @@
 // A force acting on a flange (a load), constant or from a signal input.
 #include "components/builtin.hpp"
+#include "components/symbols.hpp"
 
 namespace pneumo::components {
 
@@ -10,6 +11,7 @@ class ForceSource final : public ComponentT<ForceSource> {
     ComponentInfo i;
     i.type = "force_source";
     i.description = "Force F pushing the connected flange in +s direction (signal 'F_in' replaces F).";
+    i.symbol = symbols::mechanical("F", {{"flange", 0, 20, 'l'}, {"F_in", 40, 20, 'r'}});
     i.parameters = {ParameterSpec::scalar("F", "N", "force in +s direction", 0.0)};
     i.ports = {{"flange", Domain::translational, Causality::acausal, "flange"},
                {"F_in", Domain::signal, Causality::input, "force in N; replaces F when connected", true}};

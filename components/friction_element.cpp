@@ -3,6 +3,7 @@
 // Coulomb + viscous, or LuGre (seed 002 eq. 8, bristle state z).
 #include "components/builtin.hpp"
 #include "components/friction.hpp"
+#include "components/symbols.hpp"
 
 namespace pneumo::components {
 
@@ -16,6 +17,7 @@ class FrictionElement final : public ComponentT<FrictionElement> {
     i.description =
         "Friction of a flange sliding against the ground: friction_model preset (seed 000 eq. 4/7/8 sets), "
         "coulomb_viscous, or lugre (seed 002 eq. 8 with the bristle deflection z as a state).";
+    i.symbol = symbols::mechanical("fric", {{"flange", 0, 20, 'l'}});
     i.parameters = FrictionLaw::parameters(false);
     // The value of the set's pressure p (its kind - friction_pressure for
     // custom, built into a preset - only says which chamber pressure a

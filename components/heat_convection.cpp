@@ -1,6 +1,7 @@
 // Convective heat transfer between two thermal ports: Q = alpha A (T_a - T_b)
 // (seed 000 eq. 13), flowing from a to b.
 #include "components/builtin.hpp"
+#include "components/symbols.hpp"
 
 namespace pneumo::components {
 
@@ -11,6 +12,7 @@ class HeatConvection final : public ComponentT<HeatConvection> {
     ComponentInfo i;
     i.type = "heat_convection";
     i.description = "Convective heat transfer Q = alpha * A * (T_a - T_b) from port a to port b.";
+    i.symbol = symbols::thermal_box("Q");
     i.parameters = {
         ParameterSpec::scalar("alpha", "W/(m2*K)", "heat transfer coefficient").non_negative(),
         ParameterSpec::scalar("A", "m2", "heat transfer area").non_negative(),

@@ -32,6 +32,7 @@
 #include "components/builtin.hpp"
 #include "components/faults.hpp"
 #include "components/enthalpy_flow.hpp"
+#include "components/symbols.hpp"
 
 namespace pneumo::components {
 
@@ -47,6 +48,7 @@ class Hose final : public ComponentT<Hose> {
         "Hose/tube of inner diameter D and length L in N lumped segments: segment volumes with mass and energy "
         "balance, flow elements with laminar (Hagen-Poiseuille) / turbulent (Blasius) friction, optional inertia "
         "(pressure waves at the speed of sound). Adiabatic.";
+    i.symbol = symbols::hose();
     i.parameters = {
         ParameterSpec::scalar("D", "m", "inner diameter, e.g. 4 mm").positive(),
         ParameterSpec::scalar("L", "m", "length, e.g. 2 m").positive(),

@@ -7,6 +7,7 @@
 #include "components/faults.hpp"
 #include "components/iso6358_flow.hpp"
 #include "components/signal_watch.hpp"
+#include "components/symbols.hpp"
 
 namespace pneumo::components {
 
@@ -20,6 +21,7 @@ class Iso6358Throttle final : public ComponentT<Iso6358Throttle> {
     i.description =
         "ISO 6358 flow resistance (throttle, valve path, fitting): m_flow = C rho_ref p1 sqrt(T_ref/T1) phi(p2/p1, "
         "b), both directions; isenthalpic. Optional signal 'opening' scales C (1 = fully open).";
+    i.symbol = symbols::throttle();
     i.parameters = {
         ParameterSpec::scalar("C", "m3/(s*Pa)", "sonic conductance, e.g. 0.4 dm3/(s*bar)").non_negative(),
         ParameterSpec::scalar("b", "1", "critical pressure ratio", 0.5).range(0.0, 0.999),

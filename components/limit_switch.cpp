@@ -5,6 +5,7 @@
 // (COMPONENT.on / COMPONENT.off).
 #include "components/builtin.hpp"
 #include "components/switching.hpp"
+#include "components/symbols.hpp"
 
 namespace pneumo::components {
 
@@ -18,6 +19,7 @@ class LimitSwitch final : public WindowSwitchComponent<LimitSwitch> {
     i.description =
         "Limit switch (no force): signal y = 1 while the flange position is within position +- window/2; once on, "
         "off only beyond the window widened by hysteresis. Switches at root-located events (tags on, off).";
+    i.symbol = symbols::limit_switch();
     i.parameters = {
         ParameterSpec::scalar("position", "m", "where the switch sits (e.g. 0 for a retracted, the stroke for an "
                                                  "extended cylinder)"),

@@ -1,5 +1,6 @@
 // Logic NOT of a 0/1 signal, y = 1 - in: an algebraic equation (no modes).
 #include "components/builtin.hpp"
+#include "components/symbols.hpp"
 
 namespace pneumo::components {
 
@@ -9,6 +10,7 @@ class NotGate final : public ComponentT<NotGate> {
     ComponentInfo i;
     i.type = "not";
     i.description = "Logic NOT of a 0/1 signal: y = 1 - in.";
+    i.symbol = symbols::function_block("1");
     i.ports = {{"in", Domain::signal, Causality::input, "input 0/1"},
                {"y", Domain::signal, Causality::output, "output 0/1", true}};
     i.equations = {"y = 1 - in"};

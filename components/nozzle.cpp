@@ -9,8 +9,9 @@
 
 #include "components/builtin.hpp"
 #include "components/faults.hpp"
-#include "components/signal_watch.hpp"
 #include "components/nozzle_flow.hpp"
+#include "components/signal_watch.hpp"
+#include "components/symbols.hpp"
 
 namespace pneumo::components {
 
@@ -25,6 +26,7 @@ class Nozzle final : public ComponentT<Nozzle> {
         "Isentropic orifice: m_flow = Cd A p1 sqrt(2 kappa/((kappa-1) R T1)) psi(p2/p1), choked below "
         "(2/(kappa+1))^(kappa/(kappa-1)); both directions; isenthalpic. Give A or d. Optional signal 'opening' "
         "scales the area (1 = fully open).";
+    i.symbol = symbols::nozzle();
     i.parameters = {
         ParameterSpec::scalar("A", "m2", "geometric flow area, e.g. 1.2 mm2 (or give d)").positive().optional(),
         ParameterSpec::scalar("d", "m", "orifice diameter, e.g. 1.5 mm (or give A)").positive().optional(),

@@ -5,6 +5,7 @@
 #include "components/builtin.hpp"
 #include "components/faults.hpp"
 #include "components/check_valve_flow.hpp"
+#include "components/symbols.hpp"
 
 namespace pneumo::components {
 
@@ -19,6 +20,7 @@ class OneWayFlowControl final : public ComponentT<OneWayFlowControl> {
         "Throttle (ISO 6358 C, b) with a check valve in parallel: a -> b throttled, b -> a free through the check "
         "valve (opens above check_cracking). Meter-out: a on the cylinder side. Optional signal 'opening' scales the "
         "throttle's C.";
+    i.symbol = symbols::one_way_flow_control();
     i.parameters = {
         ParameterSpec::scalar("C", "m3/(s*Pa)", "sonic conductance of the throttle, e.g. 0.1 dm3/(s*bar)")
             .non_negative(),

@@ -2,6 +2,7 @@
 // algebraic equation (no modes), so the output jumps with its inputs.
 #include "components/builtin.hpp"
 #include "components/logic_gates.hpp"
+#include "components/symbols.hpp"
 
 namespace pneumo::components {
 
@@ -13,6 +14,7 @@ class OrGate final : public ComponentT<OrGate> {
     i.description =
         "Logic OR of 0/1 signals: y = 1 - (1 - in1)(1 - in2)(1 - in3)(1 - in4) (in3, in4 optional, 0 when "
         "unconnected).";
+    i.symbol = symbols::function_block("\u22651");
     i.ports = gate_ports(0.0);
     i.equations = {"y = in1 or in2 or in3 or in4"};
     return i;

@@ -2,6 +2,7 @@
 // position s and velocity v through first-order lags (sensor_lag.hpp).
 #include "components/builtin.hpp"
 #include "components/sensor_lag.hpp"
+#include "components/symbols.hpp"
 
 namespace pneumo::components {
 
@@ -13,6 +14,7 @@ class PositionSensor final : public ComponentT<PositionSensor> {
     ComponentInfo i;
     i.type = "position_sensor";
     i.description = "Position/velocity sensor (no force): signals s and v of the flange, through a PT1 lag tau.";
+    i.symbol = symbols::position_sensor();
     i.parameters = {
         pt1_tau_parameter("both outputs"),
         ParameterSpec::scalar("s0", "m", "initial position output if tau > 0", 0.0),

@@ -11,6 +11,7 @@
 #include "components/builtin.hpp"
 #include "components/faults.hpp"
 #include "components/check_valve_flow.hpp"
+#include "components/symbols.hpp"
 #include "components/valve_command.hpp"
 
 namespace pneumo::components {
@@ -27,6 +28,7 @@ class PressureRegulator final : public ComponentT<PressureRegulator> {
         "Relieving pressure regulator: in -> out opens as p_out falls below p_set (fully open at p_set - droop), "
         "out -> exhaust opens above p_set + relief_offset (fully open relief_band higher); ISO 6358 paths. p_set "
         "absolute (write barg for gauge).";
+    i.symbol = symbols::pressure_regulator();
     using P = ParameterSpec;
     i.parameters = {
         P::scalar("p_set", "Pa", "set outlet pressure, absolute: write e.g. 4 barg for gauge").positive(),

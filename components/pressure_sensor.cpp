@@ -5,6 +5,7 @@
 
 #include "components/builtin.hpp"
 #include "components/sensor_lag.hpp"
+#include "components/symbols.hpp"
 
 namespace pneumo::components {
 
@@ -16,6 +17,7 @@ class PressureSensor final : public ComponentT<PressureSensor> {
     ComponentInfo i;
     i.type = "pressure_sensor";
     i.description = "Pressure sensor (no flow): signal p = absolute pressure at the port, through a PT1 lag tau.";
+    i.symbol = symbols::gauge("port", "p", "p");
     i.parameters = {
         pt1_tau_parameter("the output"),
         ParameterSpec::scalar("p0", "Pa", "initial output if tau > 0 (default: ambient pressure)")

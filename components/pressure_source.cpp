@@ -4,6 +4,7 @@
 #include "components/builtin.hpp"
 #include "components/faults.hpp"
 #include "components/signal_watch.hpp"
+#include "components/symbols.hpp"
 
 namespace pneumo::components {
 
@@ -14,6 +15,7 @@ class PressureSource final : public ComponentT<PressureSource> {
     ComponentInfo i;
     i.type = "pressure_source";
     i.description = "Ideal pressure source (absolute pressure p, delivered gas temperature T).";
+    i.symbol = symbols::pressure_source();
     i.parameters = {
         ParameterSpec::scalar("p", "Pa", "pressure, absolute (write '6 barg' for gauge)").positive(),
         ParameterSpec::scalar("T", "K", "temperature of the delivered gas", 293.15).positive(),

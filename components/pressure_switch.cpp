@@ -6,6 +6,7 @@
 
 #include "components/builtin.hpp"
 #include "components/switching.hpp"
+#include "components/symbols.hpp"
 
 namespace pneumo::components {
 
@@ -19,6 +20,7 @@ class PressureSwitch final : public WindowSwitchComponent<PressureSwitch> {
     i.description =
         "Pressure switch (no flow): signal y = 1 from p >= p_on (absolute; write '4 barg' for gauge) until p < p_on - "
         "hysteresis. Switches at root-located events (tags on, off).";
+    i.symbol = symbols::gauge("port", "y", "p>");
     i.parameters = {
         ParameterSpec::scalar("p_on", "Pa", "switching pressure, absolute").positive(),
         ParameterSpec::scalar("hysteresis", "Pa", "fall below p_on before it releases", 0.2e5).non_negative(),

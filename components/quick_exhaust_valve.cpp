@@ -9,6 +9,7 @@
 #include "components/builtin.hpp"
 #include "components/faults.hpp"
 #include "components/check_valve_flow.hpp"
+#include "components/symbols.hpp"
 #include "components/valve_command.hpp"
 
 namespace pneumo::components {
@@ -23,6 +24,7 @@ class QuickExhaustValve final : public ComponentT<QuickExhaustValve> {
     i.description =
         "Quick exhaust valve: P -> A while p_P > p_A (R sealed), A -> R while p_A > p_P (P sealed); each path opens "
         "C1-smoothly over 'ramp' above 'cracking'; ISO 6358 paths.";
+    i.symbol = symbols::quick_exhaust_valve();
     using P = ParameterSpec;
     i.parameters = {
         P::scalar("C_PA", "m3/(s*Pa)", "sonic conductance P -> A when open").positive(),

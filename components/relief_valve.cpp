@@ -8,6 +8,7 @@
 // between p_set and p_set + band, where the relieved flow matches the feed.
 #include "components/builtin.hpp"
 #include "components/check_valve_flow.hpp"
+#include "components/symbols.hpp"
 
 namespace pneumo::components {
 
@@ -21,6 +22,7 @@ class ReliefValve final : public ComponentT<ReliefValve> {
     i.description =
         "Pressure relief valve in -> out: closed for p_in <= p_set (absolute; write barg for gauge), ISO 6358 "
         "conductance C opening C1-smoothly over 'band' above p_set; isenthalpic.";
+    i.symbol = symbols::relief_valve();
     i.parameters = {
         ParameterSpec::scalar("p_set", "Pa", "set (cracking) pressure, absolute: write e.g. 5 barg for gauge")
             .positive(),

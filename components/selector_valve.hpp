@@ -10,6 +10,7 @@
 #pragma once
 
 #include "components/check_valve_flow.hpp"
+#include "components/symbols.hpp"
 #include "components/valve_command.hpp"
 #include "framework/model/component.hpp"
 
@@ -78,6 +79,7 @@ class SelectorValveComponent final : public ComponentT<SelectorValveComponent<Ki
     ComponentInfo i;
     i.type = Kind::type;
     i.description = Kind::description;
+    i.symbol = symbols::logic_valve(!Kind::higher_wins);
     SelectorValve::describe(i);
     return i;
   }

@@ -23,6 +23,7 @@
 
 #include "components/builtin.hpp"
 #include "components/switching.hpp"
+#include "components/symbols.hpp"
 
 namespace pneumo::components {
 
@@ -140,6 +141,7 @@ class Sequencer final : public ComponentT<Sequencer> {
         "Step chain in pneumatic notation, e.g. steps: \"A+ B+ B- A-\" (parentheses: one step, \"A+ (B+ C+)\"). Ports "
         "per instance: input start; inputs X1 / X0 (X's extended / retracted limit switch) ending each step, or as "
         "named in transitions; outputs X (1 from X+ to X-, the valve command). Events: cycle_start, step_K, cycle_end.";
+    i.symbol = symbols::function_block("SEQ");
     i.parameters = {
         ParameterSpec::text("steps", {}, "the chain, e.g. \"A+ B+ B- A-\"", std::nullopt),
         ParameterSpec::text("transitions", {}, "per step the input(s) that end it, e.g. \"A1 B1 B0 A0\"; joined by & "

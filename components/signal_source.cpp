@@ -4,6 +4,7 @@
 #include <algorithm>
 
 #include "components/builtin.hpp"
+#include "components/symbols.hpp"
 #include "framework/core/smooth.hpp"
 
 namespace pneumo::components {
@@ -16,6 +17,7 @@ class SignalSource final : public ComponentT<SignalSource> {
     i.description =
         "Signal over time. kind constant: value; step: value, jumping by height at t_start; ramp: value rising by "
         "height linearly from t_start over duration; table: linear interpolation in [[t, value], ...].";
+    i.symbol = symbols::function_block("source");
     i.parameters = {
         ParameterSpec::text("kind", {"constant", "step", "ramp", "table"}, "shape of the signal", "constant"),
         ParameterSpec::scalar("value", "1", "value (at t < t_start for step and ramp); SI units", 0.0),

@@ -17,6 +17,7 @@
 
 #include "components/builtin.hpp"
 #include "components/cylinder_parts.hpp"
+#include "components/symbols.hpp"
 
 namespace pneumo::components {
 
@@ -31,6 +32,7 @@ class SingleActingCylinder final : public ComponentT<SingleActingCylinder> {
     i.description =
         "Single-acting cylinder with spring return: pressure at port cap extends, the spring (preload, rate) "
         "retracts; spring chamber vented to ambient or closed (gas chamber, port rod); x = 0 retracted.";
+    i.symbol = symbols::single_acting_cylinder();
     using P = ParameterSpec;
     i.parameters = {
         P::scalar("bore", "m", "piston diameter").positive(),

@@ -1,5 +1,6 @@
 // Linear spring and damper in parallel between two flanges.
 #include "components/builtin.hpp"
+#include "components/symbols.hpp"
 
 namespace pneumo::components {
 
@@ -13,6 +14,7 @@ class SpringDamper final : public ComponentT<SpringDamper> {
     i.description =
         "Spring k and damper d in parallel between flanges a and b: tension F = k (s_b - s_a - L0) + d (v_b - v_a) "
         "pulls a towards b and b towards a.";
+    i.symbol = symbols::mechanical("spring", {{"a", 0, 20, 'l'}, {"b", 60, 20, 'r'}}, 60);
     i.parameters = {
         ParameterSpec::scalar("k", "N/m", "spring stiffness").non_negative(),
         ParameterSpec::scalar("d", "N*s/m", "damping coefficient", 0.0).non_negative(),

@@ -13,6 +13,7 @@
 
 #include "components/builtin.hpp"
 #include "components/sensor_lag.hpp"
+#include "components/symbols.hpp"
 
 namespace pneumo::components {
 
@@ -26,6 +27,7 @@ class TemperatureSensor final : public ComponentT<TemperatureSensor> {
     i.description =
         "Gas temperature sensor (no flow): signal T = temperature of the gas arriving at the port, through a PT1 lag "
         "tau (seed 000: thermocouple, tau = 15 ms).";
+    i.symbol = symbols::gauge("port", "T", "T");
     i.parameters = {
         pt1_tau_parameter("the output"),
         ParameterSpec::scalar("T0", "K", "initial output if tau > 0 (default: ambient temperature)")

@@ -1,5 +1,6 @@
 // Lumped thermal capacity: C dT/dt = Q (a wall, a cylinder body).
 #include "components/builtin.hpp"
+#include "components/symbols.hpp"
 
 namespace pneumo::components {
 
@@ -9,6 +10,7 @@ class ThermalMass final : public ComponentT<ThermalMass> {
     ComponentInfo i;
     i.type = "thermal_mass";
     i.description = "Lumped heat capacity C dT/dt = Q.";
+    i.symbol = symbols::thermal_box("C");
     i.parameters = {
         ParameterSpec::scalar("C", "J/K", "heat capacity (mass times specific heat)").positive(),
         ParameterSpec::scalar("T0", "K", "initial temperature", 293.15).positive(),

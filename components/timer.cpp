@@ -8,6 +8,7 @@
 
 #include "components/builtin.hpp"
 #include "components/switching.hpp"
+#include "components/symbols.hpp"
 
 namespace pneumo::components {
 
@@ -22,6 +23,7 @@ class Timer final : public ComponentT<Timer> {
     i.description =
         "Time relay: on_delay - y = 1 once the input has been 1 for delay, 0 with the input; off_delay - y = 1 with "
         "the input, 0 once it has been 0 for delay. Events: start, elapsed, cancel, reset (on_delay), set (off_delay).";
+    i.symbol = symbols::function_block("T");
     i.parameters = {
         ParameterSpec::text("kind", {"on_delay", "off_delay"}, "which edge is delayed", "on_delay"),
         ParameterSpec::scalar("delay", "s", "delay").positive(),

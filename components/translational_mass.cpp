@@ -5,6 +5,7 @@
 
 #include "components/builtin.hpp"
 #include "components/faults.hpp"
+#include "components/symbols.hpp"
 
 namespace pneumo::components {
 
@@ -14,6 +15,7 @@ class TranslationalMass final : public ComponentT<TranslationalMass> {
     ComponentInfo i;
     i.type = "translational_mass";
     i.description = "Sliding mass: ds/dt = v, m dv/dt = sum of forces on the flange.";
+    i.symbol = symbols::mechanical("m", {{"flange", 0, 20, 'l'}});
     i.parameters = {
         ParameterSpec::scalar("m", "kg", "mass").positive(),
         ParameterSpec::scalar("s0", "m", "initial position; default: set by the connected components (or 0)",

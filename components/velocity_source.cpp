@@ -1,6 +1,7 @@
 // A flange moved at a prescribed velocity (a drive of infinite power), from
 // the parameter v or a signal input; its position integrates from s0.
 #include "components/builtin.hpp"
+#include "components/symbols.hpp"
 
 namespace pneumo::components {
 
@@ -12,6 +13,7 @@ class VelocitySource final : public ComponentT<VelocitySource> {
     ComponentInfo i;
     i.type = "velocity_source";
     i.description = "Drives the flange at velocity v (signal 'v_in' replaces v); starts at position s0.";
+    i.symbol = symbols::mechanical("v", {{"flange", 0, 20, 'l'}, {"v_in", 40, 20, 'r'}});
     i.parameters = {ParameterSpec::scalar("v", "m/s", "velocity in +s", 0.0),
                     ParameterSpec::scalar("s0", "m", "initial position", 0.0)};
     i.ports = {{"flange", Domain::translational, Causality::acausal, "driven flange"},

@@ -11,6 +11,7 @@
 #include "components/builtin.hpp"
 #include "components/faults.hpp"
 #include "components/enthalpy_flow.hpp"
+#include "components/symbols.hpp"
 
 namespace pneumo::components {
 
@@ -25,6 +26,7 @@ class Volume final : public ComponentT<Volume> {
     i.type = "volume";
     i.description = "Rigid gas volume with mass and energy balance (ideal gas); optional heat port to a wall and optional second gas "
         "port (through-flow volume).";
+    i.symbol = symbols::volume();
     i.parameters = {
         ParameterSpec::scalar("V", "m3", "volume").positive(),
         ParameterSpec::scalar("p0", "Pa", "initial pressure, absolute", 101325.0).positive(),

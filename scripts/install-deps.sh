@@ -16,7 +16,8 @@ PACKAGES=(
   libgtest-dev googletest
   gnuplot-nox            # pneumo plot
   libopenmpi-dev openmpi-bin   # pneumo sweep under mpirun (optional at build time)
-  chromium               # headless check of the pneumo diagnose HTML report (tests)
+  chromium               # headless check of the pneumo diagnose HTML report and the draw results view (tests)
+  librsvg2-bin           # pneumo draw -o circuit.png (rsvg-convert)
   pybind11-dev python3-dev python3-numpy   # the Python module (python/)
   python3-pytest         # its tests
   clang libclang-rt-14-dev     # libFuzzer targets (fuzz/, scripts/fuzz.sh)

@@ -29,5 +29,6 @@ Command add_components_command(CLI::App& app);
 Command add_fit_command(CLI::App& app);
 Command add_diagnose_command(CLI::App& app);
 Command add_optimize_command(CLI::App& app);
+Command add_draw_command(CLI::App& app);
 
 }  // namespace pneumo::cli

@@ -2,6 +2,7 @@
 // added by add_<name>_command (command.hpp).
 //   pneumo simulate NETLIST [--set NAME=VALUE ...] [-o results.csv] [--stats]
 //   pneumo components [TYPE]
+//   pneumo draw NETLIST -o circuit.svg|.png [--results run.csv -o view.html]
 // Exit status: 0 success, 1 simulation failed, 2 bad input or usage.
 #include <CLI/CLI.hpp>
 
@@ -52,7 +53,8 @@ int main(int argc, char** argv) {
   const std::vector<Command> commands{add_simulate_command(app),    add_plot_command(app),
                                       add_sweep_command(app),       add_sensitivity_command(app),
                                       add_components_command(app),  add_fit_command(app),
-                                      add_diagnose_command(app),    add_optimize_command(app)};
+                                      add_diagnose_command(app),    add_optimize_command(app),
+                                      add_draw_command(app)};
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

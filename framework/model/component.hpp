@@ -42,6 +42,7 @@
 
 #include "framework/core/scalar.hpp"
 #include "framework/model/gas.hpp"
+#include "framework/model/symbol.hpp"
 
 namespace pneumo {
 
@@ -184,6 +185,9 @@ struct ComponentInfo {
   // re-initialisation (event iteration).
   bool follows_inputs = false;
   std::vector<FaultSpec> faults;  // what can fail in this component (none: nothing declared)
+  // Its ISO 1219-1 symbol (framework/model/symbol.hpp); empty: `pneumo
+  // draw` draws a box with the ports named.
+  Symbol symbol;
 
   int port_index(const std::string& name) const;
   const ParameterSpec* parameter(const std::string& name) const;
