@@ -126,6 +126,18 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
         {"bore_opening_off", "bore opening conductance off (worn or tight cushion seal)",
          {{"k", "bore_opening_C", "1", true, 1.0, 0.2, 5.0, 1.5, true}}},
     };
+    i.events = {{"cushion_entry", "enters the cap-end cushioning zone"},
+                {"cushion_exit", "leaves the cap-end cushioning zone"},
+                {"bore_closing", "the bore opening starts to close"},
+                {"bore_open", "the bore opening is fully open"},
+                {"cap_impact", "impact on the cap-end stop"},
+                {"cap_stop_left", "leaves the cap-end stop"},
+                {"rod_stop_contact", "contact with the rod-end stop"},
+                {"rod_stop_left", "leaves the rod-end stop"},
+                {"rod_cushion_entry", "enters the rod-end cushioning zone (rod cushioning)"},
+                {"rod_cushion_exit", "leaves the rod-end cushioning zone (rod cushioning)"},
+                {"rod_bore_closing", "the rod-end bore opening starts to close (rod cushioning)"},
+                {"rod_bore_open", "the rod-end bore opening is fully open (rod cushioning)"}};
     for (const char* v : {"dead_volume_rod_side", "dead_volume_cushion", "dead_volume_channel"})
       i.faults.push_back({std::string(v) + "_off", std::string("volume ") + v + " off (fittings, machining)",
                           {{"k", v, "1", true, 1.0, 0.3, 3.0, 1.5, true}}});
@@ -508,9 +520,9 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
         P::scalar("x0", "m", "initial position; default: at rest against the stop at x = 0 at force equilibrium",
                   kNaN),
         P::scalar("p0_A", "Pa", "initial rod-side pressure (with rod cushioning also ECr), absolute", 101325.0)
-            .positive(),
+            .positive().absolute(),
         P::scalar("p0_cap", "Pa", "initial cap-side pressure (cushion volume and channel), absolute", 101325.0)
-            .positive(),
+            .positive().absolute(),
         P::scalar("T0", "K", "initial gas temperature", 293.15).positive(),
     };
   }

@@ -113,6 +113,11 @@ class Cylinder final : public ComponentT<Cylinder> {
                      {"P_pdV_rod_channel", "W", "p dV/dt of the rod-side channel gas (0 without cushioning)"}};
     add_parts(i, true, true, true);
     i.faults = Piston::faults({"dead_volume_cap", "dead_volume_rod"});
+    i.events = Piston::stop_events();
+    for (const std::string end : {"cap", "rod"}) {
+      i.events.push_back({end + "_cushion_entry", "enters the " + end + "-end cushioning zone (cushioned ends)"});
+      i.events.push_back({end + "_cushion_exit", "leaves the " + end + "-end cushioning zone (cushioned ends)"});
+    }
     for (const char* end : {"cap", "rod"})
       i.faults.push_back({std::string(end) + "_cushion_misadjusted",
                           std::string("cushion needle at the ") + end + " end off its setting (turned, clogged)",

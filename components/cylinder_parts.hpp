@@ -504,8 +504,8 @@ struct Piston {
     const std::vector<ParameterSpec> initial = {
         P::scalar("x0", "m", "initial position; default: at rest against the stop at x = 0 at force equilibrium",
                   std::numeric_limits<double>::quiet_NaN()),
-        P::scalar("p0_cap", "Pa", "initial cap-side pressure, absolute", 101325.0).positive(),
-        P::scalar("p0_rod", "Pa", "initial " + p0_rod_meaning + " pressure, absolute", 101325.0).positive(),
+        P::scalar("p0_cap", "Pa", "initial cap-side pressure, absolute", 101325.0).positive().absolute(),
+        P::scalar("p0_rod", "Pa", "initial " + p0_rod_meaning + " pressure, absolute", 101325.0).positive().absolute(),
         P::scalar("T0", "K", "initial gas temperature", 293.15).positive(),
     };
     out.insert(out.end(), initial.begin(), initial.end());
@@ -605,6 +605,12 @@ struct Piston {
                      : EventResult{true, "retracted: contact with the cap-end stop" + at, "retracted"};
     return dir > 0 ? EventResult{true, "extended: contact with the rod-end stop" + at, "extended"}
                    : EventResult{false, "leaves the extended end" + at, "left_extended"};
+  }
+  static std::vector<EventSpec> stop_events() {
+    return {{"retracted", "contact with the cap-end stop"},
+            {"left_retracted", "leaves the retracted end"},
+            {"extended", "contact with the rod-end stop"},
+            {"left_extended", "leaves the extended end"}};
   }
 };
 

@@ -31,6 +31,7 @@ class DirectionalValve32 final : public SpoolValve<DirectionalValve32> {
         "flow at P",   "flow at A", "flow at R", "temperature out of P", "temperature out of A", "temperature out of R",
         "spool motion"};
     i.faults = SpoolDrive::faults();
+    i.events = SpoolDrive::events();
     i.faults.push_back(ValvePath::leakage_fault());
     return i;
   }

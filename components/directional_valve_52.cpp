@@ -29,6 +29,7 @@ class DirectionalValve52 final : public SpoolValve<DirectionalValve52> {
     i.variables = {{"x", "1", "spool position: 0 rest (P -> B, A -> R), 1 actuated (P -> A, B -> R)", 1.0}};
     i.modes = 1;  // schedule events passed
     i.faults = SpoolDrive::faults();
+    i.events = SpoolDrive::events();
     i.faults.push_back(ValvePath::leakage_fault());
     return i;
   }

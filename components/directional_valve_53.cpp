@@ -52,6 +52,7 @@ class DirectionalValve53 final : public SpoolValve<DirectionalValve53> {
     i.variables = {{"y", "1", "spool position: -1 solenoid 12, 0 centre, 1 solenoid 14", 1.0}};
     i.modes = 1;  // schedule events passed
     i.faults = SpoolDrive::faults();
+    i.events = SpoolDrive::events({"12", "centre", "14"});
     i.faults.push_back(ValvePath::leakage_fault());
     return i;
   }

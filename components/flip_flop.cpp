@@ -31,6 +31,7 @@ class FlipFlop final : public ComponentT<FlipFlop> {
     i.equations = {"output Q", "output Qn"};
     i.modes = 1;
     i.roots = 2;
+    i.events = {{"set", "Q goes to 1"}, {"reset", "Q goes to 0"}};
     i.follows_inputs = true;
     return i;
   }

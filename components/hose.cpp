@@ -56,7 +56,7 @@ class Hose final : public ComponentT<Hose> {
         ParameterSpec::text("inertia", {"false", "true"}, "momentum balance of the gas in each flow element", "false"),
         ParameterSpec::scalar("mu", "Pa*s", "dynamic viscosity of the gas (air at 20 degC: 1.81e-5 Pa*s)", 1.81e-5)
             .positive(),
-        ParameterSpec::scalar("p0", "Pa", "initial pressure, absolute", 101325.0).positive(),
+        ParameterSpec::scalar("p0", "Pa", "initial pressure, absolute", 101325.0).positive().absolute(),
         ParameterSpec::scalar("T0", "K", "initial gas temperature", 293.15).positive(),
     };
     i.ports = {{"a", Domain::pneumatic, Causality::acausal, "end a"},

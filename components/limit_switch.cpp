@@ -33,6 +33,7 @@ class LimitSwitch final : public WindowSwitchComponent<LimitSwitch> {
     i.equations = {"no force", "switch output"};
     i.modes = 1;
     i.roots = 2;
+    i.events = {{"on", "switches on"}, {"off", "switches off"}};
     i.follows_inputs = true;  // its state at the start is read from the initial position
     return i;
   }

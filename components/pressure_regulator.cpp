@@ -31,7 +31,7 @@ class PressureRegulator final : public ComponentT<PressureRegulator> {
     i.symbol = symbols::pressure_regulator();
     using P = ParameterSpec;
     i.parameters = {
-        P::scalar("p_set", "Pa", "set outlet pressure, absolute: write e.g. 4 barg for gauge").positive(),
+        P::scalar("p_set", "Pa", "set outlet pressure, absolute: write e.g. 4 barg for gauge").positive().absolute(),
         P::scalar("droop", "Pa", "outlet pressure fall below p_set at which the supply path is fully open", 0.3e5)
             .positive(),
         P::scalar("C", "m3/(s*Pa)", "sonic conductance of the supply path when fully open").positive(),

@@ -22,7 +22,7 @@ class PressureSensor final : public ComponentT<PressureSensor> {
         pt1_tau_parameter("the output"),
         ParameterSpec::scalar("p0", "Pa", "initial output if tau > 0 (default: ambient pressure)")
             .positive()
-            .optional(),
+            .optional().absolute(),
     };
     for (auto& p : SensorCalibration::parameters("Pa")) i.parameters.push_back(std::move(p));
     i.ports = {{"port", Domain::pneumatic, Causality::acausal, "gas port (tapped, no flow)"},

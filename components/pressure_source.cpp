@@ -17,7 +17,7 @@ class PressureSource final : public ComponentT<PressureSource> {
     i.description = "Ideal pressure source (absolute pressure p, delivered gas temperature T).";
     i.symbol = symbols::pressure_source();
     i.parameters = {
-        ParameterSpec::scalar("p", "Pa", "pressure, absolute (write '6 barg' for gauge)").positive(),
+        ParameterSpec::scalar("p", "Pa", "pressure, absolute (write '6 barg' for gauge)").positive().absolute(),
         ParameterSpec::scalar("T", "K", "temperature of the delivered gas", 293.15).positive(),
         fault_parameter("fault_resistance", "Pa*s/kg",
                         "the port's pressure falls by this times the delivered mass flow (a long or throttled supply "

@@ -22,7 +22,7 @@ class PressureSwitch final : public WindowSwitchComponent<PressureSwitch> {
         "hysteresis. Switches at root-located events (tags on, off).";
     i.symbol = symbols::gauge("port", "y", "p>");
     i.parameters = {
-        ParameterSpec::scalar("p_on", "Pa", "switching pressure, absolute").positive(),
+        ParameterSpec::scalar("p_on", "Pa", "switching pressure, absolute").positive().absolute(),
         ParameterSpec::scalar("hysteresis", "Pa", "fall below p_on before it releases", 0.2e5).non_negative(),
     };
     i.ports = {{"port", Domain::pneumatic, Causality::acausal, "gas port (tapped, no flow)"},
@@ -31,6 +31,7 @@ class PressureSwitch final : public WindowSwitchComponent<PressureSwitch> {
     i.equations = {"no flow", "stream temperature", "switch output"};
     i.modes = 1;
     i.roots = 2;
+    i.events = {{"on", "switches on"}, {"off", "switches off"}};
     i.follows_inputs = true;  // its state at the start is read from the initial pressure
     return i;
   }

@@ -25,7 +25,7 @@ class ReliefValve final : public ComponentT<ReliefValve> {
     i.symbol = symbols::relief_valve();
     i.parameters = {
         ParameterSpec::scalar("p_set", "Pa", "set (cracking) pressure, absolute: write e.g. 5 barg for gauge")
-            .positive(),
+            .positive().absolute(),
         ParameterSpec::scalar("band", "Pa", "pressure rise above p_set at which the valve is fully open", 0.5e5)
             .positive(),
         ParameterSpec::scalar("C", "m3/(s*Pa)", "sonic conductance when fully open, e.g. 1 dm3/(s*bar)").positive(),

@@ -155,6 +155,9 @@ class Sequencer final : public ComponentT<Sequencer> {
     i.observables = {{"step", "1", "active step (0: waiting for start)"}};
     i.modes = kOutputs;
     i.roots = 1;
+    i.events = {{"cycle_start", "start: step 1 entered"},
+                {"step_K", "step K entered (K = 2, 3, ...)"},
+                {"cycle_end", "the last transition fired: the cycle is done"}};
     i.follows_inputs = true;
     return i;
   }

@@ -28,6 +28,7 @@ class SignalSource final : public ComponentT<SignalSource> {
     };
     i.ports = {{"y", Domain::signal, Causality::output, "the signal"}};
     i.modes = 1;  // step: 0 before, 1 after t_start
+    i.events = {{"step", "the step at t_start (kind step)"}};
     i.equations = {"signal value"};
     return i;
   }

@@ -50,6 +50,7 @@ class SingleActingCylinder final : public ComponentT<SingleActingCylinder> {
     for (auto& s : Piston::parameters("spring chamber (closed chamber)")) i.parameters.push_back(std::move(s));
     add_parts(i, true, true);
     i.faults = Piston::faults({"dead_volume_cap"});
+    i.events = Piston::stop_events();
     i.faults.push_back({"spring_weak", "return spring weaker or stiffer than its data sheet (fatigue, wrong spring)",
                         {{"k", "spring_rate", "1", true, 1.0, 0.25, 2.0, 0.8, true}}});
     return i;

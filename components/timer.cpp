@@ -34,6 +34,11 @@ class Timer final : public ComponentT<Timer> {
     i.equations = {"timer output"};
     i.modes = 3;  // output, running, due time
     i.roots = 2;  // t - t_due, in - 0.5
+    i.events = {{"start", "the delay starts"},
+                {"elapsed", "the delay has elapsed: the output switches"},
+                {"cancel", "the input changed back before the delay"},
+                {"set", "off_delay: the output goes to 1 with the input"},
+                {"reset", "on_delay: the output goes to 0 with the input"}};
     i.follows_inputs = true;
     return i;
   }

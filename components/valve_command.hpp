@@ -75,6 +75,15 @@ class SpoolDrive {
              {{"k", "t_switch_time", "1", true, 1.0, 0.25, 20.0, 2.0, true}}}};
   }
 
+  // The tags of a schedule's events, per state word: the command acts
+  // (command_WORD) and the spool has arrived (switched_WORD).
+  static std::vector<EventSpec> events(const std::vector<std::string>& words = {"off", "on"}) {
+    std::vector<EventSpec> out;
+    for (const auto& w : words) out.push_back({"command_" + w, "a scheduled command to state '" + w + "' acts"});
+    for (const auto& w : words) out.push_back({"switched_" + w, "the spool has arrived in state '" + w + "'"});
+    return out;
+  }
+
   SpoolDrive(const ParameterValues& p, std::string actuated, std::string rest)
       : SpoolDrive(p, {{0.0, std::move(rest), "off"}, {1.0, std::move(actuated), "on"}}) {}
 

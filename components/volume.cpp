@@ -29,7 +29,7 @@ class Volume final : public ComponentT<Volume> {
     i.symbol = symbols::volume();
     i.parameters = {
         ParameterSpec::scalar("V", "m3", "volume").positive(),
-        ParameterSpec::scalar("p0", "Pa", "initial pressure, absolute", 101325.0).positive(),
+        ParameterSpec::scalar("p0", "Pa", "initial pressure, absolute", 101325.0).positive().absolute(),
         ParameterSpec::scalar("T0", "K", "initial gas temperature", 293.15).positive(),
     };
     i.ports = {{"port", Domain::pneumatic, Causality::acausal, "gas port"},

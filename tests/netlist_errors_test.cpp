@@ -70,7 +70,9 @@ const std::vector<BadCase>& bad_cases() {
       {"merge_key.yaml", {}, 6, "tank", "", {"merge keys (<<) are not supported"}},
       {"parameter_reference.yaml", {}, 5, "", "p_supply", {"cannot refer to another parameter"}},
       {"implausible_pressure.yaml", {}, 7, "source", "p", {"out of range", "'p_supply'", "[1, 1e+08]"}},
-      {"implausible_pressure.yaml", {"p_supply=1e-320"}, 7, "source", "p", {"out of range", "1e-320 Pa"}},
+      {"implausible_pressure.yaml", {"p_supply=1e-320 Pa"}, 7, "source", "p", {"out of range", "1e-320 Pa"}},
+      // A bare number is SI, refused where that cannot be meant: 6 Pa for a supply.
+      {"implausible_pressure.yaml", {"p_supply=6"}, 5, "", "p_supply", {"--set p_supply=6", "6 Pa", "p_supply=6 bar"}},
       {"table_negative_conductance.yaml", {}, 38, "cylinder", "cushion_C_of_z", {"row 3, column 2", "[0, 0.001]"}},
       {"negative_volume.yaml", {}, 9, "tank", "V", {"out of range", "'V_tank'", "negative_volume.yaml:4:"}},
       {"yaml_syntax.yaml", {}, 5, "", "", {"YAML syntax error", "never closed"}},

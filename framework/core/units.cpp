@@ -678,6 +678,18 @@ DisplayUnit display_unit(std::string_view unit_text, Dimension dim, double ambie
   return {std::string(unit_text), u.scale, u.offset + (u.gauge ? ambient_pressure_pa : 0.0)};
 }
 
+std::string habitual_unit_if_implausible(double v, Dimension dim) {
+  const double a = std::abs(v);
+  if (a == 0.0 || !std::isfinite(v)) return "";  // 0 is 0 in every unit
+  if (dim == dims::length) return a > 10.0 ? "mm" : "";                 // beyond 10 m
+  if (dim == dims::pressure) return a < 1000.0 ? "bar" : "";            // below 10 mbar
+  if (dim == dims::temperature) return v < 100.0 ? "degC" : "";         // below -173 degC
+  if (dim == dims::area) return a > 1.0 ? "mm2" : "";                   // beyond 1 m2
+  if (dim == dims::volume) return a > 1.0 ? "L" : "";                   // beyond 1000 L
+  if (dim == dims::sonic_conductance) return a > 1e-5 ? "dm3/(s*bar)" : "";  // beyond 1000 dm3/(s*bar)
+  return "";
+}
+
 std::vector<std::string> known_unit_names() {
   std::vector<std::string> names;
   for (const auto& [name, unit] : unit_table()) names.push_back(name);

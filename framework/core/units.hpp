@@ -151,6 +151,15 @@ struct DimensionMismatch : std::invalid_argument {
 };
 DisplayUnit display_unit(std::string_view unit_text, Dimension dim, double ambient_pressure_pa = 101325.0);
 
+// A number written without a unit is SI. For the dimensions people habitually
+// write in other units, a bare number far outside what its SI value
+// plausibly is - `bore: 40` (40 m), `p: 6` (6 Pa), `T: 20` (20 K),
+// `C: 0.4` (0.4 m3/(s*Pa)) - was almost surely meant in the habitual unit.
+// Returns that unit ("mm", "bar", "degC", "L", "mm2", "dm3/(s*bar)") when
+// `si_value` is implausible as SI for `dim`; "" when it is plausible or the
+// dimension has no habit (mass, time, force: SI is what people write).
+std::string habitual_unit_if_implausible(double si_value, Dimension dim);
+
 // Every unit name parse_unit() accepts as a single token (for docs/completion).
 std::vector<std::string> known_unit_names();
 

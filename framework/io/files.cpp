@@ -134,7 +134,15 @@ std::string read_input_file(const std::string& path, const std::string& what) {
   check_input_file(path, what);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw std::invalid_argument(what + " " + path + ": cannot be read");
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  std::string text;
+  char chunk[65536];
+  while (in.read(chunk, sizeof chunk) || in.gcount() > 0) {
+    text.append(chunk, static_cast<std::size_t>(in.gcount()));
+    if (text.size() > kMaxInputBytes)
+      throw std::invalid_argument(what + " " + path + ": larger than " + std::to_string(kMaxInputBytes >> 20) +
+                                  " MB, more than pneumo reads");
+  }
+  return text;
 }
 
 std::FILE* open_journal(const std::string& path) {

@@ -12,6 +12,7 @@
 // says what to change; the commands report it as bad input (exit status 2).
 #pragma once
 
+#include <cstddef>
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -42,7 +43,10 @@ std::string first_line_of(const std::string& path);
 // absent, a directory, a device, FIFO or socket. `what` names it ("samples").
 void check_input_file(const std::string& path, const std::string& what);
 
-// The whole of a regular input file (check_input_file first).
+// The whole of a regular input file (check_input_file first), refused
+// beyond kMaxInputBytes: a file of kernel or process state (/proc) counts
+// as regular and may never end.
+inline constexpr std::size_t kMaxInputBytes = std::size_t{1} << 30;
 std::string read_input_file(const std::string& path, const std::string& what);
 
 // Opens an append-only journal at `path` without following a symbolic link;

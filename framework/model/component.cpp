@@ -1,5 +1,6 @@
 #include "framework/model/component.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <vector>
@@ -134,6 +135,24 @@ const ParameterSpec* ComponentInfo::parameter(const std::string& n) const {
   for (const auto& p : parameters)
     if (p.name == n) return &p;
   return nullptr;
+}
+
+bool EventSpec::matches(const std::string& t) const {
+  const bool numbered = tag.size() > 2 && tag.compare(tag.size() - 2, 2, "_K") == 0;
+  if (!numbered) return t == tag;
+  const std::size_t stem = tag.size() - 1;  // "step_"
+  return t.size() > stem && t.compare(0, stem, tag, 0, stem) == 0 &&
+         std::all_of(t.begin() + static_cast<std::ptrdiff_t>(stem), t.end(), [](char c) { return c >= '0' && c <= '9'; });
+}
+
+bool ComponentInfo::raises(const std::string& t) const {
+  return std::any_of(events.begin(), events.end(), [&](const EventSpec& e) { return e.matches(t); });
+}
+
+std::string ComponentInfo::event_list() const {
+  std::string s;
+  for (const auto& e : events) s += (s.empty() ? "" : ", ") + e.tag;
+  return s.empty() ? "none" : s;
 }
 
 double ParameterValues::scalar(const std::string& name) const {

@@ -85,6 +85,11 @@ struct ParameterSpec {
   std::vector<std::string> columns;
   bool required_table = true;
   bool is_optional = false;
+  // An absolute pressure (a start pressure, a supply, a set point): the only
+  // pressures a gauge unit (barg, psig) may give. Every other pressure is a
+  // difference (a cracking pressure, a band, a droop, a hysteresis), which
+  // the ambient pressure a gauge unit adds would falsify: 0.2 barg is 1.21 bar.
+  bool is_absolute = false;
   // text parameters: allowed values (empty = any), default
   std::vector<std::string> choices;
   std::optional<std::string> default_text;
@@ -121,6 +126,7 @@ struct ParameterSpec {
   }
   // May be left out (the component checks ParameterValues::has()).
   ParameterSpec optional() && { required_table = false; is_optional = true; return std::move(*this); }
+  ParameterSpec absolute() && { is_absolute = true; return std::move(*this); }
   ParameterSpec positive() && { min = 0.0; min_exclusive = true; return std::move(*this); }
   ParameterSpec non_negative() && { min = 0.0; return std::move(*this); }
   ParameterSpec range(double lo, double hi) && { min = lo; max = hi; return std::move(*this); }
@@ -171,6 +177,15 @@ struct FaultSpec {
   std::vector<FaultParameterSpec> parameters;
 };
 
+// A tagged event a component raises (EventResult::tag), which metrics,
+// energy audits and diagnosis phases name as COMPONENT.TAG. A tag ending in
+// "_K" stands for a numbered family: step_K covers step_2, step_3, ...
+struct EventSpec {
+  std::string tag;
+  std::string description;  // when it happens, in the user's words
+  bool matches(const std::string& t) const;
+};
+
 struct ComponentInfo {
   std::string type;
   std::string description;
@@ -185,12 +200,17 @@ struct ComponentInfo {
   // re-initialisation (event iteration).
   bool follows_inputs = false;
   std::vector<FaultSpec> faults;  // what can fail in this component (none: nothing declared)
+  // Every tag its events carry; a netlist naming another is refused at load
+  // (none: it raises no event a metric can name).
+  std::vector<EventSpec> events;
   // Its ISO 1219-1 symbol (framework/model/symbol.hpp); empty: `pneumo
   // draw` draws a box with the ports named.
   Symbol symbol;
 
   int port_index(const std::string& name) const;
   const ParameterSpec* parameter(const std::string& name) const;
+  bool raises(const std::string& tag) const;
+  std::string event_list() const;  // "cycle_start, step_K, cycle_end" or "none"
 };
 
 // Parameter values after unit conversion and range checks, SI.

@@ -3,7 +3,9 @@
 // resolved ports and output probes.
 #include <algorithm>
 #include <set>
+#include <utility>
 
+#include "framework/core/expression.hpp"
 #include "framework/model/signal_loops.hpp"
 #include "framework/model/start_conflicts.hpp"
 #include "framework/netlist/netlist.hpp"
@@ -16,6 +18,25 @@ using namespace netlist_detail;
 namespace {
 
 Dimension spec_dimension(const ParameterSpec& spec) { return units::dimension_of(spec.unit); }
+
+// How a scalar was written, `what` naming it for the message. A gauge unit
+// gives only absolute pressures (ParameterSpec::is_absolute). A bare number
+// is SI, refused where that is implausible for the parameter's dimension
+// (`bore: 40` would be 40 m): the message gives the unit to write.
+void check_written(const Reader& r, const ValueDecl& node, const ComponentDecl& c, const ParameterSpec& spec,
+                   const units::Quantity& q, const std::string& what, const std::string& number) {
+  if (q.gauge && !spec.is_absolute)
+    r.fail(node, c.name, spec.name,
+           what + " is a gauge pressure, but '" + spec.name +
+               "' is a pressure difference: write it in bar (e.g. '0.2 bar'), not barg or psig");
+  if (q.had_unit) return;
+  const std::string unit = units::habitual_unit_if_implausible(q.si_value, spec_dimension(spec));
+  if (!unit.empty())
+    r.fail(node, c.name, spec.name,
+           what + " has no unit, so it is read as " + units::format_si(q.si_value, spec_dimension(spec)) +
+               ", which is not plausible for '" + spec.name + "'; write its unit, e.g. '" +
+               number + " " + unit + "'");
+}
 
 }  // namespace
 
@@ -40,9 +61,13 @@ double parameter_value(const Netlist& nl, const ComponentDecl& c, const Paramete
       r.fail(node, c.name, spec.name,
              "top-level parameter '" + text + "' (" + tp->where.to_string() + ") has dimension " +
                  tp->dim.to_string() + " but this parameter needs " + spec.unit + " (" + dim.to_string() + ")");
+    check_written(r, node, c, spec, {tp->si_value, tp->dim, tp->had_unit, tp->gauge},
+                  "top-level parameter '" + text + "' (" + tp->where.to_string() + ")", units::format_si(tp->si_value, {}));
     return tp->si_value;
   }
-  return r.quantity(node, nl.gas.p_ambient, dim, spec.unit, c.name, spec.name);
+  const double v = r.quantity(node, nl.gas.p_ambient, dim, spec.unit, c.name, spec.name);
+  check_written(r, node, c, spec, units::parse_quantity(text, nl.gas.p_ambient), "'" + text + "'", text);
+  return v;
 }
 
 namespace {
@@ -255,6 +280,34 @@ Probe make_probe(const Netlist& nl, const Circuit& circuit, const std::map<std::
   return probe;
 }
 
+// The events a metric names, as (component, tag): its window and instant,
+// its {event: ...}, and the COMPONENT.TAG names of its expression.
+std::vector<std::pair<std::string, std::string>> named_events(const MetricDecl& m, const Netlist& nl) {
+  std::vector<std::pair<std::string, std::string>> out;
+  for (const auto* ref : {m.from ? &*m.from : nullptr, m.to ? &*m.to : nullptr, m.at ? &*m.at : nullptr,
+                          m.kind == MetricDecl::Kind::event_time ? &m.event : nullptr})
+    if (ref && ref->is_event()) out.emplace_back(ref->component, ref->tag);
+  if (m.kind != MetricDecl::Kind::expression) return out;
+  for (const auto& n : Expression(m.expression).names()) {
+    const auto dot = n.find('.');
+    const bool metric = std::any_of(nl.metrics.begin(), nl.metrics.end(), [&](const MetricDecl& d) { return d.name == n; });
+    if (!metric && dot != std::string::npos) out.emplace_back(n.substr(0, dot), n.substr(dot + 1));
+  }
+  return out;
+}
+
+// A misspelt tag would otherwise make a metric of nan in a run that succeeds.
+void check_named_events(const Netlist& nl, const Circuit& circuit, const std::map<std::string, int>& index) {
+  for (const auto& m : nl.metrics)
+    for (const auto& [component, tag] : named_events(m, nl)) {
+      const ComponentInfo& info = circuit.components[static_cast<std::size_t>(index.at(component))]->info();
+      if (!info.raises(tag))
+        throw InputError(m.where, component, "metrics." + m.name,
+                         "metric '" + m.name + "': component '" + component + "' (" + info.type +
+                             ") raises no event '" + tag + "'; its events: " + info.event_list());
+    }
+}
+
 }  // namespace
 
 Circuit elaborate(const Netlist& nl, const Registry& registry) {
@@ -281,6 +334,7 @@ Circuit elaborate(const Netlist& nl, const Registry& registry) {
   check_signal_loops(circuit);
   check_start_conflicts(circuit);
   for (const auto& o : nl.outputs) circuit.probes.push_back(make_probe(nl, circuit, index, o));
+  check_named_events(nl, circuit, index);
   return circuit;
 }
 

@@ -343,6 +343,7 @@ void read_parameters(Reader& r, const YAML::Node& node, Netlist& nl) {
       p.si_value = q.si_value;
       p.dim = q.dim;
       p.had_unit = q.had_unit;
+      p.gauge = q.gauge;
     } catch (const units::ParseError& err) {
       if (is_identifier(text))
         r.fail(e.value, "", e.key,
@@ -505,10 +506,16 @@ void apply_override(Netlist& nl, const std::string& assignment) {
     throw InputError(p->where, "", name,
                      option + ": '" + text + "' has dimension " + q.dim.to_string() + " but '" + name +
                          "' is declared here with dimension " + p->dim.to_string());
+  if (!q.had_unit && p->had_unit)
+    if (const std::string unit = units::habitual_unit_if_implausible(q.si_value, p->dim); !unit.empty())
+      throw InputError(p->where, "", name,
+                       option + ": '" + text + "' has no unit, so it would be " + units::format_si(q.si_value, p->dim) +
+                           "; write the unit, e.g. --set '" + name + "=" + text + " " + unit + "'");
   p->si_value = q.si_value;
   if (q.had_unit) {
     p->dim = q.dim;
     p->had_unit = true;
+    p->gauge = q.gauge;
   }
 }
 

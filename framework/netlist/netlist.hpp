@@ -34,6 +34,7 @@ struct TopParameter {
   double si_value = 0.0;
   units::Dimension dim;
   bool had_unit = false;  // false: a plain number, taken as SI
+  bool gauge = false;     // written in a gauge unit (barg, psig)
   SourceLocation where;
 };
 
