@@ -17,7 +17,7 @@
 // Force on the rod flange in +x (eq. 1-3 in one expression; the cushioning
 // terms vanish smoothly in the main stroke because p_EC = p_ch there):
 //   F = p_A A_A + p_amb A_R - p_EC (A_B - A_CP) - p_ch A_CP + F_friction + F_stops
-// Friction (components/friction.hpp, `friction_model`): seed 000 eq. 4/7/8
+// Friction (components/friction.hpp, `friction_model`): paper [1] eq. 4/7/8
 // presets or custom eq. 8 coefficients (`friction: custom`, friction_b0 ...
 // as `pneumo fit friction -o` writes them), with a separate set in the
 // cushioning zone (`friction_cushion`, preset or custom friction_cushion_*)
@@ -42,7 +42,7 @@
 // (insulated if unconnected; external heat_convection does the transfer).
 // With wall_alpha > 0 they are the walls and the gas exchanges
 //   Q = wall_alpha A(x) (T_wall - T_gas)
-// with them (seed 002 eq. 2), A(x) = both end faces + the lateral bore (and
+// with them (paper [3] eq. 2), A(x) = both end faces + the lateral bore (and
 // rod, rod side) surface over the chamber's current length (stroke travel
 // plus dead volume / piston area). heat_A acts on the rod chamber (ECr with
 // rod cushioning), heat_cap on the cushion annulus EC; the channels are
@@ -93,14 +93,14 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
     i.type = "cushioned_cylinder";
     i.description =
         "Double-acting cylinder with end-position cushioning at the cap end and optionally at the rod end (plug, "
-        "cushion annulus, needle throttle, check valve), mass and energy balance in each chamber, friction (seed 000 "
+        "cushion annulus, needle throttle, check valve), mass and energy balance in each chamber, friction (paper [1] "
         "eq. 4/7/8 presets, Coulomb + viscous, LuGre), optional gas-to-wall heat transfer, elastic end stops. x = 0 "
         "extended, x = stroke at the cap; port A rod side, port B cap-side outlet (both closed if unconnected).";
     i.symbol = symbols::cushioned_cylinder();
     using P = ParameterSpec;
     i.parameters = {
         P::scalar("bore", "m", "piston diameter").positive(),
-        P::scalar("rod", "m", "rod diameter; 0: rodless (both sides full bore area, seed 001's MY3B)").non_negative(),
+        P::scalar("rod", "m", "rod diameter; 0: rodless (both sides full bore area, paper [2]'s MY3B)").non_negative(),
         P::scalar("stroke", "m", "stroke").positive(),
         P::scalar("plug_diameter", "m", "cushioning plug diameter").positive(),
         P::scalar("cushion_length", "m", "cushioning length (plug engages at x = stroke - cushion_length)")

@@ -8,7 +8,7 @@
 //
 // Each chamber has its own mass and energy balance (state m, U); rod: 0
 // makes it rodless (both faces full bore). Friction: the friction_model of
-// components/friction.hpp (seed 000 presets with the chamber pressures at
+// components/friction.hpp (paper [1] presets with the chamber pressures at
 // the piston - the presets' p_A is the rod side, p_B and p_EC the cap side -
 // Coulomb + viscous, LuGre); elastic end stops at x = 0 and x = stroke.
 // Heat: with wall_alpha = 0 the heat ports are at the gas temperature

@@ -121,11 +121,11 @@ std::vector<ParameterSpec> FrictionLaw::parameters(bool with_cushion) {
   using P = ParameterSpec;
   std::vector<ParameterSpec> out = {
       P::text("friction_model", {"preset", "coulomb_viscous", "lugre"},
-              "friction law: preset (seed 000 eq. 4/7/8 set named by 'friction'), coulomb_viscous "
-              "(F_C tanh(v/v_reg) + d v), lugre (seed 002 eq. 8, bristle state z)",
+              "friction law: preset (paper [1] eq. 4/7/8 set named by 'friction'), coulomb_viscous "
+              "(F_C tanh(v/v_reg) + d v), lugre (paper [3] eq. 8, bristle state z)",
               "preset"),
       P::text("friction", friction_set_names(),
-              "coefficient set of seed 000 (friction_model preset), or custom: eq. 8 with friction_b0 ... friction_a",
+              "coefficient set of paper [1] (friction_model preset), or custom: eq. 8 with friction_b0 ... friction_a",
               "none"),
   };
   if (with_cushion)

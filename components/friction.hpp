@@ -35,7 +35,7 @@
 //   preset:          the eq. 4/7/8 coefficient set named by `friction`;
 //   coulomb_viscous: F = -(F_C tanh(v / v_reg) + d v), no sticking (a creep
 //                    of speed ~ F v_reg / F_C under a force F < F_C);
-//   lugre:           seed 002 eq. 8 (Canudas de Wit et al. 1995), with the
+//   lugre:           paper [3] eq. 8 (Canudas de Wit et al. 1995), with the
 //                    bristle deflection z as an internal state:
 //                      dz/dt = v - sigma0 |v| z / g(v),
 //                      g(v) = F_C + (F_S - F_C) exp(-(v / v_S)^2),

@@ -1,6 +1,6 @@
 // Friction between a flange and the ground (the frame), with the friction
-// laws of components/friction.hpp: the eq. 4/7/8 presets of seed 000,
-// Coulomb + viscous, or LuGre (seed 002 eq. 8, bristle state z).
+// laws of components/friction.hpp: the eq. 4/7/8 presets of paper [1],
+// Coulomb + viscous, or LuGre (paper [3] eq. 8, bristle state z).
 #include "components/builtin.hpp"
 #include "components/friction.hpp"
 #include "components/symbols.hpp"
@@ -15,8 +15,8 @@ class FrictionElement final : public ComponentT<FrictionElement> {
     ComponentInfo i;
     i.type = "friction_element";
     i.description =
-        "Friction of a flange sliding against the ground: friction_model preset (seed 000 eq. 4/7/8 sets), "
-        "coulomb_viscous, or lugre (seed 002 eq. 8 with the bristle deflection z as a state).";
+        "Friction of a flange sliding against the ground: friction_model preset (paper [1] eq. 4/7/8 sets), "
+        "coulomb_viscous, or lugre (paper [3] eq. 8 with the bristle deflection z as a state).";
     i.symbol = symbols::mechanical("fric", {{"flange", 0, 20, 'l'}});
     i.parameters = FrictionLaw::parameters(false);
     // The value of the set's pressure p (its kind - friction_pressure for

@@ -1,5 +1,5 @@
 // Convective heat transfer between two thermal ports: Q = alpha A (T_a - T_b)
-// (seed 000 eq. 13), flowing from a to b.
+// (paper [1] eq. 13), flowing from a to b.
 #include "components/builtin.hpp"
 #include "components/symbols.hpp"
 

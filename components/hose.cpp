@@ -51,7 +51,7 @@ class Hose final : public ComponentT<Hose> {
     i.symbol = symbols::hose();
     i.parameters = {
         ParameterSpec::scalar("D", "m", "inner diameter, e.g. 4 mm").positive(),
-        ParameterSpec::scalar("L", "m", "length, e.g. 2 m").positive(),
+        ParameterSpec::scalar("L", "m", "length, e.g. 2 m").positive().bare_up_to(1000.0),
         ParameterSpec::scalar("segments", "1", "number of lumped segments N (1 to 16)", 1.0).range(1.0, kMaxSegments),
         ParameterSpec::text("inertia", {"false", "true"}, "momentum balance of the gas in each flow element", "false"),
         ParameterSpec::scalar("mu", "Pa*s", "dynamic viscosity of the gas (air at 20 degC: 1.81e-5 Pa*s)", 1.81e-5)

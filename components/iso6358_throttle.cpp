@@ -1,4 +1,4 @@
-// ISO 6358 pneumatic resistance (seed 000 eq. 15-16): sonic conductance C and
+// ISO 6358 pneumatic resistance (paper [1] eq. 15-16): sonic conductance C and
 // critical pressure ratio b, flow in both directions. Above the pressure
 // ratio `laminar_ratio` the flow function is continued linearly in (1 - r),
 // so the mass flow is a smooth function of p_a - p_b through zero and the

@@ -1,4 +1,4 @@
-// Isentropic orifice (convergent nozzle): seed 000 eq. 14, seed 001 eq. 8-11,
+// Isentropic orifice (convergent nozzle): paper [1] eq. 14, paper [2] eq. 8-11,
 // the law in components/nozzle_flow.hpp. Flow in both directions, choked
 // below the critical pressure ratio (0.528 for kappa 1.4), continued C1 and
 // linearly through zero pressure drop above `laminar_ratio`. The effective
@@ -30,7 +30,7 @@ class Nozzle final : public ComponentT<Nozzle> {
     i.parameters = {
         ParameterSpec::scalar("A", "m2", "geometric flow area, e.g. 1.2 mm2 (or give d)").positive().optional(),
         ParameterSpec::scalar("d", "m", "orifice diameter, e.g. 1.5 mm (or give A)").positive().optional(),
-        ParameterSpec::scalar("Cd", "1", "discharge coefficient (seed 001: C_q = 0.95-0.98)", 0.95).range(0.0, 1.0),
+        ParameterSpec::scalar("Cd", "1", "discharge coefficient (paper [2]: C_q = 0.95-0.98)", 0.95).range(0.0, 1.0),
         ParameterSpec::scalar("laminar_ratio", "1",
                               "pressure ratio above which psi is continued by a quadratic in (1 - p2/p1) that is "
                               "linear at zero pressure drop; must exceed the critical ratio",

@@ -1,5 +1,5 @@
-// Isentropic flow through a convergent nozzle (orifice), seed 000 eq. 14 and
-// seed 001 eq. 8-11, shared by every component that contains one.
+// Isentropic flow through a convergent nozzle (orifice), paper [1] eq. 14 and
+// paper [2] eq. 8-11, shared by every component that contains one.
 //
 //   m = Cd A p_up sqrt(2 kappa / ((kappa - 1) R T_up)) psi(r),  r = p_dn/p_up
 //   psi(r) = sqrt(r^(2/kappa) - r^((kappa+1)/kappa))     r_crit < r <= r_lam

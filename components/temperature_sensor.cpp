@@ -1,4 +1,4 @@
-// Gas temperature sensor (e.g. the thermocouple of seed 000, tau = 15 ms) on
+// Gas temperature sensor (e.g. the thermocouple of paper [1], tau = 15 ms) on
 // a pneumatic port: draws no flow and measures the stream temperature T_in of
 // the gas at the port through a first-order lag (sensor_lag.hpp). T_in is the
 // framework's mix of the gas flowing INTO the node, so on a volume that
@@ -26,7 +26,7 @@ class TemperatureSensor final : public ComponentT<TemperatureSensor> {
     i.type = "temperature_sensor";
     i.description =
         "Gas temperature sensor (no flow): signal T = temperature of the gas arriving at the port, through a PT1 lag "
-        "tau (seed 000: thermocouple, tau = 15 ms).";
+        "tau (paper [1]: thermocouple, tau = 15 ms).";
     i.symbol = symbols::gauge("port", "T", "T");
     i.parameters = {
         pt1_tau_parameter("the output"),

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The three cushioning regimes of seed 000 section 4 on the basic rig (5 bar
+# The three cushioning regimes of paper [1] section 4 on the basic rig (5 bar
 # absolute, 3.7 kg): z_EC = 0.1, 1.5 and 6 rev, position and cushion pressure
 # over time, one figure (docs/cushion_regimes.png / .svg).
 # Usage: bash docs/plot_regimes.sh [PNEUMO_BINARY]   (from the repository root)
@@ -18,7 +18,7 @@ set output "docs/cushion_regimes.$fmt"
 set datafile separator ","
 set termoption noenhanced
 set key bottom right
-set multiplot layout 2,1 title "basic cushion rig, 5 bar abs, 3.7 kg: the three regimes of seed 000"
+set multiplot layout 2,1 title "basic cushion rig, 5 bar abs, 3.7 kg: the three regimes of paper [1]"
 set xrange [0.25:0.9]
 set ylabel "x [mm]"
 set yrange [70:102]

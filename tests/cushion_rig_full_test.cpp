@@ -1,10 +1,10 @@
 // The full end-cushioning rig (netlists/cushion_rig_full.yaml): the basic rig
 // plus wall heat transfer, Annex C eq. 8 friction (p_AB+ main stroke, p_EC
 // cushioning zone), a 5/2 valve with a 15 ms spool stroke, hoses, and the
-// measurement chain (pressure sensor, 15 ms PT1 thermocouple) of seed 000.
+// measurement chain (pressure sensor, 15 ms PT1 thermocouple) of paper [1].
 //   1. every operating point of the paper (5, 7 bar abs; z_EC 0.1, 1.5, 6 rev)
 //      runs to t_end with physical pressures, temperatures and walls;
-//   2. the three cushioning regimes of seed 000 section 4 hold;
+//   2. the three cushioning regimes of paper [1] section 4 hold;
 //   3. what the full model changes against the basic rig: the stroke starts
 //      later (valve ramp, hoses) at the same speed, and the cushion gas no
 //      longer stays at the adiabatic expansion temperature;
@@ -211,7 +211,7 @@ INSTANTIATE_TEST_SUITE_P(PaperOperatingPoints, FullRigRuns,
                          case_label);
 
 // ---------------------------------------------------------------------------
-// 2. The three regimes of seed 000 section 4, 3.7 kg.
+// 2. The three regimes of paper [1] section 4, 3.7 kg.
 // ---------------------------------------------------------------------------
 
 class FullRigRegimes : public ::testing::TestWithParam<double> {};
@@ -404,7 +404,7 @@ double integral(const std::vector<double>& t, const std::vector<double>& y) {
 
 class WallHeat : public ::testing::TestWithParam<Case> {};
 
-// Non-zero both ways; from hot to cold (seed 000 eq. 13: into the gas while
+// Non-zero both ways; from hot to cold (paper [1] eq. 13: into the gas while
 // the gas is colder than its wall, out of it while hotter); and each wall's
 // temperature change is what it received, C dT = -int(Q_gas + Q_out) dt
 // (Q_gas into the gas, Q_out to the room), within 2 % of the heat exchanged

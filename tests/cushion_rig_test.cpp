@@ -3,7 +3,7 @@
 //   1. cross-check against the independent hand-written IDA implementation
 //      in tests/reference (no shared code) for p_supply in {5, 7} bar abs and
 //      z_EC in {0.1, 1.5, 6} rev,
-//   2. the three cushioning regimes of seed 000 section 4 (overdamped with
+//   2. the three cushioning regimes of paper [1] section 4 (overdamped with
 //      rebound, well adjusted, hard impact) and the monotonicity of the
 //      impact velocity in z_EC,
 //   3. a sanity check of the rig's operating point.
@@ -256,7 +256,7 @@ INSTANTIATE_TEST_SUITE_P(SixCases, CushionRigCrossCheck,
                          });
 
 // ---------------------------------------------------------------------------
-// 2. The three cushioning regimes of seed 000 section 4 (3.7 kg).
+// 2. The three cushioning regimes of paper [1] section 4 (3.7 kg).
 // ---------------------------------------------------------------------------
 
 class CushionRigRegimes : public ::testing::TestWithParam<double> {};

@@ -3,10 +3,10 @@
 //   * gas spring: small oscillations at sqrt(kappa p A^2 / (m V)) (adiabatic
 //     closed chambers), period from the zero crossings of v;
 //   * friction presets: a friction_element driven at constant speed gives
-//     the force of seed 000 eq. 7 / eq. 8 with the Annex B / Annex C
+//     the force of paper [1] eq. 7 / eq. 8 with the Annex B / Annex C
 //     coefficients, typed into this test from the paper (an independent
 //     transcription); the cylinder feeds eq. 8 with its chamber pressures;
-//   * LuGre (seed 002 eq. 8): stick-slip at a low drive speed, none at a
+//   * LuGre (paper [3] eq. 8): stick-slip at a low drive speed, none at a
 //     high one, the steady sliding force F_C + (F_S - F_C) e^-(v/vS)^2 + s2 v,
 //     and a piston that sticks under a force below the break-away force;
 //   * energy: over a full cushioned stroke, enthalpy in + heat = change of
@@ -141,7 +141,7 @@ simulation: {t_end: 1 s, rtol: 1e-9, atol: 1e-9, output_interval: 0.5 ms}
 }
 
 // ---------------------------------------------------------------------------
-// Friction presets at constant speed. Coefficients typed from seed 000,
+// Friction presets at constant speed. Coefficients typed from paper [1],
 // Annex B (eq. 7) and Annex C (eq. 8), independently of components/friction.cpp.
 struct Eq8 {
   double b0, b1, FS0, FS1, FC, vS, kv0, kv1, a;

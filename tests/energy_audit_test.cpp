@@ -1,5 +1,5 @@
 // The cushioning energy audit (framework/analysis/energy_audit) on the basic
-// rig, in the three regimes of seed 000, and through the command line.
+// rig, in the three regimes of paper [1], and through the command line.
 //
 // What is asserted:
 //  * the audit balances: energy in (kinetic energy at entry + driving work)

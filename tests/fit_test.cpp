@@ -1,5 +1,5 @@
 // pneumo fit: coefficients come back from synthetic data generated with
-// known coefficients plus noise; bad data get clear errors; and seed 000's
+// known coefficients plus noise; bad data get clear errors; and paper [1]'s
 // finding holds end to end on a simulated friction test (eq. 8 fits the
 // per-pressure Annex B friction clearly better than eq. 4).
 //

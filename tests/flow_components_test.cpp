@@ -39,7 +39,7 @@ std::string fill(std::string text, const std::vector<std::pair<std::string, std:
 
 double last(const ResultsTable& table, const std::string& name) { return table.rows.back()[table.column(name)]; }
 
-// ISO 6358 (seed 000 eq. 15-16) at T1 = T_ref, forward flow.
+// ISO 6358 (paper [1] eq. 15-16) at T1 = T_ref, forward flow.
 double iso6358(double p1, double p2, double C, double b) {
   const double r = p2 / p1;
   const double phi = r <= b ? 1.0 : std::sqrt(1.0 - std::pow((r - b) / (1.0 - b), 2));
@@ -52,7 +52,7 @@ double nozzle_choked(double CdA, double p1, double T1) {
   return CdA * p1 * std::sqrt(kKappa / (kR * T1)) *
          std::pow(2.0 / (kKappa + 1.0), (kKappa + 1.0) / (2.0 * (kKappa - 1.0)));
 }
-// Subsonic nozzle flow, seed 000 eq. 14 with rho = p/(R T).
+// Subsonic nozzle flow, paper [1] eq. 14 with rho = p/(R T).
 double nozzle_subsonic(double CdA, double p1, double p2, double T1) {
   const double r = p2 / p1, rho = p1 / (kR * T1);
   return CdA * std::sqrt(2.0 * p1 * rho) *
@@ -139,7 +139,7 @@ simulation: {t_end: 1 ms, rtol: 1e-10, atol: 1e-10, output_interval: 1 ms}
 }
 
 // The nozzle's critical pressure ratio is (2/(kappa+1))^(kappa/(kappa-1)) =
-// 0.5283 for kappa 1.4 (seed 001 eq. 11: 0.528): sweeping p2 from 0.40 p1 to
+// 0.5283 for kappa 1.4 (paper [2] eq. 11: 0.528): sweeping p2 from 0.40 p1 to
 // 0.70 p1 in steps of 3e-4 p1, the flow stays at its maximum (the choked
 // value, 1e-8) up to the last grid point below 0.5283 and drops below it
 // from the first point above; the subsonic flow there follows eq. 14 (1e-8),

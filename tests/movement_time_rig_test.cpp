@@ -31,7 +31,7 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr double kArea = kPi * 0.016 * 0.016 / 4;  // m2, both sides (rodless)
 constexpr double kR = 287.0, kKappa = 1.4, kT = 296.15;  // netlist gas, 23 degC
 
-// Table 4 of seed 001: displacement (mm) and the measured ("Testing") time (s).
+// Table 4 of paper [2]: displacement (mm) and the measured ("Testing") time (s).
 const std::vector<double> kTable4D = {0, 100, 200, 300, 400, 500, 600, 700};
 const std::vector<double> kTable4T = {0.4, 1.21, 3, 4, 4.7, 5.4, 6.1, 7};
 

@@ -91,6 +91,21 @@ TEST(WrittenUnits, ABareBoreOfFortyIsRefusedWithTheUnitToWrite) {
   EXPECT_NO_THROW((void)elaborate(parse_netlist(drive("", ", bore: 0.04"), "drive.yaml"), builtin_registry()));
 }
 
+// What is plausible depends on the parameter: a 20 m hose is, a 40 m bore is not.
+TEST(WrittenUnits, ABareHoseLengthIsPlausibleInMetresUpToAKilometre) {
+  const auto line = [](const std::string& length) {
+    return "components:\n"
+           "  supply: {type: pressure_source, p: 6 bar}\n"
+           "  line: {type: hose, D: 4 mm, L: " + length + "}\n"
+           "  tank: {type: volume, V: 1 L}\n"
+           "connections:\n"
+           "  - [supply.port, line.a]\n"
+           "  - [line.b, tank.port]\n";
+  };
+  EXPECT_NO_THROW((void)elaborate(parse_netlist(line("20"), "line.yaml"), builtin_registry()));
+  EXPECT_NE(refusal(line("5000")).find("'5000 mm'"), std::string::npos);
+}
+
 TEST(WrittenUnits, BareTemperatureAndConductanceInTheirHabitualUnitsAreRefused) {
   EXPECT_NE(refusal(drive("", ", bore: 32 mm, T0: 20")).find("degC"), std::string::npos);
   EXPECT_NE(refusal(drive(", check_C: 0.4", ", bore: 32 mm")).find("dm3/(s*bar)"), std::string::npos);

@@ -147,7 +147,7 @@ std::vector<FrictionTestPoint> run_friction_test(const FrictionTestOptions& o) {
 void write_friction_points(const std::string& path, const std::vector<FrictionTestPoint>& pts) {
   std::ofstream f(path);
   if (!f) throw std::runtime_error("cannot write " + path);
-  f << "# simulated friction test of seed 000 (examples/friction_test): medians over the quasi-static window\n"
+  f << "# simulated friction test of paper [1] (examples/friction_test): medians over the quasi-static window\n"
     << "p0 [bar_rel],C_MO [dm3/(s*bar)],v [m/s],p_A [Pa],p_B [Pa],F [N],F_model [N],v_spread [1]\n";
   for (const auto& p : pts)
     f << num(p.p0_bar_rel) << "," << num(p.C_MO) << "," << num(p.v) << "," << num(p.p_A) << "," << num(p.p_B) << ","

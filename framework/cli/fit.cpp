@@ -72,7 +72,7 @@ class FitCommand {
     fit_ = app.add_subcommand("fit", "identify friction or throttle coefficients from measured data (Ceres)");
     fit_->require_subcommand(1);
     fric_ = fit_->add_subcommand(
-        "friction", "fit seed 000 eq. 4/7/8 to (v, p_A, p_B, F) or (v, p_EC, F) or (v, [p0,] F) points");
+        "friction", "fit paper [1] eq. 4/7/8 to (v, p_A, p_B, F) or (v, p_EC, F) or (v, [p0,] F) points");
     fric_->add_option("data", data_, "CSV with a header; columns v, F, p_A, p_B / p_EC / p0; units in brackets")
         ->required();
     fric_->add_option("--model", model_, "eq4, eq7 or eq8")->required()->check(CLI::IsMember({"eq4", "eq7", "eq8"}));

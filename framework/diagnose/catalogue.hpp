@@ -1,5 +1,5 @@
 // Candidate effects for sim-to-real diagnosis: patches to a netlist with free
-// parameters (see README "Diagnosing the sim-to-real gap"). The catalogue
+// parameters (see docs/how-to/diagnose.md). The catalogue
 // file is read once into typed declarations (components, values,
 // connections); applying an effect edits a Netlist, no YAML.
 //

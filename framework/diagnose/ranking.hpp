@@ -1,5 +1,5 @@
-// How the diagnosis judges and orders candidate effects (README "Diagnosing
-// the sim-to-real gap"): significance is a gate, the rank is the share of the
+// How the diagnosis judges and orders candidate effects
+// (docs/how-to/diagnose.md): significance is a gate, the rank is the share of the
 // validation gap an effect explains, and "practical" is measured in noise
 // units - what the measurements resolve, not what some benchmark's effects
 // happen to produce.

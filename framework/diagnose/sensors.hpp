@@ -1,5 +1,5 @@
 // Which sensor would decide between candidate explanations that the measured
-// signals cannot tell apart (README "Diagnosing the sim-to-real gap").
+// signals cannot tell apart (docs/how-to/diagnose.md).
 //
 // Both fitted models are run at every run's operating point with every
 // quantity of the model as an output (each component's observables and

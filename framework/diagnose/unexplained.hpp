@@ -1,5 +1,5 @@
-// Which balance of the model needs a correction (README "Diagnosing the
-// sim-to-real gap", issue #19): when no candidate effect brings the gap down
+// Which balance of the model needs a correction (docs/how-to/diagnose.md):
+// when no candidate effect brings the gap down
 // to the noise, every state's balance gets a smooth additive disturbance
 // d(t) on its derivative (SolverOptions::disturbances), and every measured
 // signal a smooth offset plus a gain. Each d is a sum of hat functions over

@@ -213,7 +213,7 @@ std::string friction_preset_yaml(const FrictionCoefficients& c, const FitReport&
   std::istringstream h(header);
   std::string line;
   while (std::getline(h, line)) o << "# " << line << "\n";
-  o << "# seed 000 " << friction_model_name(m) << " fitted to " << r.points << " points: RSS " << g(r.rss)
+  o << "# paper [1] " << friction_model_name(m) << " fitted to " << r.points << " points: RSS " << g(r.rss)
     << " N^2, R2 " << g(r.r2) << "\n"
     << "# general form (components/friction.hpp): |F| = b0 + b1 p + (FS0 + FS1 p - FC) exp(-|v|/vS)"
        " + (kv0 + kv1 p) |v|^a, p in bar\n"

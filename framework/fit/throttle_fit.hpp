@@ -1,4 +1,4 @@
-// ISO 6358 identification from flow measurements (seed 000 eq. 15-16,
+// ISO 6358 identification from flow measurements (paper [1] eq. 15-16,
 // section 3.2): points (p1, p2, T1, mass flow) -> sonic conductance C and
 // critical pressure ratio b, with the same flow law as the components
 // (components/iso6358_flow.hpp, linear continuation above p2/p1 = 0.999).

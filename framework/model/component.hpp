@@ -90,6 +90,10 @@ struct ParameterSpec {
   // difference (a cracking pressure, a band, a droop, a hysteresis), which
   // the ambient pressure a gauge unit adds would falsify: 0.2 barg is 1.21 bar.
   bool is_absolute = false;
+  // The largest SI value a bare number (no unit) may give, where it differs
+  // from its dimension's (units::habitual_unit_if_implausible): a hose of
+  // 20 m is plausible where a bore of 40 m is not. 0: the dimension's.
+  double bare_max = 0.0;
   // text parameters: allowed values (empty = any), default
   std::vector<std::string> choices;
   std::optional<std::string> default_text;
@@ -127,6 +131,7 @@ struct ParameterSpec {
   // May be left out (the component checks ParameterValues::has()).
   ParameterSpec optional() && { required_table = false; is_optional = true; return std::move(*this); }
   ParameterSpec absolute() && { is_absolute = true; return std::move(*this); }
+  ParameterSpec bare_up_to(double si) && { bare_max = si; return std::move(*this); }
   ParameterSpec positive() && { min = 0.0; min_exclusive = true; return std::move(*this); }
   ParameterSpec non_negative() && { min = 0.0; return std::move(*this); }
   ParameterSpec range(double lo, double hi) && { min = lo; max = hi; return std::move(*this); }

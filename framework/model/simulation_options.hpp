@@ -4,7 +4,7 @@
 // default, valid range and what it does. The netlist reader takes its keys,
 // units and ranges from the table, `pneumo simulate --help` prints it, and
 // tests/simulation_options_test.cpp holds the reader, the help and
-// README's table against it. Adding a setting: a member here, a row in
+// docs/reference/netlist.md's table against it. Adding a setting: a member here, a row in
 // simulation_options.cpp, and its use in the solver (SolverOptions extends
 // SimulationSettings).
 #pragma once

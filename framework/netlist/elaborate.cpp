@@ -2,6 +2,7 @@
 // SI parameters (converted, defaulted and range checked), connections of
 // resolved ports and output probes.
 #include <algorithm>
+#include <cmath>
 #include <set>
 #include <utility>
 
@@ -29,7 +30,7 @@ void check_written(const Reader& r, const ValueDecl& node, const ComponentDecl& 
     r.fail(node, c.name, spec.name,
            what + " is a gauge pressure, but '" + spec.name +
                "' is a pressure difference: write it in bar (e.g. '0.2 bar'), not barg or psig");
-  if (q.had_unit) return;
+  if (q.had_unit || (spec.bare_max > 0 && std::abs(q.si_value) <= spec.bare_max)) return;
   const std::string unit = units::habitual_unit_if_implausible(q.si_value, spec_dimension(spec));
   if (!unit.empty())
     r.fail(node, c.name, spec.name,

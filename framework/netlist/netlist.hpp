@@ -2,7 +2,7 @@
 // a Circuit of component instances. Every error names file:line:column, the
 // component and the parameter.
 //
-// Format (see README "Writing a netlist"):
+// Format (see docs/reference/netlist.md):
 //   gas:        {R: 287.05 J/(kg*K), kappa: 1.4}          # optional, dry air
 //   ambient:    {p: 1 atm, T: 20 degC}                     # optional
 //   parameters: {p_supply: 5 bar, V: 1 L}                  # referenced by name
