@@ -22,7 +22,7 @@
 #include "framework/analysis/run_metrics.hpp"
 #include "framework/core/parallel.hpp"
 #include "framework/core/version.hpp"
-#include "framework/plugin/plugin.hpp"
+#include "framework/run/model.hpp"
 #include "framework/run/run.hpp"
 #include "framework/study/sweep.hpp"
 
@@ -31,30 +31,22 @@ using namespace pneumo;
 
 namespace {
 
-// A loaded netlist: its text (each sweep thread parses its own copy, since
-// YAML nodes are not safe to share across threads), the parsed netlist with
-// the registry its `plugins:` make, and a lock held while anything reads
-// the shared YAML nodes (elaboration, a sweep's design and metrics), so that
-// Python threads may run one netlist at once.
+// A loaded netlist (framework/run/model.hpp: its text, each sweep thread
+// parsing its own copy, the parsed netlist and the registry its `plugins:`
+// make) and a lock held while anything reads the shared YAML nodes
+// (elaboration, a sweep's design and metrics), so that Python threads may
+// run one netlist at once.
 class LoadedNetlist {
  public:
-  explicit LoadedNetlist(const std::string& path) : path_(path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw InputError(SourceLocation{path, 0, 0}, "", "", "cannot open the netlist");
-    text_.assign((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    netlist_ = parse_netlist(text_, path);
-    registry_ = registry_with_plugins(builtin_registry(), netlist_);
-  }
+  explicit LoadedNetlist(const std::string& path) : model_(load_model(path, builtin_registry())) {}
 
-  const std::string& path() const { return path_; }
-  const std::string& text() const { return text_; }
-  const Netlist& netlist() const { return netlist_; }
-  const Registry& registry() const { return registry_; }
+  const std::string& path() const { return model_.path; }
+  const std::string& text() const { return model_.text; }
+  const Netlist& netlist() const { return model_.netlist; }
+  const Registry& registry() const { return model_.registry; }
 
  private:
-  std::string path_, text_;
-  Netlist netlist_;
-  Registry registry_;
+  Model model_;
 };
 
 // What `pneumo simulate` computes: the run, and every metric the netlist

@@ -103,7 +103,7 @@ TEST(NetlistMetrics, SweepOnACircuitWithoutCylinderMovesWithSupply) {
   opt.progress = false;
   opt.metrics = {"t_half", "p_end"};
   const std::string out = (dir.path() / "sweep.csv").string();
-  const auto summary = study::run_sweep(path, d, out, opt, study::process_communicator());
+  const auto summary = study::run_sweep(load_model(path, builtin_registry()), d, out, opt, study::process_communicator());
   ASSERT_TRUE(summary.complete);
   std::ifstream in(out);
   std::string line;
@@ -313,7 +313,7 @@ TEST(NetlistMetrics, CushionRigSweepEqualsTheBuiltInMetricsItReplaces) {
   const auto run = [&](std::vector<std::string> metrics, const std::string& name) {
     opt.metrics = std::move(metrics);
     const std::string out = (dir.path() / name).string();
-    EXPECT_TRUE(study::run_sweep(rig, d, out, opt, study::process_communicator()).complete);
+    EXPECT_TRUE(study::run_sweep(load_model(rig, builtin_registry()), d, out, opt, study::process_communicator()).complete);
     return sweep_columns(out);
   };
   const auto plain_now = run({"t_cushion", "v_impact", "p_EC_peak", "T_EC_min", "T_EC_max", "t_move"}, "plain.csv");

@@ -49,7 +49,7 @@ OptimizeOptions quiet(const std::string& journal = "") {
 
 TEST(Optimize, BeatsA400PointGridInFewerRuns) {
   const Netlist nl = load_netlist(kRig);
-  const OptimizeResult r = optimize(kRig, nominal_problem(nl), quiet());
+  const OptimizeResult r = optimize(load_model(kRig, builtin_registry()), nominal_problem(nl), quiet());
   ASSERT_TRUE(r.found) << r.best.reason;
   const double v_opt = r.best.robust[0], t_opt = r.best.robust[1];
 
@@ -59,7 +59,7 @@ TEST(Optimize, BeatsA400PointGridInFewerRuns) {
   so.threads = 2;
   so.progress = false;
   so.metrics = {"v_impact", "t_cushion"};
-  const auto s = run_sweep(kRig, d, (dir.path() / "grid.csv").string(), so, process_communicator());
+  const auto s = run_sweep(load_model(kRig, builtin_registry()), d, (dir.path() / "grid.csv").string(), so, process_communicator());
   ASSERT_TRUE(s.complete);
   double v_grid = std::numeric_limits<double>::infinity();
   for (const auto& rec : s.records)
@@ -73,7 +73,7 @@ TEST(Optimize, BeatsA400PointGridInFewerRuns) {
 
 TEST(Optimize, RobustDesignHasALowerQuantileThanTheNominalOneOnTheSameSamples) {
   const Netlist nl = load_netlist(kRig);
-  const OptimizeResult nominal = optimize(kRig, nominal_problem(nl), quiet());
+  const OptimizeResult nominal = optimize(load_model(kRig, builtin_registry()), nominal_problem(nl), quiet());
   ASSERT_TRUE(nominal.found);
   OptimizeProblem p = nominal_problem(nl);
   p.uncertain = {parse_uncertain(nl, builtin_registry(), "m_load=uniform:2kg:8kg"),
@@ -81,9 +81,9 @@ TEST(Optimize, RobustDesignHasALowerQuantileThanTheNominalOneOnTheSameSamples) {
   p.robust = parse_robust("quantile:0.95");
   p.constraints = {parse_constraint(select_metrics(nl, builtin_registry(), {}), "mean(t_cushion)<=0.1s")};
   p.samples = 24;
-  const OptimizeResult robust = optimize(kRig, p, quiet());
+  const OptimizeResult robust = optimize(load_model(kRig, builtin_registry()), p, quiet());
   ASSERT_TRUE(robust.found) << robust.best.reason;
-  const OptimizeResult nominal_on_samples = evaluate_design(kRig, p, quiet(), nominal.best.x);
+  const OptimizeResult nominal_on_samples = evaluate_design(load_model(kRig, builtin_registry()), p, quiet(), nominal.best.x);
   std::cout << "q95 v_impact: robust " << robust.best.robust[0] << " m/s at z_EC " << robust.best.x[0]
             << ", nominal optimum " << nominal_on_samples.best.robust[0] << " m/s at z_EC " << nominal.best.x[0] << "\n";
   EXPECT_LT(robust.best.robust[0], nominal_on_samples.best.robust[0]);
@@ -94,8 +94,8 @@ TEST(Optimize, ResumedOptimisationReadsItsJournal) {
   TempDir dir;
   const std::string journal = (dir.path() / "opt.journal").string();
   const Netlist nl = load_netlist(kRig);
-  const OptimizeResult first = optimize(kRig, nominal_problem(nl), quiet(journal));
-  const OptimizeResult again = optimize(kRig, nominal_problem(nl), quiet(journal));
+  const OptimizeResult first = optimize(load_model(kRig, builtin_registry()), nominal_problem(nl), quiet(journal));
+  const OptimizeResult again = optimize(load_model(kRig, builtin_registry()), nominal_problem(nl), quiet(journal));
   EXPECT_GT(first.runs, 0);
   EXPECT_EQ(again.runs, 0);
   EXPECT_EQ(again.runs_resumed, first.runs);

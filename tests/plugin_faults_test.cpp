@@ -59,7 +59,7 @@ TEST(PluginFaults, AWornPluginSealIsNamedWithoutACatalogue) {
   // The tank's volume would be the seal's double: the decay's time constant
   // goes with V / h^3, which no pressure trace separates.
   opt.faults = {"seal", "p"};
-  const auto rep = diagnose::diagnose(model, (dir.path() / "runs").string(), "", registry, opt);
+  const auto rep = diagnose::diagnose(model, (dir.path() / "runs").string(), "", builtin_registry(), opt);
   ASSERT_FALSE(rep.verdict.empty());
   EXPECT_EQ(rep.verdict[0], "seal.worn");
   for (const auto& [name, values] : rep.final_values)

@@ -116,7 +116,7 @@ TEST(Morris, RigRankingIsPhysical) {
   opt.threads = 2;
   opt.progress = false;
   opt.metrics = {"t_cushion", "v_impact", "T_EC_min"};
-  const SweepSummary s = run_sweep(rig, d, (dir / "runs.csv").string(), opt, process_communicator());
+  const SweepSummary s = run_sweep(load_model(rig, builtin_registry()), d, (dir / "runs.csv").string(), opt, process_communicator());
   ASSERT_TRUE(s.complete);
   EXPECT_EQ(s.failed, 0);
   auto mu_star = [&](int metric) {

@@ -147,7 +147,7 @@ TEST(Sweep, FailedRunIsRecordedWithItsReason) {
   // A plug wider than the 32 mm bore is rejected by the cylinder.
   const Design d = grid_design(nl, builtin_registry(), {"cylinder.plug_diameter=16mm:40mm:2"});
   const std::string out = (dir / "res.csv").string();
-  const SweepSummary s = run_sweep(kRig, d, out, quiet(), process_communicator());
+  const SweepSummary s = run_sweep(load_model(kRig, builtin_registry()), d, out, quiet(), process_communicator());
   ASSERT_TRUE(s.complete);
   EXPECT_EQ(s.failed, 1);
   const SweepTable t = read_sweep_csv(out);
@@ -167,18 +167,18 @@ TEST(Sweep, KilledSweepResumesWithoutLosingOrRepeatingRuns) {
   const Netlist nl = load_netlist(kRig);
   const Design d = grid_design(nl, builtin_registry(), {"z_EC=1:6:3", "m_load=3kg:4kg:2"});
   const std::string whole = (dir / "whole.csv").string(), resumed = (dir / "resumed.csv").string();
-  ASSERT_TRUE(run_sweep(kRig, d, whole, quiet(2), process_communicator()).complete);
+  ASSERT_TRUE(run_sweep(load_model(kRig, builtin_registry()), d, whole, quiet(2), process_communicator()).complete);
 
   SweepOptions first = quiet(1);
   first.stop_after = 3;
-  const SweepSummary s1 = run_sweep(kRig, d, resumed, first, process_communicator());
+  const SweepSummary s1 = run_sweep(load_model(kRig, builtin_registry()), d, resumed, first, process_communicator());
   EXPECT_FALSE(s1.complete);
   EXPECT_EQ(s1.computed, 3);
   EXPECT_FALSE(fs::exists(resumed)) << "an interrupted sweep must not leave a results file";
   ASSERT_TRUE(fs::exists(resumed + ".journal"));
   std::ofstream(resumed + ".journal", std::ios::app) << "4,ok,0.05";  // torn line of a killed write
 
-  const SweepSummary s2 = run_sweep(kRig, d, resumed, quiet(2), process_communicator());
+  const SweepSummary s2 = run_sweep(load_model(kRig, builtin_registry()), d, resumed, quiet(2), process_communicator());
   ASSERT_TRUE(s2.complete);
   EXPECT_EQ(s2.done_before, 3);
   EXPECT_EQ(s2.computed, 3);
@@ -198,8 +198,8 @@ TEST(Sweep, JournalOfAnotherSweepIsNotReused) {
   const std::string out = (dir / "res.csv").string();
   SweepOptions stop = quiet();
   stop.stop_after = 1;
-  run_sweep(kRig, grid_design(nl, builtin_registry(), {"z_EC=1:6:2"}), out, stop, process_communicator());
-  EXPECT_THROW(run_sweep(kRig, grid_design(nl, builtin_registry(), {"z_EC=1:5:2"}), out, quiet(),
+  run_sweep(load_model(kRig, builtin_registry()), grid_design(nl, builtin_registry(), {"z_EC=1:6:2"}), out, stop, process_communicator());
+  EXPECT_THROW(run_sweep(load_model(kRig, builtin_registry()), grid_design(nl, builtin_registry(), {"z_EC=1:5:2"}), out, quiet(),
                          process_communicator()),
                InputError);
 }

@@ -18,7 +18,7 @@
 #include "framework/io/results.hpp"
 #include "framework/io/spawn.hpp"
 #include "framework/netlist/netlist.hpp"
-#include "framework/plugin/plugin.hpp"
+#include "framework/run/model.hpp"
 
 namespace pneumo::cli {
 
@@ -55,9 +55,10 @@ int draw_command(const DrawArgs& a) {
   std::vector<std::string> inputs{a.netlist};
   if (!a.results.empty()) inputs.push_back(a.results);
   check_output_file(a.output, "-o", inputs);
-  Netlist nl = load_netlist(a.netlist);
+  const Model model = load_model(a.netlist, builtin_registry());
+  Netlist nl = model.netlist;
   for (const auto& s : a.sets) apply_override(nl, s);
-  const Registry registry = registry_with_plugins(builtin_registry(), nl);
+  const Registry& registry = model.registry;
   const Circuit circuit = elaborate(nl, registry);
   const draw::Diagram d = draw::layout(nl, circuit);
   std::string text;

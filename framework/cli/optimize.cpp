@@ -15,6 +15,7 @@
 #include "framework/cli/command.hpp"
 #include "framework/cli/count_option.hpp"
 #include "framework/cli/split_list.hpp"
+#include "framework/cli/study_support.hpp"
 #include "framework/io/files.hpp"
 #include "framework/io/plot.hpp"
 #include "framework/study/communicator.hpp"
@@ -143,8 +144,9 @@ std::vector<double> design_at(const Netlist& nl, const Registry& reg, const Opti
 int optimize_command(const OptimizeArgs& a) {
   if (process_communicator().size() > 1)
     throw InputError(SourceLocation{a.netlist, 0, 0}, "", "", "pneumo optimize runs on threads (-j), not under mpirun");
-  const Netlist nl = load_netlist(a.netlist);
-  const Registry& reg = builtin_registry();
+  const Model model = load_model(a.netlist, builtin_registry());
+  const Netlist& nl = model.netlist;
+  const Registry& reg = model.registry;
   OptimizeProblem p;
   if (a.design.empty()) throw InputError(SourceLocation{a.netlist, 1, 1}, "", "", "give --design NAME=LOW:HIGH ...");
   p.design = parse_design(nl, reg, a.design);
@@ -194,9 +196,15 @@ int optimize_command(const OptimizeArgs& a) {
   o.journal = output + ".journal";
   OptimizeResult r;
   if (a.at.empty()) {
-    r = optimize(a.netlist, p, o);
+    r = optimize(model, p, o);
   } else {  // evaluate one given design on the samples
-    r = evaluate_design(a.netlist, p, o, design_at(nl, reg, p, a.at));
+    r = evaluate_design(model, p, o, design_at(nl, reg, p, a.at));
+  }
+  if (r.failed_runs > 0 && r.failed_runs == r.runs + r.runs_resumed &&
+      every_run_failed(model, "pneumo optimize: every run failed",
+                       "  " + r.best.reason + " (the best point's first failure)\n") == 2) {
+    fs::remove(o.journal);  // bad input: nothing is written
+    return 2;
   }
   write_result_yaml(p, o, r, output);
   if (!a.quiet) print_result(p, o, r, !a.at.empty());

@@ -40,12 +40,13 @@ std::string num(double v) {
 
 int sensitivity_command(const SensitivityArgs& a) {
   Communicator& comm = process_communicator();
-  const Netlist nl = load_netlist(a.netlist);
+  const Model model = load_model(a.netlist, builtin_registry());
+  const Netlist& nl = model.netlist;
   if (a.params.empty())
     throw InputError(SourceLocation{a.netlist, 1, 1}, "", "", "pneumo sensitivity: give the ranges with --param NAME=LOW:HIGH ...");
-  const auto ranges = parse_ranges(nl, builtin_registry(), a.params);
+  const auto ranges = parse_ranges(nl, model.registry, a.params);
   const int k = static_cast<int>(ranges.size());
-  const auto metrics = select_metrics(nl, builtin_registry(), split_list(a.metrics));
+  const auto metrics = select_metrics(nl, model.registry, split_list(a.metrics));
   if (a.method != "morris" && a.method != "sobol")
     throw InputError(SourceLocation{a.netlist, 1, 1}, "", "", "--method must be morris or sobol, not '" + a.method + "'");
 
@@ -80,15 +81,13 @@ int sensitivity_command(const SensitivityArgs& a) {
   for (const auto& m : metrics) opt.metrics.push_back(m.name);
   if (comm.rank() == 0 && !a.quiet)
     std::cout << a.method << ": " << k << " parameters, " << d.samples.size() << " runs -> " << runs_path << "\n";
-  const SweepSummary s = run_sweep(a.netlist, d, runs_path, opt, comm);
+  const SweepSummary s = run_sweep(model, d, runs_path, opt, comm);
   if (comm.rank() != 0) return 0;
   report(s, runs_path, a.quiet);
   if (!s.complete) return 1;
-  if (s.failed == s.runs) {
-    // Indices of no data would be NaN: say why instead.
-    std::cerr << "pneumo sensitivity: every run failed, there are no indices; why:\n" << failure_summary(s.records);
-    return 1;
-  }
+  if (s.failed == s.runs)  // indices of no data would be NaN: say why instead
+    return every_run_failed(model, "pneumo sensitivity: every run failed, there are no indices",
+                            failure_summary(s.records));
 
   std::ostringstream csv;
   std::ostringstream table;

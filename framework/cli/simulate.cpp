@@ -16,7 +16,7 @@
 #include "framework/io/plot.hpp"
 #include "framework/io/results.hpp"
 #include "framework/model/simulation_options.hpp"
-#include "framework/plugin/plugin.hpp"
+#include "framework/run/model.hpp"
 #include "framework/run/run.hpp"
 
 namespace pneumo::cli {
@@ -117,7 +117,8 @@ int simulate_command(const SimulateArgs& a) {
   std::string output = a.output;
   const bool stats = a.stats, quiet = a.quiet;
   const std::string &plot_prefix = a.plot_prefix, &plot_columns = a.plot_columns, &audit_path = a.audit_path;
-  Netlist nl = load_netlist(netlist_path);
+  const Model model = load_model(netlist_path, builtin_registry());  // with the netlist's `plugins:`
+  Netlist nl = model.netlist;
   for (const auto& s : sets)
     if (!apply_simulation_override(nl.simulation, s, SourceLocation{nl.file, 1, 1})) apply_override(nl, s);
   const bool user_outputs = !nl.outputs.empty();
@@ -127,7 +128,7 @@ int simulate_command(const SimulateArgs& a) {
     std::filesystem::create_directories(parent);
 
   const auto t0 = std::chrono::steady_clock::now();
-  const Registry registry = registry_with_plugins(builtin_registry(), nl);  // the netlist's `plugins:`
+  const Registry& registry = model.registry;
   // Every metric of the netlist is evaluated; integrals and audits are extra outputs.
   const std::vector<bool> all_metrics(nl.metrics.size(), true);
   add_metric_outputs(nl, all_metrics);

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <iostream>
 
+#include "framework/assembly/system.hpp"
 #include "framework/io/files.hpp"
 #include "framework/study/communicator.hpp"
 
@@ -44,6 +45,23 @@ void stop_ranks() {
     if (launched_by_mpi() && process_communicator().size() > 1) process_communicator().abort(2);
   } catch (const std::exception&) {
   }
+}
+
+int every_run_failed(const Model& model, const std::string& headline, const std::string& why) {
+  std::string refused;
+  try {
+    const System assembled(elaborate(model.netlist, model.registry));
+  } catch (const InputError& e) {
+    refused = e.what();
+  } catch (const StructureError& e) {
+    refused = model.path + ": " + e.what();
+  }
+  if (refused.empty()) {
+    std::cerr << headline << "; why:\n" << why;
+    return 1;
+  }
+  std::cerr << headline << ": the netlist itself is refused, so no run could start:\n" << refused << "\n";
+  return 2;
 }
 
 void report(const SweepSummary& s, const std::string& output, bool quiet) {

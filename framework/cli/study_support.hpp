@@ -43,4 +43,11 @@ Command study_command(CLI::App* cmd, std::shared_ptr<Args> a, int (*run)(const A
 // The sweep's summary line on stdout (nothing when quiet).
 void report(const study::SweepSummary& s, const std::string& output, bool quiet);
 
+// The exit status of a study whose every run failed, after saying why on
+// stderr (`headline`, then): 2 when the model as written is bad input (its
+// circuit cannot be built: an unknown component type, a parameter out of
+// its range, a structural error), with that one error; otherwise 1, with
+// `why` (the runs' reasons).
+int every_run_failed(const Model& model, const std::string& headline, const std::string& why);
+
 }  // namespace pneumo::cli

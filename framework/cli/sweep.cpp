@@ -26,29 +26,27 @@ struct SweepArgs : StudyArgs {
 
 int sweep_command(const SweepArgs& a) {
   Communicator& comm = process_communicator();
-  const Netlist nl = load_netlist(a.netlist);
+  const Model model = load_model(a.netlist, builtin_registry());
   if ((a.grid.empty()) == (a.samples.empty()))
     throw InputError(SourceLocation{a.netlist, 1, 1}, "", "", "pneumo sweep: give either --grid NAME=FROM:TO:COUNT ... or --samples FILE");
-  const Design d = a.grid.empty() ? samples_design(nl, builtin_registry(), a.samples)
-                                  : grid_design(nl, builtin_registry(), a.grid);
+  const Design d = a.grid.empty() ? samples_design(model.netlist, model.registry, a.samples)
+                                  : grid_design(model.netlist, model.registry, a.grid);
   const std::string output = study_output(a, ".sweep.csv", is_sweep_results_header, {a.netlist, a.samples});
   SweepOptions opt;
   opt.threads = a.threads;
   opt.progress = !a.quiet;
   opt.metrics = split_list(a.metrics);
   opt.assembly.eliminate_aliases = a.eliminate;
-  const SweepSummary s = run_sweep(a.netlist, d, output, opt, comm);
+  const SweepSummary s = run_sweep(model, d, output, opt, comm);
   if (comm.rank() == 0) {
     report(s, output, a.quiet);
     if (s.failed > 0)
       std::cerr << "pneumo sweep: " << s.failed << " of " << s.runs << " runs failed (status 'failed' and the reason in "
                 << output << ")\n";
   }
-  if (comm.rank() == 0 && s.complete && s.runs > 0 && s.failed == s.runs) {
+  if (comm.rank() == 0 && s.complete && s.runs > 0 && s.failed == s.runs)
     // Nothing was computed: a results file of failures is not a success.
-    std::cerr << "pneumo sweep: every run failed; why:\n" << failure_summary(s.records);
-    return 1;
-  }
+    return every_run_failed(model, "pneumo sweep: every run failed", failure_summary(s.records));
   return s.complete || comm.rank() != 0 ? 0 : 1;
 }
 

@@ -147,10 +147,10 @@ std::string fmt(const char* f, double a, double b = 0, double c = 0) {
 class Diagnosis {
  public:
   Diagnosis(const std::string& model_file, const std::string& runs_dir, const std::string& catalogue_file,
-            const Registry& registry, const DiagnoseOptions& opt)
-      : opt_(opt), eng_(model_file, registry, opt) {
+            const Registry& base, const DiagnoseOptions& opt)
+      : opt_(opt), eng_(model_file, base, opt) {
     eng_.runs = load_runs(runs_dir, eng_.base(), eng_.base_probes());
-    cat_ = candidates(catalogue_file, registry);
+    cat_ = candidates(catalogue_file, eng_.registry());
     refuse_recalibrating_operating_points();
     rep_.model_file = model_file;
     rep_.catalogue_file = catalogue_file;
@@ -712,8 +712,8 @@ class Diagnosis {
 }  // namespace
 
 DiagnosisReport diagnose(const std::string& model_file, const std::string& runs_dir,
-                         const std::string& catalogue_file, const Registry& registry, const DiagnoseOptions& opt) {
-  return Diagnosis(model_file, runs_dir, catalogue_file, registry, opt).run();
+                         const std::string& catalogue_file, const Registry& base, const DiagnoseOptions& opt) {
+  return Diagnosis(model_file, runs_dir, catalogue_file, base, opt).run();
 }
 
 }  // namespace pneumo::diagnose

@@ -194,9 +194,11 @@ struct DiagnosisReport {
   long simulations = 0;
 };
 
-// `catalogue_file` may be empty when options.declared_faults is set.
+// `catalogue_file` may be empty when options.declared_faults is set. The
+// model is loaded with load_model: its `plugins:` are added to `base`
+// (usually builtin_registry()), once, for every run of the diagnosis.
 DiagnosisReport diagnose(const std::string& model_file, const std::string& runs_dir,
-                         const std::string& catalogue_file, const Registry& registry, const DiagnoseOptions& options);
+                         const std::string& catalogue_file, const Registry& base, const DiagnoseOptions& options);
 
 // The verdict in one plain sentence (the command's output, both reports):
 // the effects named, or with none whether the model explains the data

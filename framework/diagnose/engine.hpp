@@ -19,6 +19,7 @@
 #include "framework/diagnose/diagnose.hpp"
 #include "framework/diagnose/phases.hpp"
 #include "framework/diagnose/statistics.hpp"
+#include "framework/run/model.hpp"
 #include "framework/run/run.hpp"
 
 namespace pneumo::diagnose::engine {
@@ -99,17 +100,13 @@ struct LmState {
 
 class Engine {
  public:
-  Engine(const std::string& model_file, const Registry& registry, const DiagnoseOptions& options)
-      : registry_(registry), options_(options) {
-    std::ifstream in(model_file);
-    if (!in) throw InputError(SourceLocation{model_file, 0, 0}, "", "", "cannot open the model file");
-    std::stringstream ss;
-    ss << in.rdbuf();
-    base_netlist_ = parse_netlist(ss.str(), model_file);
-    base_probes_ = elaborate(base_netlist_, registry).probes;  // input errors now
+  // `base`: the registry the model's plugins are added to.
+  Engine(const std::string& model_file, const Registry& base, const DiagnoseOptions& options)
+      : loaded_(load_model(model_file, base)), options_(options) {
+    base_probes_ = elaborate(loaded_.netlist, loaded_.registry).probes;  // input errors now
   }
 
-  const Netlist& base() const { return base_netlist_; }
+  const Netlist& base() const { return loaded_.netlist; }
   const std::vector<Probe>& base_probes() const { return base_probes_; }
   std::vector<MeasuredRun> runs;
   std::vector<std::string> phase_names;
@@ -119,7 +116,7 @@ class Engine {
 
   Model model(const std::vector<EffectInstance>& effects) const {
     Model m;
-    m.netlist = apply_effects(base_netlist_, effects, &m.measurement);
+    m.netlist = apply_effects(loaded_.netlist, effects, &m.measurement);
     return m;
   }
 
@@ -146,7 +143,7 @@ class Engine {
       // A disturbance that drives a state out of its domain (a chamber's
       // mass below zero) leaves the solver crawling: such a run fails.
       if (!disturbances.empty()) so.max_steps = kDisturbedMaxSteps;
-      res = run_circuit(elaborate(nl, registry_), so);
+      res = run_circuit(elaborate(nl, loaded_.registry), so);
     } catch (const std::exception& ex) {
       note_failure(run.name, ex.what());
       return {};
@@ -325,7 +322,7 @@ class Engine {
       add_metric_outputs(nl, all);
       RunResult res;
       try {
-        res = run_simulation(nl, registry_);
+        res = run_simulation(nl, loaded_.registry);
       } catch (const std::exception& ex) {
         note_failure(runs[k].name, ex.what());  // input errors surfaced when the model was loaded
         continue;                               // a failed run gets one phase
@@ -356,7 +353,7 @@ class Engine {
   }
 
   const DiagnoseOptions& options() const { return options_; }
-  const Registry& registry() const { return registry_; }
+  const Registry& registry() const { return loaded_.registry; }
 
  private:
   // A coarse grid of starting points (in scaled coordinates) over the last
@@ -458,11 +455,10 @@ class Engine {
     failures_.push_back("run " + run + ": " + why);
   }
 
-  const Registry& registry_;
+  pneumo::Model loaded_;  // the model file with its plugins
   DiagnoseOptions options_;
   mutable std::mutex failures_mutex_;
   std::vector<std::string> failures_;
-  Netlist base_netlist_;
   std::vector<Probe> base_probes_;
 };
 

@@ -21,7 +21,6 @@
 
 #include <unistd.h>
 
-#include "components/builtin.hpp"
 #include "framework/core/text.hpp"
 #include "framework/core/units.hpp"
 #include "framework/io/files.hpp"
@@ -161,11 +160,9 @@ class RunJournal {
 
 class Evaluator {
  public:
-  Evaluator(const std::string& netlist_path, const OptimizeProblem& p, const OptimizeOptions& o)
-      : problem_(p), options_(o), registry_(builtin_registry()) {
-    text_ = read_input_file(netlist_path, "netlist");
-    path_ = netlist_path;
-    const Netlist nl = parse_netlist(text_, netlist_path);
+  Evaluator(const Model& model, const OptimizeProblem& p, const OptimizeOptions& o)
+      : problem_(p), options_(o), registry_(model.registry), text_(model.text), path_(model.path) {
+    const Netlist& nl = model.netlist;
     std::vector<std::string> names = p.objectives;
     for (const auto& c : p.constraints)
       if (std::find(names.begin(), names.end(), c.metric) == names.end()) names.push_back(c.metric);
@@ -190,6 +187,7 @@ class Evaluator {
   int sample_count() const { return static_cast<int>(samples_.size()); }
   long runs() const { return runs_; }
   long resumed() const { return resumed_; }
+  long failed() const { return failed_; }
   const std::vector<PointResult>& history() const { return history_; }
 
   const PointResult& evaluate(const std::vector<double>& x) {
@@ -206,6 +204,7 @@ class Evaluator {
     for (int t = 1; t < std::min(options_.threads, n); ++t) pool.emplace_back(worker);
     worker();
     for (auto& t : pool) t.join();
+    failed_ += std::count_if(rec.begin(), rec.end(), [](const RunRecord& r) { return !r.ok; });
     history_.push_back(summarise(x, rec));
     return history_.back();
   }
@@ -286,6 +285,7 @@ class Evaluator {
   std::unique_ptr<RunJournal> journal_;
   std::vector<PointResult> history_;
   std::atomic<long> runs_{0}, resumed_{0};
+  long failed_ = 0;
 };
 
 // Feasible within a relative constraint tolerance (COBYLA ends on the boundary).
@@ -638,8 +638,8 @@ std::vector<Range> parse_design(const Netlist& nl, const Registry& registry, con
 
 bool PointResult::feasible() const { return feasible_runs && violation <= kConstraintTolerance; }
 
-OptimizeResult optimize(const std::string& netlist_path, const OptimizeProblem& p, const OptimizeOptions& o) {
-  Evaluator ev(netlist_path, p, o);
+OptimizeResult optimize(const Model& model, const OptimizeProblem& p, const OptimizeOptions& o) {
+  Evaluator ev(model, p, o);
   OptimizeResult r;
   for (const auto& m : ev.metrics()) {
     r.metric_names.push_back(m.name);
@@ -679,14 +679,15 @@ OptimizeResult optimize(const std::string& netlist_path, const OptimizeProblem& 
   if (o.progress && isatty(2)) std::cerr << "\n";
   r.runs = ev.runs();
   r.runs_resumed = ev.resumed();
+  r.failed_runs = ev.failed();
   r.evaluations = static_cast<long>(ev.history().size());
   r.history = ev.history();
   return r;
 }
 
-OptimizeResult evaluate_design(const std::string& netlist_path, const OptimizeProblem& p, const OptimizeOptions& o,
+OptimizeResult evaluate_design(const Model& model, const OptimizeProblem& p, const OptimizeOptions& o,
                                const std::vector<double>& x) {
-  Evaluator ev(netlist_path, p, o);
+  Evaluator ev(model, p, o);
   Search s(ev, p, o, ev.index_of(p.objectives[0]), p.constraints);
   OptimizeResult r;
   for (const auto& m : ev.metrics()) {
@@ -697,6 +698,7 @@ OptimizeResult evaluate_design(const std::string& netlist_path, const OptimizePr
   r.found = s.feasible(r.best);
   r.runs = ev.runs();
   r.runs_resumed = ev.resumed();
+  r.failed_runs = ev.failed();
   r.evaluations = 1;
   r.history = ev.history();
   return r;

@@ -24,6 +24,7 @@
 #include <string>
 #include <vector>
 
+#include "framework/run/model.hpp"
 #include "framework/study/metrics.hpp"
 #include "framework/study/parameters.hpp"
 
@@ -97,6 +98,7 @@ struct OptimizeResult {
   bool found = false;        // a feasible point was found
   long runs = 0;             // simulations run (the journal's not counted)
   long runs_resumed = 0;     // taken from the journal
+  long failed_runs = 0;      // of runs and runs_resumed, those that failed
   long evaluations = 0;      // design points evaluated
   std::vector<std::string> metric_names;  // objectives then constraint metrics
   std::vector<std::string> metric_units;
@@ -118,10 +120,11 @@ Constraint parse_constraint(const std::vector<Metric>& available, const std::str
 // NAME=LOW:HIGH, checked against the component parameter's valid range.
 std::vector<Range> parse_design(const Netlist& netlist, const Registry& registry, const std::vector<std::string>& specs);
 
-OptimizeResult optimize(const std::string& netlist_path, const OptimizeProblem& problem, const OptimizeOptions& options);
+// Runs `model` (its components from the model's registry).
+OptimizeResult optimize(const Model& model, const OptimizeProblem& problem, const OptimizeOptions& options);
 // One design point over the problem's samples (no optimisation), as an
 // OptimizeResult whose best is that point.
-OptimizeResult evaluate_design(const std::string& netlist_path, const OptimizeProblem& problem,
+OptimizeResult evaluate_design(const Model& model, const OptimizeProblem& problem,
                                const OptimizeOptions& options, const std::vector<double>& x);
 
 void write_result_yaml(const OptimizeProblem& problem, const OptimizeOptions& options, const OptimizeResult& result,

@@ -16,7 +16,6 @@
 #include <sstream>
 #include <unistd.h>
 
-#include "components/builtin.hpp"
 #include "framework/core/parallel.hpp"
 #include "framework/io/files.hpp"
 
@@ -294,14 +293,6 @@ RunRecord run_one(const Netlist& netlist, const Registry& registry, const std::v
 
 namespace {
 
-std::string read_netlist_text(const std::string& path) {
-  try {
-    return read_input_file(path, "netlist");
-  } catch (const std::invalid_argument& e) {
-    throw InputError(SourceLocation{path, 0, 0}, "", "", e.what());
-  }
-}
-
 // The runs journalled by an earlier, interrupted sweep of the same study:
 // rank 0 reads the journals and tells the others which indices are done.
 std::set<long> runs_done(const std::string& output, const std::string& identity, std::size_t metrics, long n,
@@ -334,7 +325,7 @@ std::vector<long> my_pending_runs(long n, const std::set<long>& done, const Comm
 }
 
 // Runs `mine` on threads, each journalled as it finishes.
-std::vector<RunRecord> run_pending(const Netlist& base, const Design& design,
+std::vector<RunRecord> run_pending(const Model& model, const Design& design,
                                    const std::vector<Metric>& metrics, const std::vector<long>& mine,
                                    const SweepOptions& opt, const fs::path& journal_path, const std::string& identity,
                                    bool show_progress) {
@@ -345,7 +336,7 @@ std::vector<RunRecord> run_pending(const Netlist& base, const Design& design,
   Progress progress(static_cast<long>(mine.size()), show_progress);
   const long todo = opt.stop_after >= 0 ? std::min<long>(opt.stop_after, mine.size()) : static_cast<long>(mine.size());
   parallel_for(todo, opt.threads, [&](int, long k) {
-    RunRecord rec = run_one(base, builtin_registry(), design.parameters, design.samples[mine[k]], metrics,
+    RunRecord rec = run_one(model.netlist, model.registry, design.parameters, design.samples[mine[k]], metrics,
                             opt.assembly);
     rec.index = mine[k];
     journal.write(journal_line(rec, metrics.size()));
@@ -392,19 +383,17 @@ void collect_results(const std::vector<std::string>& gathered, std::vector<RunRe
 
 }  // namespace
 
-SweepSummary run_sweep(const std::string& netlist_path, const Design& design, const std::string& output,
+SweepSummary run_sweep(const Model& model, const Design& design, const std::string& output,
                        const SweepOptions& opt, Communicator& comm) {
   const auto t0 = Clock::now();
-  const std::string text = read_netlist_text(netlist_path);
-  const Netlist base = parse_netlist(text, netlist_path);
   try {
-    check_output_file(output, "-o", {netlist_path});
+    check_output_file(output, "-o", {model.path});
   } catch (const std::invalid_argument& e) {
     throw InputError(SourceLocation{"-o", 0, 0}, "", "", e.what());
   }
-  const auto metrics = select_metrics(base, builtin_registry(), opt.metrics);
+  const auto metrics = select_metrics(model.netlist, model.registry, opt.metrics);
   const long n = static_cast<long>(design.samples.size());
-  const std::string identity = sweep_identity(text, design, metrics, opt.assembly.eliminate_aliases);
+  const std::string identity = sweep_identity(model.text, design, metrics, opt.assembly.eliminate_aliases);
   if (const auto parent = fs::path(output).parent_path(); !parent.empty()) fs::create_directories(parent);
 
   std::vector<RunRecord> previous;
@@ -416,7 +405,7 @@ SweepSummary run_sweep(const std::string& netlist_path, const Design& design, co
   summary.done_before = static_cast<long>(done.size());
   const fs::path journal_path =
       comm.size() > 1 ? fs::path(output + ".journal.rank" + std::to_string(comm.rank())) : fs::path(output + ".journal");
-  const std::vector<RunRecord> fresh = run_pending(base, design, metrics, mine, opt, journal_path,
+  const std::vector<RunRecord> fresh = run_pending(model, design, metrics, mine, opt, journal_path,
                                                    identity, opt.progress && comm.rank() == 0);
   summary.computed = static_cast<long>(fresh.size());
   const bool my_part_complete = summary.computed == static_cast<long>(mine.size());

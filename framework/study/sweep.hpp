@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "framework/run/model.hpp"
 #include "framework/study/communicator.hpp"
 #include "framework/study/metrics.hpp"
 #include "framework/study/parameters.hpp"
@@ -53,10 +54,10 @@ struct SweepSummary {
   std::vector<RunRecord> records;  // rank 0, complete sweeps: ordered by index
 };
 
-// Runs every sample of `design` on `netlist_path`. Returns the records (all
-// of them on rank 0 when complete). Throws InputError for bad input found
-// before any run.
-SweepSummary run_sweep(const std::string& netlist_path, const Design& design, const std::string& output,
+// Runs every sample of `design` on `model` (its components from the model's
+// registry). Returns the records (all of them on rank 0 when complete).
+// Throws InputError for bad input found before any run.
+SweepSummary run_sweep(const Model& model, const Design& design, const std::string& output,
                        const SweepOptions& options, Communicator& comm);
 
 // One run of `netlist` with the given parameter values set (as values, on a
