@@ -96,6 +96,7 @@ YAML::Node load_yaml_document(const std::string& path, const std::string& what) 
                      "a second YAML document ('---') in the " + what +
                          ": only one is read; merge it into the first or remove it");
   if (docs.empty()) return YAML::Node();
+  check_expanded_size(path, docs[0]);
   std::set<int> walked;
   check_unique_keys(path, docs[0], walked);
   return docs[0];

@@ -43,6 +43,26 @@ SourceLocation location_of(const std::string& file, const YAML::Node& node) {
   return w;
 }
 
+void check_expanded_size(const std::string& file, const YAML::Node& root) {
+  std::vector<YAML::Node> pending{root};
+  std::size_t values = 0;
+  while (!pending.empty()) {
+    const YAML::Node n = pending.back();
+    pending.pop_back();
+    if (++values > kMaxYamlValues)
+      throw InputError(SourceLocation{file, 1, 1}, "", "",
+                       "with its aliases (*name) expanded, the YAML holds more than " +
+                           std::to_string(kMaxYamlValues) +
+                           " values, more than any circuit needs; an alias that repeats a large list or mapping "
+                           "many times is the likely cause");
+    if (n.IsSequence()) {
+      for (const auto& item : n) pending.push_back(item);
+    } else if (n.IsMap()) {
+      for (const auto& entry : n) pending.push_back(entry.first), pending.push_back(entry.second);
+    }
+  }
+}
+
 std::string plain_text(const std::string& file, const YAML::Node& node, const std::string& component,
                        const std::string& parameter, const std::string& what) {
   if (!node.IsDefined()) throw InputError(SourceLocation{file, 0, 0}, component, parameter, what + " is missing");
@@ -293,7 +313,9 @@ YAML::Node load_root(const std::string& text, const std::string& file_name) {
                        "a second YAML document starts here ('---'); a netlist is one document: remove the '---' "
                        "line, or move what follows into the first document");
     }
-  return documents.empty() ? YAML::Node() : documents.front();
+  if (documents.empty()) return YAML::Node();
+  check_expanded_size(file_name, documents.front());
+  return documents.front();
 }
 
 // One section of gas constants (gas:, ambient:), each checked against its

@@ -5,6 +5,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <cstddef>
 #include <string>
 
 #include "framework/core/error.hpp"
@@ -19,5 +20,13 @@ SourceLocation location_of(const std::string& file, const YAML::Node& node);
 // was expected. A null node reads as "null", as yaml-cpp has it.
 std::string plain_text(const std::string& file, const YAML::Node& node, const std::string& component,
                        const std::string& parameter, const std::string& what);
+
+// An alias (*name) repeats the node its anchor (&name) marks, so a few
+// kilobytes can stand for billions of values (a list of aliases to a list
+// of aliases ...) and make every reader of the tree run out of memory.
+// Throws an InputError at the file's start when `root` with its aliases
+// expanded holds more than kMaxYamlValues nodes; counting stops there.
+inline constexpr std::size_t kMaxYamlValues = 500000;
+void check_expanded_size(const std::string& file, const YAML::Node& root);
 
 }  // namespace pneumo
