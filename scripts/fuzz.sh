@@ -28,6 +28,12 @@ for t in "${targets[@]}"; do
   esac
   mkdir -p "build-fuzz/corpus/$t"
   echo "fuzz: $t for ${seconds} s"
-  "build-fuzz/fuzz/${t}_fuzzer" -max_total_time="$seconds" -print_final_stats=1 -max_len=8192 \
-    -artifact_prefix=build-fuzz/artifacts/ "build-fuzz/corpus/$t" "${seeds[@]}"
+  # A target that runs out of memory makes libFuzzer print a heap profile,
+  # which over millions of allocations can take longer than the run itself:
+  # the time limit keeps a finding from holding CI until its own limit.
+  if ! timeout --signal=KILL "$((seconds + 300))" "build-fuzz/fuzz/${t}_fuzzer" -max_total_time="$seconds" \
+      -print_final_stats=1 -max_len=8192 -artifact_prefix=build-fuzz/artifacts/ "build-fuzz/corpus/$t" "${seeds[@]}"; then
+    echo "fuzz: $t failed (a crash, a sanitizer report, out of memory, or killed after $((seconds + 300)) s)" >&2
+    exit 1
+  fi
 done

@@ -62,5 +62,17 @@ TEST(YamlAliases, ModestSharingStillElaborates) {
   EXPECT_NO_THROW((void)elaborate(nl, builtin_registry()));
 }
 
+// yaml-cpp reads a NUL byte as the start of endless empty documents.
+TEST(YamlAliases, ANulByteIsRefusedAtItsLineNotReadForever) {
+  const std::string text = std::string("title: demo\ncomponents:\n  a: {type: vol") + '\0' + "ume}\n";
+  try {
+    (void)parse_netlist(text, "binary.yaml");
+    ADD_FAILURE() << "accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("binary.yaml:3:16"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("NUL"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace pneumo

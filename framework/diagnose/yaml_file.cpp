@@ -85,6 +85,7 @@ YAML::Node load_yaml_document(const std::string& path, const std::string& what) 
   std::stringstream ss;
   ss << in.rdbuf();
   const std::string text = ss.str();
+  check_no_nul(path, text);
   std::vector<YAML::Node> docs;
   try {
     docs = YAML::LoadAll(text);

@@ -43,6 +43,15 @@ SourceLocation location_of(const std::string& file, const YAML::Node& node) {
   return w;
 }
 
+void check_no_nul(const std::string& file, const std::string& text) {
+  const std::size_t at = text.find('\0');
+  if (at == std::string::npos) return;
+  const std::size_t line_start = text.rfind('\n', at) == std::string::npos ? 0 : text.rfind('\n', at) + 1;
+  const auto line = 1 + std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(at), '\n');
+  throw InputError(SourceLocation{file, static_cast<int>(line), static_cast<int>(at - line_start) + 1}, "", "",
+                   "a NUL byte: the file holds binary data, not YAML text");
+}
+
 void check_expanded_size(const std::string& file, const YAML::Node& root) {
   std::vector<YAML::Node> pending{root};
   std::size_t values = 0;
@@ -274,6 +283,7 @@ std::string normalised(std::string text) {
 // The YAML tree of a netlist text; syntax errors at their line, with the
 // unclosed bracket or quote and tab indentation named.
 YAML::Node load_root(const std::string& text, const std::string& file_name) {
+  check_no_nul(file_name, text);
   std::vector<YAML::Node> documents;
   try {
     documents = YAML::LoadAll(text);

@@ -27,6 +27,11 @@ std::string plain_text(const std::string& file, const YAML::Node& node, const st
 // Throws an InputError at the file's start when `root` with its aliases
 // expanded holds more than kMaxYamlValues nodes; counting stops there.
 inline constexpr std::size_t kMaxYamlValues = 500000;
+
+// A NUL byte makes yaml-cpp's LoadAll produce documents without end (the
+// netlist fuzzer's out-of-memory); a file holding one is not text. Throws
+// an InputError at the first one's line and column.
+void check_no_nul(const std::string& file, const std::string& text);
 void check_expanded_size(const std::string& file, const YAML::Node& root);
 
 }  // namespace pneumo
