@@ -86,21 +86,21 @@ YAML::Node load_yaml_document(const std::string& path, const std::string& what) 
   ss << in.rdbuf();
   const std::string text = ss.str();
   check_no_nul(path, text);
-  std::vector<YAML::Node> docs;
+  FirstDocument doc;
   try {
-    docs = YAML::LoadAll(text);
+    doc = load_first_document(text);
   } catch (const YAML::ParserException& ex) {
     throw InputError(SourceLocation{path, ex.mark.line + 1, ex.mark.column + 1}, "", "", ex.msg);
   }
-  if (docs.size() > 1)
-    throw InputError(SourceLocation{path, second_document_line(text, docs[1]), 1}, "", "",
+  if (doc.second_line > 0)
+    throw InputError(SourceLocation{path, doc.second_line, 1}, "", "",
                      "a second YAML document ('---') in the " + what +
                          ": only one is read; merge it into the first or remove it");
-  if (docs.empty()) return YAML::Node();
-  check_expanded_size(path, docs[0]);
+  if (!doc.root.IsDefined() || doc.root.IsNull()) return YAML::Node();
+  check_expanded_size(path, doc.root);
   std::set<int> walked;
-  check_unique_keys(path, docs[0], walked);
-  return docs[0];
+  check_unique_keys(path, doc.root, walked);
+  return doc.root;
 }
 
 }  // namespace pneumo::diagnose

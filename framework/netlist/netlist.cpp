@@ -18,6 +18,8 @@
 #include <set>
 #include <sstream>
 
+#include <yaml-cpp/eventhandler.h>
+
 namespace pneumo {
 
 using namespace netlist_detail;
@@ -50,6 +52,46 @@ void check_no_nul(const std::string& file, const std::string& text) {
   const auto line = 1 + std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(at), '\n');
   throw InputError(SourceLocation{file, static_cast<int>(line), static_cast<int>(at - line_start) + 1}, "", "",
                    "a NUL byte: the file holds binary data, not YAML text");
+}
+
+namespace {
+
+// Notes where a second document's first node is; builds nothing.
+class DocumentFinder final : public YAML::EventHandler {
+ public:
+  int documents = 0, second_line = 0;
+  void OnDocumentStart(const YAML::Mark&) override { ++documents; }
+  void OnDocumentEnd() override {}
+  void OnNull(const YAML::Mark&, YAML::anchor_t) override {}
+  void OnAlias(const YAML::Mark& m, YAML::anchor_t) override { content(m); }
+  void OnScalar(const YAML::Mark& m, const std::string&, YAML::anchor_t, const std::string&) override { content(m); }
+  void OnSequenceStart(const YAML::Mark& m, const std::string&, YAML::anchor_t, YAML::EmitterStyle::value) override {
+    content(m);
+  }
+  void OnSequenceEnd() override {}
+  void OnMapStart(const YAML::Mark& m, const std::string&, YAML::anchor_t, YAML::EmitterStyle::value) override {
+    content(m);
+  }
+  void OnMapEnd() override {}
+
+ private:
+  void content(const YAML::Mark& m) {
+    if (documents == 2 && second_line == 0) second_line = m.line + 1;
+  }
+};
+
+}  // namespace
+
+FirstDocument load_first_document(const std::string& text) {
+  FirstDocument d;
+  d.root = YAML::Load(text);
+  std::istringstream in(text);
+  YAML::Parser parser(in);
+  DocumentFinder finder;
+  while (finder.documents < 2 && parser.HandleNextDocument(finder)) {
+  }
+  d.second_line = finder.second_line;
+  return d;
 }
 
 void check_expanded_size(const std::string& file, const YAML::Node& root) {
@@ -284,9 +326,9 @@ std::string normalised(std::string text) {
 // unclosed bracket or quote and tab indentation named.
 YAML::Node load_root(const std::string& text, const std::string& file_name) {
   check_no_nul(file_name, text);
-  std::vector<YAML::Node> documents;
+  FirstDocument document;
   try {
-    documents = YAML::LoadAll(text);
+    document = load_first_document(text);
   } catch (const YAML::DeepRecursion& e) {
     throw InputError(SourceLocation{file_name, e.mark.line + 1, e.mark.column + 1}, "", "",
                      "YAML nested too deeply: more than " + std::to_string(e.depth() - 1) +
@@ -316,16 +358,12 @@ YAML::Node load_root(const std::string& text, const std::string& file_name) {
     }
     throw InputError(where, "", "", message);
   }
-  for (std::size_t k = 1; k < documents.size(); ++k)
-    if (documents[k].IsDefined() && !documents[k].IsNull()) {
-      const int line = second_document_line(text, documents[k].Mark().line + 1);
-      throw InputError(SourceLocation{file_name, line, 1}, "", "",
-                       "a second YAML document starts here ('---'); a netlist is one document: remove the '---' "
-                       "line, or move what follows into the first document");
-    }
-  if (documents.empty()) return YAML::Node();
-  check_expanded_size(file_name, documents.front());
-  return documents.front();
+  if (document.second_line > 0)
+    throw InputError(SourceLocation{file_name, second_document_line(text, document.second_line), 1}, "", "",
+                     "a second YAML document starts here ('---'); a netlist is one document: remove the '---' "
+                     "line, or move what follows into the first document");
+  check_expanded_size(file_name, document.root);
+  return document.root;
 }
 
 // One section of gas constants (gas:, ambient:), each checked against its

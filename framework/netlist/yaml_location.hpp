@@ -32,6 +32,18 @@ inline constexpr std::size_t kMaxYamlValues = 500000;
 // netlist fuzzer's out-of-memory); a file holding one is not text. Throws
 // an InputError at the first one's line and column.
 void check_no_nul(const std::string& file, const std::string& text);
+
+// The first document of a YAML text, and the line of the first node of a
+// second document that holds anything (0: none). yaml-cpp's LoadAll reports
+// empty documents without end on some malformed texts (a tab before a key
+// at the end, found by the netlist fuzzer), so the documents after the
+// first are only looked for, up to the second. Throws yaml-cpp's
+// ParserException and DeepRecursion as LoadAll does.
+struct FirstDocument {
+  YAML::Node root;
+  int second_line = 0;
+};
+FirstDocument load_first_document(const std::string& text);
 void check_expanded_size(const std::string& file, const YAML::Node& root);
 
 }  // namespace pneumo
