@@ -3,7 +3,8 @@
 // into the Result, SweepResult and Component classes users see.
 //
 // Every call that runs C++ work releases the GIL; Python objects are made
-// only after it is taken back. Input errors become pneumo.NetlistError with
+// only after it is taken back. Runs and sweeps go through interruptible(),
+// so that Ctrl-C stops them at the solver's next step. Input errors become pneumo.NetlistError with
 // the CLI's message (file:line:column, component, parameter) and the parts
 // as attributes.
 #include <pybind11/numpy.h>
@@ -14,12 +15,15 @@
 #include <chrono>
 #include <ctime>
 #include <fstream>
+#include <future>
 #include <memory>
 #include <sstream>
+#include <thread>
 
 #include "components/builtin.hpp"
 #include "framework/analysis/energy_audit.hpp"
 #include "framework/analysis/run_metrics.hpp"
+#include "framework/core/interrupt.hpp"
 #include "framework/core/parallel.hpp"
 #include "framework/core/version.hpp"
 #include "framework/run/model.hpp"
@@ -48,6 +52,41 @@ class LoadedNetlist {
  private:
   Model model_;
 };
+
+// Runs `work` (C++ only: it must not touch Python objects) on a thread of
+// its own, while the calling thread takes the GIL every 50 ms to let Python
+// handle its signals. Python runs its signal handlers only between
+// bytecodes, so a KeyboardInterrupt would otherwise wait for the whole
+// sweep; here Ctrl-C asks the C++ work to stop (the solver throws
+// Interrupted at its next step) and raises KeyboardInterrupt once it has.
+// Called from a thread other than Python's main one, PyErr_CheckSignals
+// does nothing and the work simply runs to its end.
+template <class Work>
+auto interruptible(Work work) -> decltype(work()) {
+  using Result = decltype(work());
+  std::packaged_task<Result()> task(std::move(work));
+  std::future<Result> done = task.get_future();
+  std::thread worker(std::move(task));
+  for (;;) {
+    std::future_status status;
+    {
+      py::gil_scoped_release release;
+      status = done.wait_for(std::chrono::milliseconds(50));
+    }
+    if (status == std::future_status::ready) break;
+    if (PyErr_CheckSignals() != 0) {  // a handler raised (KeyboardInterrupt)
+      request_interrupt();
+      {
+        py::gil_scoped_release release;
+        worker.join();
+      }
+      clear_interrupt();
+      throw py::error_already_set();
+    }
+  }
+  worker.join();
+  return done.get();  // the work's own exception, if it threw
+}
 
 // What `pneumo simulate` computes: the run, and every metric the netlist
 // declares (integrals and audits as extra outputs, dropped afterwards).
@@ -255,6 +294,8 @@ PYBIND11_MODULE(_core, m) {
       PyErr_SetObject(netlist_error.ptr(), exc.ptr());
     } catch (const StructureError& e) {
       netlist_error(e.what());
+    } catch (const Interrupted&) {  // Ctrl-C seen by another thread's call
+      PyErr_SetString(PyExc_KeyboardInterrupt, "pneumo: the run was interrupted");
     }
   });
 
@@ -281,11 +322,7 @@ PYBIND11_MODULE(_core, m) {
       .def(
           "simulate",
           [](const LoadedNetlist& l, const std::vector<std::string>& sets) {
-            Simulation s;
-            {
-              py::gil_scoped_release release;
-              s = simulate(l, sets);
-            }
+            const Simulation s = interruptible([&] { return simulate(l, sets); });
             return simulation_dict(s);
           },
           py::arg("sets"));
@@ -300,13 +337,11 @@ PYBIND11_MODULE(_core, m) {
          const std::vector<std::string>& metric_names, const std::vector<std::string>& sets, int threads) {
         study::Design d;
         std::vector<study::Metric> metrics;
-        std::vector<study::RunRecord> records;
-        {
-          py::gil_scoped_release release;
+        const std::vector<study::RunRecord> records = interruptible([&] {
           d = samples_from(l, names, samples);
           metrics = study::select_metrics(l.netlist(), l.registry(), metric_names);
-          records = run_design(l, d, metrics, sets, threads);
-        }
+          return run_design(l, d, metrics, sets, threads);
+        });
         return sweep_dict(d, metrics, records);
       },
       py::arg("netlist"), py::arg("names"), py::arg("samples"), py::arg("metrics"), py::arg("sets"),

@@ -14,6 +14,7 @@
 #include <limits>
 #include <stdexcept>
 
+#include "framework/core/interrupt.hpp"
 #include "framework/solver/ida_callbacks.hpp"
 #include "framework/solver/failure_report.hpp"
 #include "framework/solver/ida_handles.hpp"
@@ -377,8 +378,10 @@ void Integration::integrate() {
   y_ev_.reset(N_VClone(y_.get()));
   yp_ev_.reset(N_VClone(y_.get()));
   restart_roots(nullptr);
-  while (t_ < opt_.t_end - eps_t_)
+  while (t_ < opt_.t_end - eps_t_) {
+    throw_if_interrupted();
     if (step() == Next::stop) break;
+  }
   finish();
 }
 
