@@ -6,11 +6,13 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <fstream>
 #include <set>
 #include <string>
 
 #include "components/builtin.hpp"
 #include "framework/core/error.hpp"
+#include "framework/diagnose/catalogue.hpp"
 #include "framework/netlist/netlist.hpp"
 #include "framework/run/run.hpp"
 #include "test_support.hpp"
@@ -19,18 +21,12 @@ namespace pneumo {
 namespace {
 
 using test_support::read_file;
+using test_support::replace_once;
 using test_support::run_cli;
 using test_support::TempDir;
 
 const std::string kSequence = std::string(PNEUMO_SOURCE_DIR) + "/netlists/sequence_ab.yaml";
 const std::string kCycleTime = "seq.cycle_end - seq.cycle_start";
-
-std::string replaced(std::string text, const std::string& from, const std::string& to) {
-  const auto at = text.find(from);
-  EXPECT_NE(at, std::string::npos) << from;
-  if (at != std::string::npos) text.replace(at, from.size(), to);
-  return text;
-}
 
 // The line of `needle` in `text`, counted from 1.
 int line_of(const std::string& text, const std::string& needle) {
@@ -40,7 +36,7 @@ int line_of(const std::string& text, const std::string& needle) {
 
 TEST(EventTags, AMisspeltTagOfAnExistingComponentIsRefusedWithTheTagsItRaises) {
   const TempDir dir;
-  const std::string text = replaced(read_file(kSequence), kCycleTime, "seq.cycle_endd - seq.cycle_start");
+  const std::string text = replace_once(read_file(kSequence), kCycleTime, "seq.cycle_endd - seq.cycle_start");
   const std::string path = dir.write("misspelt.yaml", text);
   const auto [status, out] = run_cli("simulate '" + path + "' -o '" + (dir.path() / "out.csv").string() + "'");
   EXPECT_EQ(status, 2) << out;
@@ -51,7 +47,7 @@ TEST(EventTags, AMisspeltTagOfAnExistingComponentIsRefusedWithTheTagsItRaises) {
 }
 
 TEST(EventTags, AWindowBoundedByAnUnknownTagIsRefused) {
-  const std::string text = replaced(read_file(kSequence), "metrics:\n",
+  const std::string text = replace_once(read_file(kSequence), "metrics:\n",
                                     "metrics:\n  p_peak: {max: p_rod_A, from: cyl_A.extendd}\n");
   try {
     (void)elaborate(parse_netlist(text, "window.yaml"), builtin_registry());
@@ -66,11 +62,33 @@ TEST(EventTags, AWindowBoundedByAnUnknownTagIsRefused) {
 TEST(EventTags, ANumberedStepIsAcceptedAndAnUnnumberedOneIsNot) {
   const std::string base = read_file(kSequence);
   const auto with = [&](const std::string& tag) {
-    return parse_netlist(replaced(base, kCycleTime, tag + " - seq.cycle_start"), "steps.yaml");
+    return parse_netlist(replace_once(base, kCycleTime, tag + " - seq.cycle_start"), "steps.yaml");
   };
   EXPECT_NO_THROW((void)elaborate(with("seq.step_2"), builtin_registry()));
   EXPECT_THROW((void)elaborate(with("seq.step_x"), builtin_registry()), InputError);
   EXPECT_THROW((void)elaborate(with("seq.step_"), builtin_registry()), InputError);
+}
+
+// A diagnosis catalogue's phase starting at a tag the component never
+// raises would never start: refused at its line, with the tags there are.
+TEST(EventTags, ACataloguePhaseAtAnUndeclaredTagIsRefusedAtItsLine) {
+  const Netlist model = load_netlist(std::string(PNEUMO_SOURCE_DIR) + "/netlists/cushion_rig.yaml");
+  TempDir dir;
+  const auto load = [&](const std::string& from) {
+    std::ofstream(dir.path() / "c.yaml") << "effects: {}\nphases:\n  - {name: rest, from: start}\n"
+                                       << "  - {name: cushion, from: " << from << "}\n";
+    try {
+      (void)diagnose::load_catalogue((dir.path() / "c.yaml").string(), model, builtin_registry());
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  const std::string e = load("cylinder.cushion_entryy");
+  EXPECT_NE(e.find("c.yaml:4:"), std::string::npos) << e;
+  EXPECT_NE(e.find("raises no event 'cushion_entryy'"), std::string::npos) << e;
+  EXPECT_NE(e.find("cushion_entry, cushion_exit"), std::string::npos) << e;
+  EXPECT_EQ(load("cylinder.cushion_entry"), "");
 }
 
 // Every tag the shipped circuits raise is one their components declare: the

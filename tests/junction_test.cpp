@@ -14,13 +14,6 @@ namespace {
 
 using namespace test_support;
 
-std::string replace_once(std::string s, const std::string& from, const std::string& to) {
-  const auto at = s.find(from);
-  EXPECT_NE(at, std::string::npos) << from;
-  if (at != std::string::npos) s.replace(at, from.size(), to);
-  return s;
-}
-
 RunResult run_text(const std::string& text, const std::string& name) {
   return run_simulation(parse_netlist(text, name), builtin_registry());
 }

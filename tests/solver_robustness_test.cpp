@@ -20,13 +20,6 @@ namespace {
 
 using namespace test_support;
 
-std::string replace_once(std::string s, const std::string& from, const std::string& to) {
-  const auto at = s.find(from);
-  EXPECT_NE(at, std::string::npos) << from;
-  if (at != std::string::npos) s.replace(at, from.size(), to);
-  return s;
-}
-
 // netlists/meter_out_cylinder.yaml at supply pressure p_gauge (the rod side
 // and line_B start at it), load m, the flow controls' C (m3/(s*Pa)).
 std::string meter_out(double p_gauge, double m, double C_cap, double C_rod) {

@@ -81,6 +81,15 @@ inline std::string num(double v) {
   return s.str();
 }
 
+// `s` with the first `from` replaced by `to`; a `from` that is not there
+// fails the test (an edit of a shipped netlist that no longer applies).
+inline std::string replace_once(std::string s, const std::string& from, const std::string& to) {
+  const auto at = s.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  if (at != std::string::npos) s.replace(at, from.size(), to);
+  return s;
+}
+
 inline double rel_err(double actual, double expected) { return std::abs(actual - expected) / std::abs(expected); }
 
 // Runs a netlist text with the built-in components; a failed solve fails the

@@ -316,8 +316,21 @@ bool effects_conflict(const Effect& a, const Effect& b) {
 
 namespace {
 
+// A phase starting at COMPONENT.TAG: the component's type must raise TAG,
+// or the phase would silently never start. Empty if it does.
+std::string event_problem(const std::string& from, const Netlist& model, const Registry& registry) {
+  const auto dot = from.find('.');
+  const auto decl = std::find_if(model.components.begin(), model.components.end(),
+                                 [&](const ComponentDecl& c) { return c.name == from.substr(0, dot); });
+  const auto* entry = registry.find(decl->type);
+  if (!entry || entry->info->raises(from.substr(dot + 1))) return "";
+  return "component '" + decl->name + "' (" + decl->type + ") raises no event '" + from.substr(dot + 1) +
+         "'; its events: " + entry->info->event_list();
+}
+
 // phases: [{name: NAME, from: start | COMPONENT.TAG | METRIC}, ...]
-std::vector<PhaseDecl> read_phases(const std::string& path, const YAML::Node& list, const Netlist& model) {
+std::vector<PhaseDecl> read_phases(const std::string& path, const YAML::Node& list, const Netlist& model,
+                                   const Registry& registry) {
   if (!list.IsSequence()) fail(path, list, "", "", "'phases' must be a list of {name, from}");
   std::vector<PhaseDecl> out;
   for (const YAML::Node item : list) {
@@ -335,6 +348,10 @@ std::vector<PhaseDecl> read_phases(const std::string& path, const YAML::Node& li
       fail(path, item["from"], "", "phases." + ph.name,
            "phase '" + ph.name + "' starts at '" + ph.from +
                "', which is neither 'start', an event COMPONENT.TAG of the model nor one of its metrics");
+    if (is_event && !is_metric)
+      if (const std::string problem = event_problem(ph.from, model, registry); !problem.empty())
+        fail(path, item["from"], ph.from.substr(0, dot), "phases." + ph.name,
+             "phase '" + ph.name + "' starts at '" + ph.from + "': " + problem);
     out.push_back(std::move(ph));
   }
   return out;
@@ -708,7 +725,7 @@ Catalogue read_catalogue(const std::string& path, const Netlist& model, const Re
   cat.file = path;
   const Reader reader(path);
   const YAML::Node root = read_root(path);
-  if (root["phases"]) cat.phases = read_phases(path, root["phases"], model);
+  if (root["phases"]) cat.phases = read_phases(path, root["phases"], model, registry);
   const YAML::Node effects = root["effects"] ? root["effects"] : YAML::Node(YAML::NodeType::Map);
   for (auto it = effects.begin(); it != effects.end(); ++it) {
     const YAML::Node body = it->second;  // a copy: the iterator's pair is a temporary

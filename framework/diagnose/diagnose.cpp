@@ -140,7 +140,7 @@ std::string fmt(const char* f, double a, double b = 0, double c = 0) {
   return buf;
 }
 
-// One diagnosis, step by step (README "Diagnosing the sim-to-real gap"):
+// One diagnosis, step by step (docs/how-to/diagnose.md):
 // the data and the unpatched model's gap (where), every candidate screened
 // and fitted alone, ranked and grouped (which), the verdict by forward
 // selection, then what it leaves unexplained and which sensor would decide.

@@ -1,4 +1,4 @@
-// Sim-to-real gap diagnosis (README "Diagnosing the sim-to-real gap").
+// Sim-to-real gap diagnosis (docs/how-to/diagnose.md).
 //
 // Where: residuals of the unpatched model on every measured run, weighted by
 // the noise each signal shows itself (robust high-pass estimate), split by
@@ -138,9 +138,9 @@ struct TracePlot {  // decimated traces of one validation run and signal
   std::vector<double> phase_times;  // each phase's start, then the end
 };
 
-// What the verdict leaves unexplained (README "Diagnosing the sim-to-real
-// gap"): set when the validation gap after the named effects stays above the
-// noise (DiagnoseOptions::adequate_gap) on the whole set or on one signal.
+// What the verdict leaves unexplained (docs/how-to/diagnose.md): set when
+// the validation gap after the named effects stays above the noise
+// (DiagnoseOptions::adequate_gap) on the whole set or on one signal.
 // The model's balances (each differential equation, as the derivative of its
 // state) and each sensor reading (offset and gain) are given a smooth
 // additive disturbance in turn, fitted by regularised least squares over the

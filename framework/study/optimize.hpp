@@ -1,5 +1,5 @@
 // Design optimisation over netlist parameters (`pneumo optimize`), robust
-// against uncertain operating conditions (seed 000's stated next step: the
+// against uncertain operating conditions (paper [1]'s stated next step: the
 // cushioning readjusted by trial and error whenever load or pressure change).
 //
 // A design point x (continuous design variables within bounds) is judged on
