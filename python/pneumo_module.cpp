@@ -42,7 +42,16 @@ namespace {
 // run one netlist at once.
 class LoadedNetlist {
  public:
-  explicit LoadedNetlist(const std::string& path) : model_(load_model(path, builtin_registry())) {}
+  // Validated in full, as a run would be: an unknown type, port or
+  // parameter and a circuit without a consistent structure are errors here,
+  // at pneumo.load(), not at the first simulate().
+  explicit LoadedNetlist(const std::string& path) : model_(load_model(path, builtin_registry())) {
+    try {
+      const System assembled(elaborate(model_.netlist, model_.registry));
+    } catch (const StructureError& e) {
+      throw StructureError(path + ": " + e.what());  // as the CLI prints it
+    }
+  }
 
   const std::string& path() const { return model_.path; }
   const std::string& text() const { return model_.text; }

@@ -7,6 +7,7 @@
 
 #include <functional>
 #include <string>
+#include <vector>
 
 namespace pneumo::cli {
 
@@ -20,6 +21,17 @@ struct Command {
   // Called after bad input was reported, before exiting with status 2.
   std::function<void()> on_error{};
 };
+
+// --set NAME=VALUE ..., with one meaning in every command that runs a
+// netlist (apply_override in framework/netlist/netlist.hpp).
+inline CLI::Option* add_set_option(CLI::App* cmd, std::vector<std::string>& sets) {
+  return cmd
+      ->add_option("--set", sets,
+                   "override a value of the netlist: a top-level parameter NAME=VALUE, a component's "
+                   "COMPONENT.PARAMETER=VALUE ('cylinder.bore=40 mm') or a simulation: key, "
+                   "simulation.KEY=VALUE ('simulation.t_end=0.5 s'); VALUE an SI number or a quantity ('7 bar')")
+      ->take_all();
+}
 
 Command add_simulate_command(CLI::App& app);
 Command add_plot_command(CLI::App& app);

@@ -17,7 +17,7 @@ namespace {
 
 struct DiagnoseArgs {
   std::string model, runs, effects, out;
-  std::vector<std::string> faults;
+  std::vector<std::string> faults, sets;
   int threads = 2, max_effects = 2;
   bool quiet = false, effects_only = false;
 };
@@ -54,6 +54,7 @@ int diagnose_command(const DiagnoseArgs& a) {
     throw InputError(SourceLocation{"--effects-only", 0, 0}, "", "", "--effects-only needs --effects CATALOGUE.yaml");
   opt.declared_faults = !a.effects_only;
   opt.faults = a.faults;
+  opt.sets = a.sets;
   const auto rep = diagnose::diagnose(a.model, a.runs, a.effects, builtin_registry(), opt);
   std::filesystem::create_directories(a.out);
   diagnose::write_report_json(rep, (std::filesystem::path(a.out) / "report.json").string());
@@ -71,6 +72,7 @@ Command add_diagnose_command(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "diagnose", "find which unmodelled effect explains the gap between a model and measured runs");
   cmd->add_option("model", a->model, "model netlist (YAML)")->required();
+  add_set_option(cmd, a->sets);
   cmd->add_option("--runs", a->runs, "directory of measured runs (NAME.yaml + NAME.csv)")->required();
   cmd->add_option("--effects", a->effects,
                   "catalogue of candidate effects (YAML), added to the components' declared faults (one of the same "

@@ -55,9 +55,8 @@ int draw_command(const DrawArgs& a) {
   std::vector<std::string> inputs{a.netlist};
   if (!a.results.empty()) inputs.push_back(a.results);
   check_output_file(a.output, "-o", inputs);
-  const Model model = load_model(a.netlist, builtin_registry());
-  Netlist nl = model.netlist;
-  for (const auto& s : a.sets) apply_override(nl, s);
+  const Model model = load_model(a.netlist, builtin_registry(), a.sets);
+  const Netlist& nl = model.netlist;
   const Registry& registry = model.registry;
   const Circuit circuit = elaborate(nl, registry);
   const draw::Diagram d = draw::layout(nl, circuit);
@@ -87,7 +86,7 @@ Command add_draw_command(CLI::App& app) {
   draw->add_option("netlist", a->netlist, "netlist file (YAML)")->required();
   draw->add_option("-o,--output", a->output, "circuit.svg, circuit.png, or view.html with --results")->required();
   draw->add_option("--results", a->results, "results CSV of this netlist (pneumo simulate -o): animate them");
-  draw->add_option("--set", a->sets, "override a top-level parameter: NAME=VALUE")->take_all();
+  add_set_option(draw, a->sets);
   return {.app = draw, .run = [a] { return draw_command(*a); }, .input = [a] { return a->netlist; }};
 }
 

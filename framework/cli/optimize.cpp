@@ -30,7 +30,7 @@ using namespace study;
 
 struct OptimizeArgs {
   std::string netlist, output, robust = "mean", algorithm = "direct+cobyla";
-  std::vector<std::string> design, minimize, constraints, uncertain, at;
+  std::vector<std::string> sets, design, minimize, constraints, uncertain, at;
   int samples = 32, threads = 1, max_evaluations = 60, pareto_points = 8;
   unsigned long seed = 1;
   bool pareto = false, auto_adjust = false, quiet = false;
@@ -144,7 +144,7 @@ std::vector<double> design_at(const Netlist& nl, const Registry& reg, const Opti
 int optimize_command(const OptimizeArgs& a) {
   if (process_communicator().size() > 1)
     throw InputError(SourceLocation{a.netlist, 0, 0}, "", "", "pneumo optimize runs on threads (-j), not under mpirun");
-  const Model model = load_model(a.netlist, builtin_registry());
+  const Model model = load_model(a.netlist, builtin_registry(), a.sets);
   const Netlist& nl = model.netlist;
   const Registry& reg = model.registry;
   OptimizeProblem p;
@@ -220,6 +220,7 @@ Command add_optimize_command(CLI::App& app) {
   auto a = std::make_shared<OptimizeArgs>();
   auto* c = app.add_subcommand("optimize", "optimise design parameters for a metric, robust against uncertain conditions");
   c->add_option("netlist", a->netlist, "netlist file (YAML)")->required();
+  add_set_option(c, a->sets);
   c->add_option("--design", a->design, "NAME=LOW:HIGH design variable (repeatable; units allowed)")->take_all();
   c->add_option("--minimize", a->minimize, "metric to minimise (two, comma separated, with --pareto)");
   c->add_option("--constraint", a->constraints, "METRIC<=VALUE or METRIC>=VALUE (repeatable; units allowed)")

@@ -40,7 +40,7 @@ std::string num(double v) {
 
 int sensitivity_command(const SensitivityArgs& a) {
   Communicator& comm = process_communicator();
-  const Model model = load_model(a.netlist, builtin_registry());
+  const Model model = load_model(a.netlist, builtin_registry(), a.sets);
   const Netlist& nl = model.netlist;
   if (a.params.empty())
     throw InputError(SourceLocation{a.netlist, 1, 1}, "", "", "pneumo sensitivity: give the ranges with --param NAME=LOW:HIGH ...");

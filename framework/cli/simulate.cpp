@@ -113,14 +113,11 @@ void print_written(const ResultsTable& table, const std::string& output) {
 
 int simulate_command(const SimulateArgs& a) {
   const std::string& netlist_path = a.netlist;
-  const std::vector<std::string>& sets = a.sets;
   std::string output = a.output;
   const bool stats = a.stats, quiet = a.quiet;
   const std::string &plot_prefix = a.plot_prefix, &plot_columns = a.plot_columns, &audit_path = a.audit_path;
-  const Model model = load_model(netlist_path, builtin_registry());  // with the netlist's `plugins:`
+  const Model model = load_model(netlist_path, builtin_registry(), a.sets);  // with the netlist's `plugins:`
   Netlist nl = model.netlist;
-  for (const auto& s : sets)
-    if (!apply_simulation_override(nl.simulation, s, SourceLocation{nl.file, 1, 1})) apply_override(nl, s);
   const bool user_outputs = !nl.outputs.empty();
   if (output.empty() && !a.output_given) output = std::filesystem::path(netlist_path).stem().string() + ".csv";
   check_outputs(a, output);
@@ -185,10 +182,7 @@ Command add_simulate_command(CLI::App& app) {
   auto* sim = app.add_subcommand("simulate", "simulate a netlist and write the outputs to CSV");
   sim->footer("The netlist's simulation: keys (unit, default, valid range):\n" + simulation_options_help());
   sim->add_option("netlist", a->netlist, "netlist file (YAML)")->required();
-  sim->add_option("--set", a->sets,
-                  "override a top-level parameter: NAME=VALUE, VALUE an SI number or a quantity ('7 bar'); or a "
-                  "simulation: key, simulation.KEY=VALUE ('simulation.t_end=0.5 s')")
-      ->take_all();
+  add_set_option(sim, a->sets);
   sim->add_option("-o,--output", a->output, "results CSV (default: NETLIST_STEM.csv)")
       ->each([a](const std::string&) { a->output_given = true; });
   sim->add_flag("--stats", a->stats, "print solver statistics");

@@ -16,6 +16,7 @@ using namespace pneumo::study;
 
 void add_study_options(CLI::App* cmd, StudyArgs& a) {
   cmd->add_option("netlist", a.netlist, "netlist file (YAML)")->required();
+  add_set_option(cmd, a.sets);
   cmd->add_option("-j,--threads", a.threads, "threads (per MPI rank)")->transform(whole_number(1, kMaxThreads));
   cmd->add_option("--metrics", a.metrics, "metrics, comma separated (default: all the netlist provides)");
   cmd->add_flag("--eliminate-aliases,!--keep-aliases", a.eliminate,

@@ -4,6 +4,7 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "framework/cli/command.hpp"
 #include "framework/study/sweep.hpp"
@@ -13,11 +14,12 @@ namespace pneumo::cli {
 // What every study command takes.
 struct StudyArgs {
   std::string netlist, output, metrics;
+  std::vector<std::string> sets;  // --set
   int threads = 1;
   bool quiet = false, eliminate = true;  // alias elimination is the default
 };
 
-// The netlist, -j, --metrics and --keep-aliases of a study command.
+// The netlist, --set, -j, --metrics and --keep-aliases of a study command.
 void add_study_options(CLI::App* cmd, StudyArgs& a);
 
 // NETLIST_STEM + suffix, in the working directory.

@@ -26,7 +26,7 @@ struct SweepArgs : StudyArgs {
 
 int sweep_command(const SweepArgs& a) {
   Communicator& comm = process_communicator();
-  const Model model = load_model(a.netlist, builtin_registry());
+  const Model model = load_model(a.netlist, builtin_registry(), a.sets);
   if ((a.grid.empty()) == (a.samples.empty()))
     throw InputError(SourceLocation{a.netlist, 1, 1}, "", "", "pneumo sweep: give either --grid NAME=FROM:TO:COUNT ... or --samples FILE");
   const Design d = a.grid.empty() ? samples_design(model.netlist, model.registry, a.samples)

@@ -87,6 +87,7 @@ struct DiagnoseOptions {
   // one of the same name. Off: the catalogue's alone.
   bool declared_faults = false;
   std::vector<std::string> faults;  // non-empty: only these candidates (narrow_catalogue())
+  std::vector<std::string> sets;    // --set on the model, before any run's operating point
   bool progress = true;
   std::function<void(const std::string&)> log;  // progress lines (default: stderr)
 };

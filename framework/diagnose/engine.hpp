@@ -102,7 +102,7 @@ class Engine {
  public:
   // `base`: the registry the model's plugins are added to.
   Engine(const std::string& model_file, const Registry& base, const DiagnoseOptions& options)
-      : loaded_(load_model(model_file, base)), options_(options) {
+      : loaded_(load_model(model_file, base, options.sets)), options_(options) {
     base_probes_ = elaborate(loaded_.netlist, loaded_.registry).probes;  // input errors now
   }
 

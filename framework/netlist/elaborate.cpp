@@ -136,25 +136,38 @@ std::string text_parameter(const Reader& r, const ComponentDecl& c, const Parame
   return v;
 }
 
-// The parameters the declaration gives, converted by their specs.
+// One parameter the declaration gives, converted by its spec.
+void given_parameter(const Reader& r, const Netlist& nl, const ComponentDecl& c, const ComponentInfo& info,
+                     const std::string& pname, const ValueDecl& pnode, ParameterValues& out) {
+  const ParameterSpec* spec = info.parameter(pname);
+  if (!spec) {
+    std::vector<std::string> names;
+    for (const auto& s : info.parameters) names.push_back(s.name);
+    throw InputError(c.where_of(pname), c.name, pname,
+                     "unknown parameter of type '" + c.type + "'; " + choices_hint(pname, names) +
+                         " (run 'pneumo components " + c.type + "')");
+  }
+  switch (spec->kind) {
+    case ParameterKind::scalar: out.set_scalar(pname, scalar_parameter(r, nl, c, *spec, pnode)); break;
+    case ParameterKind::table: out.set_table(pname, table_parameter(r, nl, c, *spec, pnode)); break;
+    case ParameterKind::text: out.set_text(pname, text_parameter(r, c, *spec, pnode)); break;
+  }
+}
+
+// The parameters the declaration gives. A value from the command line
+// (--set C.P=V) is checked as a written one; its errors say where it came from.
 std::set<std::string> given_parameters(const Reader& r, const Netlist& nl, const ComponentDecl& c,
                                        const ComponentInfo& info, ParameterValues& out) {
   std::set<std::string> given;
   for (const auto& [pname, pnode] : c.parameters) {
-    const ParameterSpec* spec = info.parameter(pname);
-    if (!spec) {
-      std::vector<std::string> names;
-      for (const auto& s : info.parameters) names.push_back(s.name);
-      throw InputError(c.where_of(pname), c.name, pname,
-                       "unknown parameter of type '" + c.type + "'; " + choices_hint(pname, names) +
-                           " (run 'pneumo components " + c.type + "')");
+    try {
+      given_parameter(r, nl, c, info, pname, pnode, out);
+    } catch (const InputError& e) {
+      const std::string prefix = pnode.given_by + ": ";
+      if (pnode.given_by.empty() || e.message().rfind(prefix, 0) == 0) throw;
+      throw InputError(e.where(), e.component(), e.parameter(), prefix + e.message());
     }
     given.insert(pname);
-    switch (spec->kind) {
-      case ParameterKind::scalar: out.set_scalar(pname, scalar_parameter(r, nl, c, *spec, pnode)); break;
-      case ParameterKind::table: out.set_table(pname, table_parameter(r, nl, c, *spec, pnode)); break;
-      case ParameterKind::text: out.set_text(pname, text_parameter(r, c, *spec, pnode)); break;
-    }
   }
   return given;
 }
@@ -191,9 +204,13 @@ std::unique_ptr<Component> make_component(const Reader& r, const Netlist& nl, co
     return entry.make(k);
   } catch (const ParameterError& e) {
     SourceLocation w = c.where;
+    std::string given_by;
     for (const auto& [pname, pnode] : c.parameters)
-      if (pname == e.parameter()) w = pnode.where;
-    throw InputError(w, c.name, e.parameter(), e.what());
+      if (pname == e.parameter()) {
+        w = pnode.where;
+        given_by = pnode.given_by.empty() ? "" : pnode.given_by + ": ";
+      }
+    throw InputError(w, c.name, e.parameter(), given_by + e.what());
   }
 }
 

@@ -1,5 +1,6 @@
 #include "framework/netlist/netlist.hpp"
 
+#include "framework/core/text.hpp"
 #include "framework/io/files.hpp"
 #include "framework/model/gas_parameters.hpp"
 #include "framework/netlist/metric_reader.hpp"
@@ -544,6 +545,43 @@ Netlist parse_netlist(const std::string& text, const std::string& file_name) {
   return nl;
 }
 
+namespace {
+
+// --set COMPONENT.PARAMETER=VALUE: the text replaces what the netlist wrote
+// (or stands in for the default), so that elaboration reads and checks it as
+// it checks a written value - unit, range, plausibility - and its errors say
+// that it came from the command line.
+void override_component_parameter(Netlist& nl, const std::string& name, const std::string& text,
+                                  const std::string& option, const SourceLocation& netlist_where) {
+  const auto dot = name.find('.');
+  const std::string component = name.substr(0, dot), parameter = name.substr(dot + 1);
+  const auto c = std::find_if(nl.components.begin(), nl.components.end(),
+                              [&](const ComponentDecl& d) { return d.name == component; });
+  if (c == nl.components.end()) {
+    std::vector<std::string> names;
+    for (const auto& d : nl.components) names.push_back(d.name);
+    throw InputError(netlist_where, component, "",
+                     option + ": no component '" + component + "' in " + nl.file + "; " + choices_hint(component, names));
+  }
+  if (parameter.empty() || parameter.find('.') != std::string::npos)
+    throw InputError(c->where, component, parameter,
+                     option + ": expected COMPONENT.PARAMETER=VALUE, e.g. --set '" + component + ".PARAMETER=2 mm'");
+  ValueDecl v;
+  v.text = trim(text);
+  v.given_by = option;
+  for (auto& [key, written] : c->parameters)
+    if (key == parameter) {
+      v.where = written.where;
+      written = std::move(v);
+      return;
+    }
+  v.where = c->where;
+  c->parameters.emplace_back(parameter, std::move(v));
+  if (!c->parameter_where.empty()) c->parameter_where.push_back(c->where);
+}
+
+}  // namespace
+
 void apply_override(Netlist& nl, const std::string& assignment) {
   // The mistake is on the command line, but the place to compare it with is
   // the netlist: errors point at the declaration (or at 'parameters:').
@@ -556,6 +594,8 @@ void apply_override(Netlist& nl, const std::string& assignment) {
                      option + ": expected NAME=VALUE, e.g. --set p_supply=7e5 or --set p_supply='7 bar'");
   const std::string name = assignment.substr(0, eq);
   const std::string text = assignment.substr(eq + 1);
+  if (apply_simulation_override(nl.simulation, assignment, netlist_where)) return;
+  if (name.find('.') != std::string::npos) return override_component_parameter(nl, name, text, option, netlist_where);
   TopParameter* p = nullptr;
   for (auto& tp : nl.parameters)
     if (tp.name == name) p = &tp;

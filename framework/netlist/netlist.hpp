@@ -50,6 +50,7 @@ struct ValueDecl {
   std::vector<ValueDecl> items;   // list
   SourceLocation where;
   std::optional<double> si;       // a study's value (SI): no text to read
+  std::string given_by;           // "--set C.P=V" when the command line gave it: errors say so
 
   static ValueDecl number(double si_value, SourceLocation where) {
     ValueDecl v;
@@ -155,8 +156,10 @@ struct Netlist {
 Netlist load_netlist(const std::string& path);
 Netlist parse_netlist(const std::string& text, const std::string& file_name);
 
-// Apply `NAME=VALUE` to a top-level parameter. VALUE is an SI number or a
-// quantity with unit ("7 bar"); its dimension must match the declaration.
+// Apply `--set NAME=VALUE`, the same for every command and Python: NAME a
+// top-level parameter (VALUE an SI number or a quantity with unit, "7 bar",
+// of the declared dimension), COMPONENT.PARAMETER (VALUE as it would be
+// written in the netlist, read and checked at elaboration) or simulation.KEY.
 // Errors point at the declaration (or at 'parameters:' for an unknown NAME)
 // and their message starts with "--set NAME=VALUE".
 void apply_override(Netlist& netlist, const std::string& assignment);

@@ -7,7 +7,7 @@
 
 namespace pneumo {
 
-Model load_model(const std::string& path, const Registry& base) {
+Model load_model(const std::string& path, const Registry& base, const std::vector<std::string>& sets) {
   Model m;
   m.path = path;
   try {
@@ -18,7 +18,15 @@ Model load_model(const std::string& path, const Registry& base) {
   }
   m.netlist = parse_netlist(m.text, path);
   m.registry = registry_with_plugins(base, m.netlist);
+  for (const auto& s : sets) apply_override(m.netlist, s);
+  m.sets = sets;
   return m;
+}
+
+std::string Model::identity() const {
+  std::string id = text;
+  for (const auto& s : sets) id += "\n# --set " + s;
+  return id;
 }
 
 }  // namespace pneumo

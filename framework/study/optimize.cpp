@@ -161,7 +161,7 @@ class RunJournal {
 class Evaluator {
  public:
   Evaluator(const Model& model, const OptimizeProblem& p, const OptimizeOptions& o)
-      : problem_(p), options_(o), registry_(model.registry), text_(model.text), path_(model.path) {
+      : problem_(p), options_(o), registry_(model.registry), netlist_(model.netlist) {
     const Netlist& nl = model.netlist;
     std::vector<std::string> names = p.objectives;
     for (const auto& c : p.constraints)
@@ -175,7 +175,7 @@ class Evaluator {
       for (std::size_t j = 0; j < u.size(); ++j) s.push_back(p.uncertain[j].quantile(u[j]));
       samples_.push_back(std::move(s));
     }
-    std::string identity = "# pneumo optimize journal " + std::to_string(std::hash<std::string>{}(text_));
+    std::string identity = "# pneumo optimize journal " + std::to_string(std::hash<std::string>{}(model.identity()));
     for (const auto& r : p.design) identity += " " + r.parameter.name;
     for (const auto& u : p.uncertain) identity += " " + u.parameter.name + "=" + u.text;
     for (const auto& m : metrics_) identity += " " + m.name;
@@ -197,7 +197,7 @@ class Evaluator {
     std::vector<RunRecord> rec(n);
     std::atomic<int> next{0};
     auto worker = [&] {
-      Netlist nl = parse_netlist(text_, path_);
+      Netlist nl = netlist_;
       for (int j; (j = next++) < n;) rec[j] = run_or_recall(nl, x, j);
     };
     std::vector<std::thread> pool;
@@ -278,7 +278,7 @@ class Evaluator {
   const OptimizeProblem& problem_;
   const OptimizeOptions& options_;
   const Registry& registry_;
-  std::string text_, path_;
+  Netlist netlist_;  // the model with its --set; each run edits a copy
   std::vector<Metric> metrics_;
   std::vector<StudyParameter> parameters_;
   std::vector<Sample> samples_;

@@ -393,7 +393,7 @@ SweepSummary run_sweep(const Model& model, const Design& design, const std::stri
   }
   const auto metrics = select_metrics(model.netlist, model.registry, opt.metrics);
   const long n = static_cast<long>(design.samples.size());
-  const std::string identity = sweep_identity(model.text, design, metrics, opt.assembly.eliminate_aliases);
+  const std::string identity = sweep_identity(model.identity(), design, metrics, opt.assembly.eliminate_aliases);
   if (const auto parent = fs::path(output).parent_path(); !parent.empty()) fs::create_directories(parent);
 
   std::vector<RunRecord> previous;
