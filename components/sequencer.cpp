@@ -132,7 +132,7 @@ struct Chain {
 
 class Sequencer final : public ComponentT<Sequencer> {
  public:
-  enum Mode { kStep, kCycles, kCycleStart, kOutputs };
+  enum Mode { kStep, kCycles, kCycleStart, kStepEntered, kOutputs };
 
   static ComponentInfo describe() {
     ComponentInfo i;
@@ -198,6 +198,21 @@ class Sequencer final : public ComponentT<Sequencer> {
     return advance(e, modes, -1, 0);
   }
 
+  // A chain that ends mid-cycle names its step and the inputs it still waits
+  // for, and since when: a switch that never closes (outside the stroke, not
+  // connected) otherwise only shows as a metric of nan.
+  std::string at_end(const Eval<double>& e, const double* modes) const override {
+    const int step = static_cast<int>(modes[kStep]);
+    if (step == 0) return "";
+    std::string waiting;
+    for (int input : chain_.transitions[step - 1])
+      if (!high(e.signal(1 + input), 0)) waiting += (waiting.empty() ? "" : " and ") + chain_.inputs[input];
+    if (waiting.empty()) waiting = chain_.transition_text[step - 1];
+    return "the cycle did not end: step " + std::to_string(step) + " (" + chain_.step_text[step - 1] +
+           ") was entered at " + format_number(modes[kStepEntered]) + " s and was still waiting for " + waiting +
+           " at the end of the run";
+  }
+
  private:
   int output_port(std::size_t k) const { return 1 + static_cast<int>(chain_.inputs.size() + k); }
 
@@ -209,7 +224,7 @@ class Sequencer final : public ComponentT<Sequencer> {
     const int step = static_cast<int>(modes[kStep]);
     if (step == 0) {
       if (!level(0) || (cycles_ > 0 && modes[kCycles] >= cycles_)) return {};
-      enter(1, modes);
+      enter(1, e.t(), modes);
       modes[kCycleStart] = e.t();
       return {true, "start: step 1 " + chain_.step_text[0], "cycle_start"};
     }
@@ -217,7 +232,7 @@ class Sequencer final : public ComponentT<Sequencer> {
       if (!level(1 + input)) return {};
     const std::string after = chain_.transition_text[step - 1];
     if (step < n) {
-      enter(step + 1, modes);
+      enter(step + 1, e.t(), modes);
       return {true, after + ": step " + std::to_string(step + 1) + " " + chain_.step_text[step],
               "step_" + std::to_string(step + 1)};
     }
@@ -228,8 +243,9 @@ class Sequencer final : public ComponentT<Sequencer> {
                 format_number(e.t() - modes[kCycleStart]) + " s",
             "cycle_end"};
   }
-  void enter(int step, double* modes) const {
+  void enter(int step, double t, double* modes) const {
     modes[kStep] = step;
+    modes[kStepEntered] = t;
     for (const auto& a : chain_.steps[step - 1]) modes[kOutputs + a.output] = a.level;
   }
 

@@ -61,6 +61,23 @@ bool System::fire_event(int bi, double t, const double* y, const double* yp, Eve
   return res.changed;
 }
 
+std::vector<std::string> System::end_notes(double t, const double* y, const double* yp) {
+  block_inputs(t, y, yp);
+  std::vector<std::string> notes;
+  for (const auto& block : blocks_) {
+    const Block& b = *block;
+    if (!b.component) continue;
+    double ly[kMaxLocal], lyp[kMaxLocal];
+    bool invalid = false;
+    gather(b, y, yp, ly, lyp);
+    const double* modes = modes_.data() + b.mode0;
+    const Eval<double> e(*b.component, t, ly, lyp, modes, b.connected.get(), circuit_.gas, &invalid);
+    if (std::string note = b.component->at_end(e, modes); !note.empty())
+      notes.push_back(b.component->name() + ": " + note);
+  }
+  return notes;
+}
+
 bool System::handle_time_event(double t, const double* y, const double* yp, std::vector<EventLogEntry>& log) {
   block_inputs(t, y, yp);
   bool changed = false;

@@ -159,6 +159,9 @@ class System {
   bool handle_input_changes(double t, const double* y, const double* yp, std::vector<EventLogEntry>& log,
                             std::vector<std::string>* changed = nullptr);
 
+  // Each component's at_end() at the run's last point, as "NAME: sentence".
+  std::vector<std::string> end_notes(double t, const double* y, const double* yp);
+
   double probe(const Probe& p, double t, const double* y, const double* yp) const;
 
   // Number of Jacobian entries that AD found outside the structural pattern

@@ -163,6 +163,8 @@ int simulate_command(const SimulateArgs& a) {
     return 1;
   }
   write_csv_atomic(output, run.table);
+  if (!quiet)
+    for (const auto& w : run.solver.warnings) std::cerr << "pneumo: warning: " << w << "\n";
   if (!a.metrics_path.empty()) write_metrics_csv(a.metrics_path, nl, metric_values, metric_unit);
   if (!audit_path.empty()) write_energy_audit(audits, audit_path, quiet);
   if (!quiet) print_written(run.table, output);

@@ -438,6 +438,14 @@ class Component {
     return {};
   }
 
+  // What a run that ended here leaves unfinished and a user should hear -
+  // a step chain still waiting for a switch that never closed - as one
+  // sentence, or "" (the default). Asked once, after a run that succeeded.
+  virtual std::string at_end(const Eval<double>& e, const double* modes) const {
+    (void)e; (void)modes;
+    return "";
+  }
+
   // Event iteration (for types whose info says follows_inputs). After an
   // event changed some modes, the signals they drive jump at the
   // re-initialisation, where no root function can see the jump; the

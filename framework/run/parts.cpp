@@ -120,6 +120,7 @@ void merge_parts(std::vector<PartRun>& parts, ResultsTable header, SolverResult&
     t_last = std::min(t_last, part.table.rows.empty() ? -std::numeric_limits<double>::infinity()
                                                       : part.table.rows.back()[0]);
     solver.events.insert(solver.events.end(), part.solver.events.begin(), part.solver.events.end());
+    solver.warnings.insert(solver.warnings.end(), part.solver.warnings.begin(), part.solver.warnings.end());
   }
   solver.stats.parts = static_cast<int>(parts.size());
   std::stable_sort(solver.events.begin(), solver.events.end(),

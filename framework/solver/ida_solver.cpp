@@ -572,6 +572,7 @@ void Integration::finish() {
   if (result_.message.empty()) {
     result_.ok = true;
     result_.t_reached = t_;
+    result_.warnings = system_.end_notes(t_, user_.physical_y(y_.get()), user_.physical_yp(yp_.get()));
   }
   accumulate_stats();
   auto& s = result_.stats;

@@ -78,6 +78,9 @@ struct SolverResult {
   double t_reached = 0.0;
   SolverStats stats;
   std::vector<EventLogEntry> events;
+  // What components say of the state a successful run ended in
+  // (Component::at_end): "seq: ended in step 2 ..., waiting for B1".
+  std::vector<std::string> warnings;
 };
 
 // Called at t_start, at every output time, and after every event.
