@@ -47,6 +47,7 @@ class Integration {
   bool consistent_ic();
   bool settle();
   bool rest_start();
+  bool integrate_to_rest();
   bool at_rest(std::string* moving) const;
   double model_t(double t) const { return settling_ ? opt_.t_start : t; }
   void accumulate_stats();
@@ -305,9 +306,10 @@ std::string short_text(double v) {
 // dropped, they happened before the run. Unconnected heat ports exchange
 // heat with the ambient meanwhile (System::set_resting): at rest the gas
 // is at the ambient temperature.
+constexpr double kMaxSettleTime = 1e6;  // s of settling time
+constexpr long kMaxSettleSteps = 100000;
+
 bool Integration::rest_start() {
-  constexpr double kMaxSettleTime = 1e6;  // s of settling time
-  constexpr long kMaxSettleSteps = 100000;
   if (!system_.set_resting(true))
     throw std::invalid_argument("a steady start needs the System assembled with AssemblyOptions::rest_heat");
   settling_ = true;
@@ -325,41 +327,7 @@ bool Integration::rest_start() {
     if (n_quad_ > 0) check(IDAQuadReInit(ida_, q_.get()), "IDAQuadReInit");
     return consistent_ic() && settle();
   };
-  bool ok = reinit_at(0.0);
-  if (ok) restart_roots(nullptr);
-  std::string moving;
-  long steps = 0;
-  while (ok && !at_rest(&moving)) {
-    if (t_ >= kMaxSettleTime * (1 - 1e-12) || steps >= kMaxSettleSteps) {
-      fail("the circuit does not come to rest within " + std::to_string(steps) + " steps and " + short_text(t_) +
-           " s of settling; still moving: " + moving +
-           ". Something keeps moving with every input held at t_start (a flange driven at a speed, a flow that "
-           "nothing stops): start from given values (steady_start: false), or give it a stop or a load that "
-           "holds it");
-      ok = false;
-      break;
-    }
-    double t_ret = t_;
-    check(IDASetStopTime(ida_, kMaxSettleTime), "IDASetStopTime");
-    const int flag = IDASolve(ida_, kMaxSettleTime, &t_ret, y_.get(), yp_.get(), IDA_ONE_STEP);
-    ++steps;
-    if (flag < 0) {
-      t_ = t_ret;
-      fail("integration failed after " + short_text(t_ret) + " s of settling: " + flag_text(flag, user_) + "." +
-           step_failure_report(ida_, user_, y_.get(), yp_.get(), opt_.t_start, result_.events));
-      ok = false;
-      break;
-    }
-    if (roots_.size() > 0) {
-      const Next next = state_events(t_ret);
-      if (next == Next::stop || (next == Next::restarted && !within_event_budget())) {
-        ok = false;
-        break;
-      }
-      if (next == Next::restarted) continue;
-    }
-    t_ = t_ret;
-  }
+  const bool ok = reinit_at(0.0) && integrate_to_rest();
   result_.events.resize(std::min(result_.events.size(), logged));
   system_.set_resting(false);
   settling_ = false;
@@ -373,6 +341,37 @@ bool Integration::rest_start() {
   }
   if (opt_.max_step > 0) check(IDASetMaxStep(ida_, opt_.max_step), "IDASetMaxStep");
   return reinit_at(opt_.t_start);
+}
+
+// The settling's steps and state events, from consistent values, until at
+// rest (true) or a failure, the settling's limits included (false, the
+// message set).
+bool Integration::integrate_to_rest() {
+  restart_roots(nullptr);
+  std::string moving;
+  for (long steps = 0; !at_rest(&moving); ++steps) {
+    if (t_ >= kMaxSettleTime * (1 - 1e-12) || steps >= kMaxSettleSteps) {
+      fail("the circuit does not come to rest within " + std::to_string(steps) + " steps and " + short_text(t_) +
+           " s of settling; still moving: " + moving +
+           ". Something keeps moving with every input held at t_start (a flange driven at a speed, a flow that "
+           "nothing stops): start from given values (steady_start: false), or give it a stop or a load that "
+           "holds it");
+      return false;
+    }
+    double t_ret = t_;
+    check(IDASetStopTime(ida_, kMaxSettleTime), "IDASetStopTime");
+    const int flag = IDASolve(ida_, kMaxSettleTime, &t_ret, y_.get(), yp_.get(), IDA_ONE_STEP);
+    if (flag < 0) {
+      t_ = t_ret;
+      fail("integration failed after " + short_text(t_ret) + " s of settling: " + flag_text(flag, user_) + "." +
+           step_failure_report(ida_, user_, y_.get(), yp_.get(), opt_.t_start, result_.events));
+      return false;
+    }
+    const Next next = roots_.size() > 0 ? state_events(t_ret) : Next::step;
+    if (next == Next::stop || (next == Next::restarted && !within_event_budget())) return false;
+    if (next == Next::step) t_ = t_ret;  // a restart has set t_ to its event
+  }
+  return true;
 }
 
 // Whether no state would move by its absolute tolerance (atol of its
