@@ -116,7 +116,8 @@ Simulation simulate(const LoadedNetlist& loaded, const std::vector<std::string>&
     const std::vector<bool> all(nl.metrics.size(), true);
     add_metric_outputs(nl, all);
     if (metrics_read_audit(nl, all)) audits = prepare_energy_audit(nl, loaded.registry());
-    system = std::make_unique<System>(elaborate(nl, loaded.registry()));
+    system = std::make_unique<System>(elaborate(nl, loaded.registry()),
+                                      AssemblyOptions{.rest_heat = nl.simulation.steady_start});
     for (const auto& d : metric_dimensions(nl, system->circuit())) s.metric_units.push_back(units::si_unit_name(d));
     (void)metric_units(nl, system->circuit());  // a declared unit that does not fit is an error here too
   }

@@ -126,8 +126,25 @@ class SignalDefaultBlock final : public Block {
   void residual(double, const Pattern* y, const Pattern*, Pattern* r, const EvalContext&) const override { eval(y, r); }
 };
 
+class RestHeatBlock final : public Block {
+ public:
+  const double* conductance = nullptr;
+  double T_ambient = 0.0;
+  template <class T>
+  void eval(const T* y, T* r) const { r[0] = y[0] - *conductance * (T_ambient - y[1]); }
+  void residual(double, const double* y, const double*, double* r, const EvalContext&) const override { eval(y, r); }
+  void residual(double, const Dual* y, const Dual*, Dual* r, const EvalContext&) const override { eval(y, r); }
+  void residual(double, const Pattern* y, const Pattern*, Pattern* r, const EvalContext&) const override { eval(y, r); }
+};
+
 }  // namespace
 
+std::unique_ptr<Block> make_rest_heat_block(const double* conductance, double T_ambient) {
+  auto b = std::make_unique<RestHeatBlock>();
+  b->conductance = conductance;
+  b->T_ambient = T_ambient;
+  return b;
+}
 std::unique_ptr<Block> make_component_block() { return std::make_unique<ComponentBlock>(); }
 std::unique_ptr<Block> make_flow_sum_block(bool total_first) { return std::make_unique<FlowSumBlock>(total_first); }
 std::unique_ptr<Block> make_stream_mix_block(int ports) { return std::make_unique<StreamMixBlock>(ports); }

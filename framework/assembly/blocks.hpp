@@ -79,6 +79,9 @@ std::unique_ptr<Block> make_stream_sum_block();
 std::unique_ptr<Block> make_kinematic_block();
 // ... and the default value of an unconnected optional input, vars: [it].
 std::unique_ptr<Block> make_signal_default_block(double value);
+// ... the heat flow into an unconnected (insulated) heat port, *conductance
+// (T_ambient - T), vars: [Q, T] (a steady start's rest; 0 in the run),
+std::unique_ptr<Block> make_rest_heat_block(const double* conductance, double T_ambient);
 // The stream-mixing rows: their temperatures stay unknowns of IDA.
 bool is_stream_mix(const Block& b);
 // A group's sums for the mixes of a large node.

@@ -450,6 +450,12 @@ void System::add_node_balances(NodeLayout& l) {
     }
     const char* what = ps.domain == Domain::pneumatic ? "mass" : ps.domain == Domain::thermal ? "heat" : "force";
     const std::string at = node_text(c, ports);
+    if (rest_heat_ports_ && ps.domain == Domain::thermal && ports.size() == 1) {
+      auto rest = make_rest_heat_block(&rest_heat_, c.gas.T_ambient);
+      rest->vars = {l.vars(ports[0]).flow, l.across[ni]};
+      add_node_block(std::move(rest), "heat from the ambient at rest into " + at, {}, l, node);
+      continue;
+    }
     std::vector<int> flows;
     for (const auto& p : ports) flows.push_back(l.vars(p).flow);
     // More flows than a block's locals: the balance adds the sums of groups

@@ -8,7 +8,12 @@
 
 namespace pneumo {
 
-System::System(Circuit circuit, const AssemblyOptions& options) : circuit_(std::move(circuit)) {
+System::System(Circuit circuit, const AssemblyOptions& options)
+    : circuit_(std::move(circuit)),
+      // The reductions must see the rest-heat rows' dependence on T (with a
+      // zero conductance Q = 0 would pass for a constant and be substituted).
+      rest_heat_(options.rest_heat ? kRestHeatConductance : 0.0),
+      rest_heat_ports_(options.rest_heat) {
   build_nodes();
   build_pattern();
   check_structure();
@@ -53,6 +58,14 @@ System::System(Circuit circuit, const AssemblyOptions& options) : circuit_(std::
         aliases_.checked.push_back(static_cast<int>(e));
     }
   reset_modes();
+  rest_heat_ = 0.0;
+}
+
+bool System::set_resting(bool resting) {
+  if (!rest_heat_ports_) return false;
+  rest_heat_ = resting ? kRestHeatConductance : 0.0;
+  work_.cache_valid = false;  // the explicit unknowns (the ports' heat flows) change
+  return true;
 }
 
 void System::build_slots() {

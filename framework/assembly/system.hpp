@@ -57,6 +57,12 @@ struct AssemblyOptions {
   // AD Jacobian. Needs eliminate_aliases; rows of components with discrete
   // modes are never used (an event could change them).
   bool eliminate_explicit = true;
+  // Give every heat port left unconnected (insulated) a conductance to the
+  // ambient temperature that System::set_resting switches on: a steady
+  // start's settling then ends with the gas at the temperature a long rest
+  // gives it, where the run's adiabatic walls would keep the heat of
+  // filling. Off, the port's heat flow is the constant 0 as always.
+  bool rest_heat = false;
 };
 
 // Lower bound of the typical magnitude of a quantity in `unit` (SI unit
@@ -139,6 +145,16 @@ class System {
   std::string row_name(int row) const;
 
   void start_values(std::vector<double>& y0, std::vector<double>& yp0) const;
+
+  // A steady start's settling (AssemblyOptions::rest_heat): unconnected
+  // heat ports exchange heat with the ambient temperature while resting,
+  // not otherwise. Returns false, changing nothing, if the System was
+  // assembled without rest_heat.
+  bool set_resting(bool resting);
+  bool has_rest_heat() const { return rest_heat_ports_; }
+  // The conductance of such a port while resting (W/K): fast next to any
+  // chamber's filling, a rest of seconds of settling time.
+  static constexpr double kRestHeatConductance = 1.0;
 
   // Discrete modes and events.
   std::vector<double>& modes() { return modes_; }
@@ -245,6 +261,10 @@ class System {
   std::vector<long> col_ptr_, row_idx_;
   std::vector<std::vector<int>> dep_y_, dep_yp_;  // per row: structural columns
   std::vector<double> modes_;
+  // The conductance of the rest-heat rows (kRestHeatConductance while
+  // resting and while the structure is found, else 0); their blocks read it.
+  double rest_heat_ = 0.0;
+  bool rest_heat_ports_ = false;
   int n_roots_ = 0;
   std::vector<int> root_blocks_;  // the blocks of components with root functions
 

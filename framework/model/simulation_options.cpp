@@ -48,6 +48,10 @@ const std::vector<SimulationOption>& simulation_options() {
       flag(&S::jacobian_reuse, "jacobian_reuse",
            "answer IDA's requests for a Newton matrix that only follow a change of its step size by recombining "
            "the last evaluation's parts dF/dy, dF/dy'; false: every matrix evaluated afresh, as IDA alone does"),
+      flag(&S::steady_start, "steady_start",
+           "start from the rest state the circuit settles into with every input held at t_start (valves in their "
+           "initial positions, no time events): pressures, positions, the piston against its stop or in force "
+           "equilibrium, the gas at the ambient temperature; start values are where the settling starts"),
   };
   return table;
 }

@@ -25,6 +25,7 @@ struct SimulationSettings {
   double output_interval = 1e-3;
   double max_step = 0.0;
   bool jacobian_reuse = true;
+  bool steady_start = false;
 };
 
 // One setting: its spec (name, unit, default, range, description; a

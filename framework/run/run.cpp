@@ -84,8 +84,10 @@ RunResult run_system(System& system, const SolverOptions& options) {
 
 RunResult run_circuit(Circuit circuit, const SolverOptions& options) {
   const std::vector<std::vector<int>> parts = independent_parts(circuit);
+  // A steady start's settling needs the rest-heat rows (System::set_resting).
+  const AssemblyOptions assembly{.rest_heat = options.steady_start};
   if (parts.size() <= 1) {
-    System system(std::move(circuit));
+    System system(std::move(circuit), assembly);
     return run_system(system, options);
   }
   const ResultsTable header = table_header(circuit);
@@ -101,7 +103,7 @@ RunResult run_circuit(Circuit circuit, const SolverOptions& options) {
   parallel_for(static_cast<long>(parts.size()), threads, [&](int, long p) {
     std::unique_ptr<System> system;
     try {
-      system = std::make_unique<System>(std::move(circuits[p]));
+      system = std::make_unique<System>(std::move(circuits[p]), assembly);
     } catch (...) {
       errors[p] = std::current_exception();
       return;

@@ -65,8 +65,9 @@ int fresh_matrix(UserData& u, double t, double cj, N_Vector y, N_Vector yp, doub
 
 }  // namespace
 
-int residual_cb(realtype t, N_Vector y, N_Vector yp, N_Vector rr, void* user) {
+int residual_cb(realtype t_ida, N_Vector y, N_Vector yp, N_Vector rr, void* user) {
   auto* u = static_cast<UserData*>(user);
+  const double t = u->model_t(t_ida);
   const auto start = std::chrono::steady_clock::now();
   const int flag = guarded(u, [&] {
     return u->system->residual(t, u->physical_y(y), u->disturbed_yp(t, yp), N_VGetArrayPointer(rr));
@@ -75,9 +76,10 @@ int residual_cb(realtype t, N_Vector y, N_Vector yp, N_Vector rr, void* user) {
   return flag;
 }
 
-int jacobian_cb(realtype t, realtype cj, N_Vector y, N_Vector yp, N_Vector, SUNMatrix J, void* user, N_Vector,
+int jacobian_cb(realtype t_ida, realtype cj, N_Vector y, N_Vector yp, N_Vector, SUNMatrix J, void* user, N_Vector,
                 N_Vector, N_Vector) {
   auto* u = static_cast<UserData*>(user);
+  const double t = u->model_t(t_ida);
   const auto start = std::chrono::steady_clock::now();
   const int flag = guarded(u, [&] {
     // IDA zeroes the matrix (structure included) before each call.
@@ -101,8 +103,9 @@ int jacobian_cb(realtype t, realtype cj, N_Vector y, N_Vector yp, N_Vector, SUNM
   return flag;
 }
 
-int quadrature_cb(realtype t, N_Vector y, N_Vector yp, N_Vector q, void* user) {
+int quadrature_cb(realtype t_ida, N_Vector y, N_Vector yp, N_Vector q, void* user) {
   auto* u = static_cast<UserData*>(user);
+  const double t = u->model_t(t_ida);
   return guarded(u, [&] {
     u->system->probe_all(*u->integrands, t, u->physical_y(y), u->physical_yp(yp), N_VGetArrayPointer(q));
     return 0;

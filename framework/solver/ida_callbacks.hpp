@@ -6,6 +6,7 @@
 #include <idas/idas.h>
 #include <sunlinsol/sunlinsol_klu.h>
 
+#include <cmath>
 #include <exception>
 #include <string>
 #include <vector>
@@ -44,6 +45,10 @@ struct UserData {
   // SolverOptions::disturbances by IDA unknown: the equations see
   // y' - d(t) (applied to yp_phys after physical_yp).
   std::vector<std::pair<int, const Disturbance*>> disturbed;
+  // A steady start's settling integrates in a time of its own with the
+  // model's time held at t_start: the equations see frozen_t (NaN: IDA's t).
+  double frozen_t = NAN;
+  double model_t(double t) const { return std::isnan(frozen_t) ? t : frozen_t; }
   const double* disturbed_yp(double t, N_Vector yp) {
     physical_yp(yp);
     for (const auto& [i, d] : disturbed) yp_phys[i] -= d->at(t);

@@ -47,6 +47,10 @@ class Integration {
   void fail(const std::string& msg);
   bool consistent_ic();
   bool settle();
+  bool rest_start();
+  bool integrate_to_rest();
+  bool at_rest(std::string* moving) const;
+  double model_t(double t) const { return settling_ ? opt_.t_start : t; }
   void accumulate_stats();
   bool restart(const std::vector<int>* fired);
   void restart_roots(const std::vector<int>* fired);
@@ -97,6 +101,9 @@ class Integration {
   long restarts_at_budget_ = 0;
   double t_at_budget_ = 0.0;
   int recoveries_at_budget_ = 0, recoveries_ = 0;
+  // In a steady start's settling (rest_start): t_ is the settling time, the
+  // model sees t_start, nothing is output.
+  bool settling_ = false;
 };
 
 Integration::Integration(System& system, const SolverOptions& opt, const OutputFn& output, const Quadratures* quad)
@@ -230,7 +237,8 @@ bool Integration::consistent_ic() {
   // and its segments' energy), so a short scale keeps it converging in a
   // few iterations: 10 us gives cj = 1e8 1/s, far above any rate of a
   // pneumatic drive.
-  const double t_next = t_ + std::min({opt_.output_interval, 1e-5, std::max(opt_.t_end - t_, 1e-9)});
+  const double t_next =
+      t_ + (settling_ ? 1e-5 : std::min({opt_.output_interval, 1e-5, std::max(opt_.t_end - t_, 1e-9)}));
   user_.parts.in_calc_ic = true;
   int flag = IDACalcIC(ida_, IDA_YA_YDP_INIT, t_next);
   if (flag < 0) {
@@ -264,7 +272,7 @@ bool Integration::settle() {
   for (int pass = 0;; ++pass) {
     user_.parts.valid = false;
     std::vector<std::string> changed;
-    if (!system_.handle_input_changes(t_, user_.physical_y(y_.get()), user_.physical_yp(yp_.get()), result_.events,
+    if (!system_.handle_input_changes(model_t(t_), user_.physical_y(y_.get()), user_.physical_yp(yp_.get()), result_.events,
                                       &changed))
       return true;
     if (pass == kMaxPasses) {
@@ -280,6 +288,116 @@ bool Integration::settle() {
     if (n_quad_ > 0) check(IDAQuadReInit(ida_, q_.get()), "IDAQuadReInit");
     if (!consistent_ic()) return false;
   }
+}
+
+std::string short_text(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.6g", v);
+  return buf;
+}
+
+// A steady start (SimulationSettings::steady_start): the same equations
+// integrated in a settling time of their own, from 0, with the model's time
+// held at t_start - valves in their initial positions, sources at their
+// t_start values, no time event - until every state is at rest; the run
+// then starts at t_start from there. State events are handled as in the
+// run, so a piston comes to rest against its stop, and a switch or a
+// sequencer its state triggers acts (a circuit whose logic keeps cycling
+// never rests: an error, as the event budget's); their log entries are
+// dropped, they happened before the run. Unconnected heat ports exchange
+// heat with the ambient meanwhile (System::set_resting): at rest the gas
+// is at the ambient temperature.
+constexpr double kMaxSettleTime = 1e6;  // s of settling time
+constexpr long kMaxSettleSteps = 100000;
+
+bool Integration::rest_start() {
+  if (!system_.set_resting(true))
+    throw std::invalid_argument("a steady start needs the System assembled with AssemblyOptions::rest_heat");
+  settling_ = true;
+  user_.frozen_t = opt_.t_start;
+  const std::size_t logged = result_.events.size();
+  // IDA's own limit on the step would keep it from striding over the long
+  // settling; the error test alone decides.
+  if (opt_.max_step > 0) check(IDASetMaxStep(ida_, kMaxSettleTime), "IDASetMaxStep");
+  auto reinit_at = [&](double t) {
+    t_ = t;
+    if (n_quad_ > 0) N_VConst(0.0, q_.get());
+    ++result_.stats.reinitialisations;
+    accumulate_stats();
+    check(IDAReInit(ida_, t_, y_.get(), yp_.get()), "IDAReInit");
+    if (n_quad_ > 0) check(IDAQuadReInit(ida_, q_.get()), "IDAQuadReInit");
+    return consistent_ic() && settle();
+  };
+  const bool ok = reinit_at(0.0) && integrate_to_rest();
+  result_.events.resize(std::min(result_.events.size(), logged));
+  system_.set_resting(false);
+  settling_ = false;
+  user_.frozen_t = NAN;
+  grid_k_at_budget_ = -1;
+  if (!ok) {
+    result_.message =
+        "steady start (settling with every input held at t_start = " + short_text(opt_.t_start) + " s): " + result_.message;
+    result_.t_reached = opt_.t_start;
+    return false;
+  }
+  if (opt_.max_step > 0) check(IDASetMaxStep(ida_, opt_.max_step), "IDASetMaxStep");
+  return reinit_at(opt_.t_start);
+}
+
+// The settling's steps and state events, from consistent values, until at
+// rest (true) or a failure, the settling's limits included (false, the
+// message set).
+bool Integration::integrate_to_rest() {
+  restart_roots(nullptr);
+  std::string moving;
+  for (long steps = 0; !at_rest(&moving); ++steps) {
+    if (t_ >= kMaxSettleTime * (1 - 1e-12) || steps >= kMaxSettleSteps) {
+      fail("the circuit does not come to rest within " + std::to_string(steps) + " steps and " + short_text(t_) +
+           " s of settling; still moving: " + moving +
+           ". Something keeps moving with every input held at t_start (a flange driven at a speed, a flow that "
+           "nothing stops): start from given values (steady_start: false), or give it a stop or a load that "
+           "holds it");
+      return false;
+    }
+    double t_ret = t_;
+    check(IDASetStopTime(ida_, kMaxSettleTime), "IDASetStopTime");
+    const int flag = IDASolve(ida_, kMaxSettleTime, &t_ret, y_.get(), yp_.get(), IDA_ONE_STEP);
+    if (flag < 0) {
+      t_ = t_ret;
+      fail("integration failed after " + short_text(t_ret) + " s of settling: " + flag_text(flag, user_) + "." +
+           step_failure_report(ida_, user_, y_.get(), yp_.get(), opt_.t_start, result_.events));
+      return false;
+    }
+    const Next next = roots_.size() > 0 ? state_events(t_ret) : Next::step;
+    if (next == Next::stop || (next == Next::restarted && !within_event_budget())) return false;
+    if (next == Next::step) t_ = t_ret;  // a restart has set t_ to its event
+  }
+  return true;
+}
+
+// Whether no state would move by its absolute tolerance (atol of its
+// typical magnitude: the scaled unknowns') over the run's length at its
+// present rate; else the three fastest into `moving`, with their rates.
+// (Not rtol |y|: a position driven away for ever would pass for resting
+// once far enough.)
+bool Integration::at_rest(std::string* moving) const {
+  const double span = opt_.t_end - opt_.t_start;
+  const double* yp = N_VGetArrayPointer(yp_.get());
+  std::vector<std::pair<double, int>> fast;
+  for (int i = 0; i < n_; ++i) {
+    if (system_.differential()[i] == 0.0) continue;
+    const double ratio = std::abs(yp[i]) * span / opt_.atol;
+    if (ratio > 1.0) fast.emplace_back(ratio, i);
+  }
+  std::sort(fast.rbegin(), fast.rend());
+  moving->clear();
+  for (std::size_t k = 0; k < std::min<std::size_t>(3, fast.size()); ++k) {
+    const int i = fast[k].second;
+    char rate[32];
+    std::snprintf(rate, sizeof rate, "%.3g", yp[i] * user_.nominal[i]);
+    *moving += (k ? ", " : "") + system_.variable_names()[i] + " (d/dt = " + rate + " per s)";
+  }
+  return fast.empty();
 }
 
 // IDAReInit resets IDA's counters: add them up before every re-initialisation.
@@ -315,7 +433,7 @@ void Integration::restart_roots(const std::vector<int>* fired) {
 }
 
 void Integration::roots_at(double tr, N_Vector yy, N_Vector yyp, std::vector<double>& g) {
-  system_.roots(tr, user_.physical_y(yy), user_.physical_yp(yyp), g.data());
+  system_.roots(model_t(tr), user_.physical_y(yy), user_.physical_yp(yyp), g.data());
   ++result_.stats.root_evals;
 }
 
@@ -327,6 +445,7 @@ void Integration::interpolate(double tr, N_Vector yy, N_Vector yyp, bool with_yp
 
 // An output row at t from IDA's current y, y'.
 void Integration::emit() {
+  if (settling_) return;
   if (n_quad_ > 0) {
     double tq = t_;
     if (t_ > opt_.t_start && IDAGetQuad(ida_, &tq, q_.get()) >= 0)
@@ -337,6 +456,7 @@ void Integration::emit() {
 
 // An output row at t_out inside the last step, from the state yy, yyp there.
 void Integration::emit_at(double t_out, N_Vector yy, N_Vector yyp) {
+  if (settling_) return;
   if (n_quad_ > 0 && IDAGetQuadDky(ida_, t_out, 0, q_.get()) >= 0)
     std::copy_n(N_VGetArrayPointer(q_.get()), n_quad_, quad_->values->begin());
   output_(t_out, user_.physical_y(yy), user_.physical_yp(yyp));
@@ -366,8 +486,6 @@ void Integration::integrate() {
                               result_.events);
     ++next_event_;
   }
-  if (!consistent_ic() || !settle()) return;
-  emit();
   // Output rows in a step are read off IDA's interpolant: with IDA_NORMAL
   // every output time would also cost a root-function evaluation (IDA
   // checks the roots up to each tout), for outputs every ms about as many as
@@ -377,6 +495,9 @@ void Integration::integrate() {
   N_VConst(0.0, yp_out_.get());  // stays 0 when the outputs read no y'
   y_ev_.reset(N_VClone(y_.get()));
   yp_ev_.reset(N_VClone(y_.get()));
+  if (!consistent_ic() || !settle()) return;
+  if (opt_.steady_start && !rest_start()) return;
+  emit();
   restart_roots(nullptr);
   while (t_ < opt_.t_end - eps_t_) {
     throw_if_interrupted();
@@ -527,13 +648,13 @@ Integration::Next Integration::state_events(double t_ret) {
   };
   double t_root = t_ret;
   while (roots_.locate(t_ret, h_last, g_at, t_root)) {
-    while (grid_.pending() && grid_.next() < t_root - eps_t_) emit_interpolated(grid_.time(grid_.k++));
+    while (!settling_ && grid_.pending() && grid_.next() < t_root - eps_t_) emit_interpolated(grid_.time(grid_.k++));
     interpolate(t_root, y_ev_.get(), yp_ev_.get(), true);
     const std::vector<int> fired = roots_.root_info();
     user_.parts.valid = false;  // the modes may have changed
-    const bool reinit = system_.handle_roots(t_root, user_.physical_y(y_ev_.get()), user_.physical_yp(yp_ev_.get()),
+    const bool reinit = system_.handle_roots(model_t(t_root), user_.physical_y(y_ev_.get()), user_.physical_yp(yp_ev_.get()),
                                              fired.data(), result_.events);
-    if (grid_.pending() && std::abs(t_root - grid_.next()) <= eps_t_) ++grid_.k;
+    if (!settling_ && grid_.pending() && std::abs(t_root - grid_.next()) <= eps_t_) ++grid_.k;
     if (reinit) {
       // Restart from the event; IDA's step beyond it is discarded.
       N_VScale(1.0, y_ev_.get(), y_.get());

@@ -274,7 +274,9 @@ RunRecord run_one(const Netlist& netlist, const Registry& registry, const std::v
     for (std::size_t j = 0; j < parameters.size(); ++j) assign(run_nl, parameters[j], sample[j]);
     // Integral metrics and energy audits read extra (solver-integrated) outputs.
     const MetricPlan plan = prepare_metrics(run_nl, registry, metrics);
-    System system(elaborate(run_nl, registry), assembly);
+    AssemblyOptions run_assembly = assembly;
+    run_assembly.rest_heat = run_nl.simulation.steady_start;  // its settling's rows
+    System system(elaborate(run_nl, registry), run_assembly);
     const RunResult run = run_system(system, solver_options(run_nl.simulation));
     rec.steps = run.solver.stats.steps;
     if (!run.solver.ok) {
