@@ -88,8 +88,8 @@ std::vector<double> grid(const FitParameter& p, int n, bool log) {
   return g;
 }
 
-// Starting values. Every law is linear in all its coefficients but vS and
-// a (and F0 enters linearly too): on a grid of (vS, a) the others follow
+// Starting values: the given ones and the three best of a grid. Every law
+// is linear in all its coefficients but vS and a (and F0 too): on a grid of (vS, a) the others follow
 // from one linear least-squares solve (the model's columns are found by
 // evaluating it, so no law is written twice), clamped to their bounds. The
 // best grid point starts the nonlinear fit near the global minimum instead
@@ -97,8 +97,9 @@ std::vector<double> grid(const FitParameter& p, int n, bool log) {
 // whose speeds (mm/s) are far from where kv is defined (1 m/s), where the
 // solver crawls along the kv-a valley without converging. At most ~2000
 // points (every n-th) are used: a start needs no more.
-std::vector<FitParameter> separable_start(FrictionModel m, bool offset, const std::vector<FrictionPoint>& all,
-                                          std::vector<FitParameter> params) {
+std::vector<std::vector<FitParameter>> separable_starts(FrictionModel m, bool offset,
+                                                        const std::vector<FrictionPoint>& all,
+                                                        const std::vector<FitParameter>& params) {
   const int k = static_cast<int>(params.size());
   const std::size_t ivs = index_of(params, "vS"), ia = index_of(params, "a");
   std::vector<int> lin;
@@ -118,9 +119,7 @@ std::vector<FitParameter> separable_start(FrictionModel m, bool offset, const st
     for (const auto& pt : pts) s += std::pow(force(pt) - observed(offset, pt), 2);
     return s;
   };
-  std::vector<double> best = x;
-  double best_rss = rss();
-  if (!std::isfinite(best_rss)) best_rss = INFINITY;
+  std::vector<std::pair<double, std::vector<double>>> found;  // (RSS, values) per grid point
   Eigen::MatrixXd A(n, lin.size());
   Eigen::VectorXd y(n), f0(n);
   for (double vs : grid(params[ivs], 12, true))
@@ -138,10 +137,15 @@ std::vector<FitParameter> separable_start(FrictionModel m, bool offset, const st
       for (std::size_t c = 0; c < lin.size(); ++c)
         x[lin[c]] = std::isfinite(sol(c)) ? std::clamp(sol(c), params[lin[c]].lower, params[lin[c]].upper)
                                           : params[lin[c]].initial;
-      if (const double s = rss(); s < best_rss) best_rss = s, best = x;
+      if (const double s = rss(); std::isfinite(s)) found.emplace_back(s, x);
     }
-  for (int j = 0; j < k; ++j) params[j].initial = best[j];
-  return params;
+  std::sort(found.begin(), found.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::vector<std::vector<FitParameter>> starts{params};  // the given values, then the best 3 grid points
+  for (std::size_t i = 0; i < found.size() && i < 3; ++i) {
+    starts.push_back(params);
+    for (int j = 0; j < k; ++j) starts.back()[j].initial = found[i].second[j];
+  }
+  return starts;
 }
 
 FitParameter par(const char* name, const char* unit, double init, double lo, double hi, const char* note = "") {
@@ -258,9 +262,15 @@ FitReport fit_friction(FrictionModel m, const std::vector<FrictionPoint>& points
     res.push_back({m, offset, k, pt});
     obs.push_back(observed(offset, pt));
   }
-  FitReport r = detail::solve(separable_start(m, offset, points, params), res, obs, 1.0);
-  for (int j = 0; j < k; ++j) r.parameters[j].initial = params[j].initial;  // report the user's
-  return r;
+  // The Stribeck term has local minima: the least RSS of four starts.
+  FitReport best;
+  bool have = false;
+  for (const auto& start : separable_starts(m, offset, points, params)) {
+    FitReport r = detail::solve(start, res, obs, 1.0);
+    if (!have || r.rss < best.rss) best = std::move(r), have = true;
+  }
+  for (int j = 0; j < k; ++j) best.parameters[j].initial = params[j].initial;  // report the user's
+  return best;
 }
 
 std::vector<FrictionPoint> friction_points(const DataTable& d, FrictionPressure pressure, double p_ambient) {

@@ -50,9 +50,10 @@ std::vector<FitParameter> default_friction_parameters(FrictionModel m, bool offs
 // default_friction_parameters(m).
 double friction_model_force(FrictionModel m, const std::vector<double>& c, double v, double p_bar);
 
-// Started from the best point of a (vS, a) grid with the other coefficients
-// solved linearly (the Stribeck term has local minima, and the paper's
-// initial values can lie far from the data's optimum). Throws
+// The least RSS from four starts: the given values and the three best points
+// of a (vS, a) grid with the other coefficients solved linearly (the Stribeck
+// term has local minima, and the paper's initial values can lie far from
+// the data's optimum). Throws
 // std::invalid_argument (too few points, bad bounds, offset data signed the
 // wrong way).
 FitReport fit_friction(FrictionModel m, const std::vector<FrictionPoint>& points,
