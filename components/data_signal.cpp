@@ -25,7 +25,7 @@ class DataSignal final : public ComponentT<DataSignal> {
         "comes: separator, header yes/no, skip_rows, decimal and thousands marks; scale and offset turn a raw "
         "sensor voltage into 'unit'. A relative file name is taken from the working directory.";
     i.parameters = {
-        ParameterSpec::text("file", {}, "the data file (a relative name: from the working directory)", std::nullopt),
+        ParameterSpec::text("file", {}, "the data file (a relative name: from the netlist's folder)", std::nullopt).path(),
         ParameterSpec::text("separator", {"comma", "semicolon", "tab", "whitespace"}, "cell separator", "comma"),
         ParameterSpec::text("header", {"yes", "no"}, "the first row read names the columns", "yes"),
         ParameterSpec::scalar("skip_rows", "1", "lines dropped at the top of the file", 0.0).non_negative(),

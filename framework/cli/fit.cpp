@@ -1,4 +1,4 @@
-// pneumo fit friction DATA.csv --model eq4|eq7|eq8 [--pressure pAB-|pAB+|pEC] [-o preset.yaml]
+// pneumo fit friction DATA.csv --model eq4|eq7|eq8 [--pressure pAB-|pAB+|pEC] [--offset] [-o preset.yaml]
 // pneumo fit throttle DATA.csv [-o throttle.yaml]
 #include <cmath>
 #include <cstdio>
@@ -82,6 +82,9 @@ class FitCommand {
     fric_->add_option("--lower", lower_, "lower bound NAME=VALUE")->take_all();
     fric_->add_option("--upper", upper_, "upper bound NAME=VALUE")->take_all();
     fric_->add_option("--fix", fix_, "hold NAME at VALUE")->take_all();
+    fric_->add_flag("--offset", offset_,
+                    "also fit a constant force offset F0 (a load cell's zero): F signed, positive along v, "
+                    "F = sign(v) law + F0");
     fric_->add_option("-o,--output", output_, "write the netlist-ready friction preset (YAML) here");
 
     thr_ = fit_->add_subcommand("throttle",
@@ -105,7 +108,7 @@ class FitCommand {
                                                   : parse_friction_pressure(pressure_.empty() ? "pAB-" : pressure_);
     if (m == FrictionModel::eq7 && !pressure_.empty())
       throw data_error(data_, "--pressure: eq. 7 has no pressure term (it is fitted per supply pressure p0)");
-    auto params = default_friction_parameters(m);
+    auto params = default_friction_parameters(m, offset_);
     try {
       for (const auto& s : init_) set_parameter(params, s, ParameterField::initial);
       for (const auto& s : lower_) set_parameter(params, s, ParameterField::lower);
@@ -157,6 +160,9 @@ class FitCommand {
         header += "\nsupply pressure p0 = " + bar_rel(p0, 101325) + " bar_rel";
         yaml << (yaml.tellp() > 0 ? "---\n" : "");
       }
+      if (offset_)
+        header += "\nforce offset F0 = " + std::to_string(r.value("F0")) + " N (+- " +
+                  std::to_string(r.parameter("F0").std_error) + "): the sensor's, not the seal's";
       yaml << friction_preset_yaml(c, r, m, pressure == components::FrictionPressure::ec, header);
     }
     if (!output_.empty()) {
@@ -209,6 +215,7 @@ class FitCommand {
   CLI::App *fit_ = nullptr, *fric_ = nullptr, *thr_ = nullptr;
   std::string data_, model_, pressure_, output_, tdata_, toutput_;
   std::vector<std::string> init_, lower_, upper_, fix_;
+  bool offset_ = false;
 };
 
 }  // namespace

@@ -6,6 +6,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include <Eigen/Dense>
+
 #include "framework/fit/least_squares_impl.hpp"
 
 namespace pneumo::fit {
@@ -34,15 +36,117 @@ T model_force(FrictionModel m, const C& c, double v, double p) {
   return T(0.0);
 }
 
+// What a point's measured force is compared with: the law's magnitude, or,
+// with a load-cell offset F0 (the last coefficient), the signed force
+// sign(v) law + F0 (F measured positive along the motion).
+template <class T, class C>
+T point_force(FrictionModel m, bool offset, int k, const C& c, const FrictionPoint& pt) {
+  const T law = model_force<T>(m, c, pt.v, pt.p_bar);
+  return offset ? (pt.v < 0 ? -law : law) + c(k - 1) : law;
+}
+
+double observed(bool offset, const FrictionPoint& pt) { return offset ? pt.F : std::abs(pt.F); }
+
 struct FrictionResidual {
   FrictionModel model;
-  double v, p, F;
+  bool offset;
+  int k;
+  FrictionPoint pt;
   template <class T>
   bool operator()(T const* const* params, T* r) const {
-    r[0] = model_force<T>(model, [&](int i) { return params[i][0]; }, v, p) - F;
+    r[0] = point_force<T>(model, offset, k, [&](int i) { return params[i][0]; }, pt) - observed(offset, pt);
     return true;
   }
 };
+
+bool has_offset(FrictionModel m, const std::vector<FitParameter>& params) {
+  return params.size() == default_friction_parameters(m).size() + 1 && params.back().name == "F0";
+}
+
+std::size_t index_of(const std::vector<FitParameter>& params, const std::string& name) {
+  std::size_t i = 0;
+  while (params[i].name != name) ++i;
+  return i;
+}
+
+// Values from lo to hi (log-spaced if `log`), or the held value when fixed.
+// (Unbounded: a decade either side of the initial value.)
+std::vector<double> grid(const FitParameter& p, int n, bool log) {
+  if (p.fixed) return {p.initial};
+  double lo = p.lower, hi = p.upper;
+  if (!std::isfinite(lo) || !std::isfinite(hi) || (log && hi <= 0)) {
+    const double s = std::max(std::abs(p.initial), 1e-12);
+    lo = std::max(lo, log ? s / 10 : p.initial - 10 * s);
+    hi = std::min(hi, log ? s * 10 : p.initial + 10 * s);
+  }
+  if (log) lo = std::max(lo, hi * 1e-4);
+  std::vector<double> g;
+  for (int i = 0; i < n; ++i) {
+    const double f = double(i) / (n - 1);
+    g.push_back(log ? lo * std::pow(hi / lo, f) : lo + f * (hi - lo));
+  }
+  return g;
+}
+
+// Starting values: the given ones and the three best of a grid. Every law
+// is linear in all its coefficients but vS and a (and F0 too): on a grid of (vS, a) the others follow
+// from one linear least-squares solve (the model's columns are found by
+// evaluating it, so no law is written twice), clamped to their bounds. The
+// best grid point starts the nonlinear fit near the global minimum instead
+// of where the paper's initial values happen to lie - far from it on data
+// whose speeds (mm/s) are far from where kv is defined (1 m/s), where the
+// solver crawls along the kv-a valley without converging. At most ~2000
+// points (every n-th) are used: a start needs no more.
+std::vector<std::vector<FitParameter>> separable_starts(FrictionModel m, bool offset,
+                                                        const std::vector<FrictionPoint>& all,
+                                                        const std::vector<FitParameter>& params) {
+  const int k = static_cast<int>(params.size());
+  const std::size_t ivs = index_of(params, "vS"), ia = index_of(params, "a");
+  std::vector<int> lin;
+  for (int j = 0; j < k; ++j)
+    if (!params[j].fixed && j != int(ivs) && j != int(ia)) lin.push_back(j);
+  std::vector<FrictionPoint> pts;
+  const std::size_t step = std::max<std::size_t>(1, all.size() / 2000);
+  for (std::size_t i = 0; i < all.size(); i += step) pts.push_back(all[i]);
+  const int n = static_cast<int>(pts.size());
+  std::vector<double> x(k);
+  for (int j = 0; j < k; ++j) x[j] = params[j].initial;
+  auto force = [&](const FrictionPoint& pt) {
+    return point_force<double>(m, offset, k, [&](int i) { return x[i]; }, pt);
+  };
+  auto rss = [&] {
+    double s = 0;
+    for (const auto& pt : pts) s += std::pow(force(pt) - observed(offset, pt), 2);
+    return s;
+  };
+  std::vector<std::pair<double, std::vector<double>>> found;  // (RSS, values) per grid point
+  Eigen::MatrixXd A(n, lin.size());
+  Eigen::VectorXd y(n), f0(n);
+  for (double vs : grid(params[ivs], 12, true))
+    for (double a : grid(params[ia], 10, false)) {
+      x[ivs] = vs, x[ia] = a;
+      for (int j : lin) x[j] = 0;
+      for (int i = 0; i < n; ++i) f0(i) = force(pts[i]);  // the part that is not linear
+      for (std::size_t c = 0; c < lin.size(); ++c) {
+        x[lin[c]] = 1;
+        for (int i = 0; i < n; ++i) A(i, c) = force(pts[i]) - f0(i);
+        x[lin[c]] = 0;
+      }
+      for (int i = 0; i < n; ++i) y(i) = observed(offset, pts[i]) - f0(i);
+      const Eigen::VectorXd sol = A.colPivHouseholderQr().solve(y);
+      for (std::size_t c = 0; c < lin.size(); ++c)
+        x[lin[c]] = std::isfinite(sol(c)) ? std::clamp(sol(c), params[lin[c]].lower, params[lin[c]].upper)
+                                          : params[lin[c]].initial;
+      if (const double s = rss(); std::isfinite(s)) found.emplace_back(s, x);
+    }
+  std::sort(found.begin(), found.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::vector<std::vector<FitParameter>> starts{params};  // the given values, then the best 3 grid points
+  for (std::size_t i = 0; i < found.size() && i < 3; ++i) {
+    starts.push_back(params);
+    for (int j = 0; j < k; ++j) starts.back()[j].initial = found[i].second[j];
+  }
+  return starts;
+}
 
 FitParameter par(const char* name, const char* unit, double init, double lo, double hi, const char* note = "") {
   return bounded_parameter(name, unit, init, lo, hi, note);
@@ -95,6 +199,12 @@ std::string friction_pressure_name(FrictionPressure p) {
   return "";
 }
 
+std::vector<FitParameter> default_friction_parameters(FrictionModel m, bool offset) {
+  auto params = default_friction_parameters(m);
+  if (offset) params.push_back(par("F0", "N", 0, -1000, 1000, "force offset (load cell), not friction"));
+  return params;
+}
+
 std::vector<FitParameter> default_friction_parameters(FrictionModel m) {
   const char* fc_note = "only FS-FC is identifiable";
   switch (m) {
@@ -131,30 +241,35 @@ double friction_model_force(FrictionModel m, const std::vector<double>& c, doubl
 }
 
 FitReport fit_friction(FrictionModel m, const std::vector<FrictionPoint>& points, std::vector<FitParameter> params) {
-  if (params.size() != default_friction_parameters(m).size())
+  const bool offset = has_offset(m, params);
+  if (params.size() != default_friction_parameters(m).size() && !offset)
     throw std::invalid_argument("coefficient list does not match model " + friction_model_name(m));
+  check_parameters(params);
+  if (offset) {
+    // The offset model needs forces signed along the motion: refuse data
+    // written the other way round rather than fit a negative friction.
+    double along = 0;
+    for (const auto& pt : points) along += pt.v < 0 ? -pt.F : pt.F;
+    if (along < 0)
+      throw std::invalid_argument(
+          "with a force offset F is signed: positive along the motion (sign of v), but in these data F is mostly "
+          "against v; negate the F column");
+  }
+  const int k = static_cast<int>(params.size());
   std::vector<FrictionResidual> res;
   std::vector<double> obs;
   for (const auto& pt : points) {
-    res.push_back({m, pt.v, pt.p_bar, pt.F});
-    obs.push_back(pt.F);
+    res.push_back({m, offset, k, pt});
+    obs.push_back(observed(offset, pt));
   }
-  // The Stribeck term makes the problem multimodal in vS (a small vS lets
-  // exp(-|v|/vS) vanish at every point and the bias absorb it): start from
-  // the given vS and from 1/3, 3 and 10 times it, keep the smallest RSS.
-  std::size_t ivs = 0;
-  while (params[ivs].name != "vS") ++ivs;
+  // The Stribeck term has local minima: the least RSS of four starts.
   FitReport best;
   bool have = false;
-  const double vs0 = params[ivs].initial;
-  for (double f : {1.0, 1.0 / 3.0, 3.0, 10.0}) {
-    if (params[ivs].fixed && f != 1.0) break;
-    auto start = params;
-    start[ivs].initial = std::clamp(vs0 * f, start[ivs].lower, start[ivs].upper);
+  for (const auto& start : separable_starts(m, offset, points, params)) {
     FitReport r = detail::solve(start, res, obs, 1.0);
-    r.parameters[ivs].initial = vs0;
     if (!have || r.rss < best.rss) best = std::move(r), have = true;
   }
+  for (int j = 0; j < k; ++j) best.parameters[j].initial = params[j].initial;  // report the user's
   return best;
 }
 
@@ -173,10 +288,10 @@ std::vector<FrictionPoint> friction_points(const DataTable& d, FrictionPressure 
   for (std::size_t i = 0; i < d.rows.size(); ++i) {
     const auto& r = d.rows[i];
     FrictionPoint p;
-    p.v = std::abs(r[cv]);
-    p.F = std::abs(r[cF]);
+    p.v = r[cv];  // signed: a force offset is told apart from friction by the direction
+    p.F = r[cF];
     p.line = d.lines[i];
-    if (p.v <= 0)
+    if (p.v == 0)
       throw InputError(d.where(i), "", "",
                        "column 'v': speed 0 - friction at rest is not on the Stribeck curve; drop the row");
     switch (pressure) {

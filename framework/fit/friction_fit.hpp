@@ -29,24 +29,33 @@ std::string friction_model_name(FrictionModel m);
 components::FrictionPressure parse_friction_pressure(const std::string& text);
 std::string friction_pressure_name(components::FrictionPressure p);
 
+// Without a force offset only the magnitudes of v and F are used; with one,
+// F is the measured force signed along the motion (positive when it resists
+// a positive v): F = sign(v) law(|v|, p) + F0.
 struct FrictionPoint {
-  double v = 0;      // m/s (its magnitude is used)
+  double v = 0;      // m/s
   double p_bar = 0;  // the model's pressure, bar
-  double F = 0;      // friction force magnitude, N
+  double F = 0;      // friction force, N
   int line = 0;      // data file line, 0 if none
 };
 
 // Coefficients with the paper's initial values and bounds (eq. 4: FC >= 2 N
 // and vS >= 1 mm/s as the constraints of Annex A).
 std::vector<FitParameter> default_friction_parameters(FrictionModel m);
+// With `offset`, a last coefficient F0 (N): a constant force added to the
+// signed law (a load cell's zero error), fitted alongside it.
+std::vector<FitParameter> default_friction_parameters(FrictionModel m, bool offset);
 
 // The model's force (N) for coefficient values in the order of
 // default_friction_parameters(m).
 double friction_model_force(FrictionModel m, const std::vector<double>& c, double v, double p_bar);
 
-// Best of four starts in vS (the given value, 1/3, 3 and 10 times it; the
-// Stribeck term has local minima). Throws std::invalid_argument (too few
-// points, bad bounds).
+// The least RSS from four starts: the given values and the three best points
+// of a (vS, a) grid with the other coefficients solved linearly (the Stribeck
+// term has local minima, and the paper's initial values can lie far from
+// the data's optimum). Throws
+// std::invalid_argument (too few points, bad bounds, offset data signed the
+// wrong way).
 FitReport fit_friction(FrictionModel m, const std::vector<FrictionPoint>& points,
                        std::vector<FitParameter> params);
 

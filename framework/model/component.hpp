@@ -97,6 +97,9 @@ struct ParameterSpec {
   // text parameters: allowed values (empty = any), default
   std::vector<std::string> choices;
   std::optional<std::string> default_text;
+  // A text parameter naming a file: a relative name is read from the
+  // netlist's folder (so a netlist runs from any working directory).
+  bool is_path = false;
 
   // Builders so that a component's parameter list reads like a table.
   static ParameterSpec scalar(std::string name, std::string unit, std::string description,
@@ -131,6 +134,7 @@ struct ParameterSpec {
   // May be left out (the component checks ParameterValues::has()).
   ParameterSpec optional() && { required_table = false; is_optional = true; return std::move(*this); }
   ParameterSpec absolute() && { is_absolute = true; return std::move(*this); }
+  ParameterSpec path() && { is_path = true; return std::move(*this); }
   ParameterSpec bare_up_to(double si) && { bare_max = si; return std::move(*this); }
   ParameterSpec positive() && { min = 0.0; min_exclusive = true; return std::move(*this); }
   ParameterSpec non_negative() && { min = 0.0; return std::move(*this); }

@@ -3,6 +3,7 @@
 // resolved ports and output probes.
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <set>
 #include <utility>
 
@@ -126,13 +127,15 @@ Table table_parameter(const Reader& r, const Netlist& nl, const ComponentDecl& c
   return t;
 }
 
-std::string text_parameter(const Reader& r, const ComponentDecl& c, const ParameterSpec& spec,
+std::string text_parameter(const Reader& r, const Netlist& nl, const ComponentDecl& c, const ParameterSpec& spec,
                            const ValueDecl& pnode) {
   const std::string& pname = spec.name;
   const std::string v = r.scalar_text(pnode, c.name, pname, "the value");
   if (!spec.choices.empty() &&
       std::find(spec.choices.begin(), spec.choices.end(), v) == spec.choices.end())
     r.fail(pnode, c.name, pname, "'" + v + "' is not allowed; " + choices_hint(v, spec.choices));
+  if (spec.is_path && !v.empty() && std::filesystem::path(v).is_relative())
+    return (std::filesystem::path(nl.file).parent_path() / v).lexically_normal().string();
   return v;
 }
 
@@ -150,7 +153,7 @@ void given_parameter(const Reader& r, const Netlist& nl, const ComponentDecl& c,
   switch (spec->kind) {
     case ParameterKind::scalar: out.set_scalar(pname, scalar_parameter(r, nl, c, *spec, pnode)); break;
     case ParameterKind::table: out.set_table(pname, table_parameter(r, nl, c, *spec, pnode)); break;
-    case ParameterKind::text: out.set_text(pname, text_parameter(r, c, *spec, pnode)); break;
+    case ParameterKind::text: out.set_text(pname, text_parameter(r, nl, c, *spec, pnode)); break;
   }
 }
 
