@@ -15,6 +15,7 @@
 #include <stdexcept>
 
 #include "framework/core/interrupt.hpp"
+#include "framework/core/text.hpp"
 #include "framework/solver/ida_callbacks.hpp"
 #include "framework/solver/failure_report.hpp"
 #include "framework/solver/ida_handles.hpp"
@@ -290,12 +291,6 @@ bool Integration::settle() {
   }
 }
 
-std::string short_text(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.6g", v);
-  return buf;
-}
-
 // A steady start (SimulationSettings::steady_start): the same equations
 // integrated in a settling time of their own, from 0, with the model's time
 // held at t_start - valves in their initial positions, sources at their
@@ -336,7 +331,7 @@ bool Integration::rest_start() {
   grid_k_at_budget_ = -1;
   if (!ok) {
     result_.message =
-        "steady start (settling with every input held at t_start = " + short_text(opt_.t_start) + " s): " + result_.message;
+        "steady start (settling with every input held at t_start = " + rounded(opt_.t_start, 6) + " s): " + result_.message;
     result_.t_reached = opt_.t_start;
     return false;
   }
@@ -351,8 +346,9 @@ bool Integration::integrate_to_rest() {
   restart_roots(nullptr);
   std::string moving;
   for (long steps = 0; !at_rest(&moving); ++steps) {
+    throw_if_interrupted();
     if (t_ >= kMaxSettleTime * (1 - 1e-12) || steps >= kMaxSettleSteps) {
-      fail("the circuit does not come to rest within " + std::to_string(steps) + " steps and " + short_text(t_) +
+      fail("the circuit does not come to rest within " + std::to_string(steps) + " steps and " + rounded(t_, 6) +
            " s of settling; still moving: " + moving +
            ". Something keeps moving with every input held at t_start (a flange driven at a speed, a flow that "
            "nothing stops): start from given values (steady_start: false), or give it a stop or a load that "
@@ -364,7 +360,7 @@ bool Integration::integrate_to_rest() {
     const int flag = IDASolve(ida_, kMaxSettleTime, &t_ret, y_.get(), yp_.get(), IDA_ONE_STEP);
     if (flag < 0) {
       t_ = t_ret;
-      fail("integration failed after " + short_text(t_ret) + " s of settling: " + flag_text(flag, user_) + "." +
+      fail("integration failed after " + rounded(t_ret, 6) + " s of settling: " + flag_text(flag, user_) + "." +
            step_failure_report(ida_, user_, y_.get(), yp_.get(), opt_.t_start, result_.events));
       return false;
     }
