@@ -42,7 +42,8 @@
 // (insulated if unconnected; external heat_convection does the transfer).
 // With wall_alpha > 0 they are the walls and the gas exchanges
 //   Q = wall_alpha A(x) (T_wall - T_gas)
-// with them (paper [3] eq. 2), A(x) = both end faces + the lateral bore (and
+// with them (paper [3] eq. 2; a heat port left unconnected is a wall at the
+// ambient temperature), A(x) = both end faces + the lateral bore (and
 // rod, rod side) surface over the chamber's current length (stroke travel
 // plus dead volume / piston area). heat_A acts on the rod chamber (ECr with
 // rod cushioning), heat_cap on the cushion annulus EC; the channels are
@@ -411,6 +412,12 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
 
   // The cap-end cushioning's energy balance (cylinder_parts.hpp), from the
   // cushion entry to the piston's first standstill or reversal.
+  // Walls that exchange heat (wall_alpha > 0) with nothing connected are at
+  // the ambient temperature.
+  bool unconnected_heat_port_at_ambient(int port) const override {
+    return wall_alpha_ > 0 && (port == kHeatA || port == kHeatCap);
+  }
+
   std::optional<EnergyAuditSpec> energy_audit(const GasModel& gas) const override {
     CushionAuditNames n;
     n.title = "cap-end cushioning";
@@ -510,7 +517,9 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
                 "default",
                 "no"),
         P::scalar("wall_alpha", "W/(m2*K)",
-                  "gas-to-wall heat transfer coefficient; 0: heat ports at gas temperature (external convection)", 0.0)
+                  "gas-to-wall heat transfer coefficient; 0: heat ports at gas temperature (external convection); "
+                  "> 0 with a heat port unconnected: that wall at the ambient temperature",
+                  0.0)
             .non_negative(),
     };
   }

@@ -13,7 +13,8 @@
 // Coulomb + viscous, LuGre); elastic end stops at x = 0 and x = stroke.
 // Heat: with wall_alpha = 0 the heat ports are at the gas temperature
 // (insulated if unconnected); with wall_alpha > 0 they are the walls and the
-// gas exchanges Q = wall_alpha A_wall(x) (T_wall - T_gas) with them.
+// gas exchanges Q = wall_alpha A_wall(x) (T_wall - T_gas) with them - walls
+// at the ambient temperature where nothing is connected to the heat port.
 //
 // End-position cushioning at either end is optional: giving
 // cap_cushion_length (or rod_cushion_length) splits that chamber into the
@@ -266,6 +267,12 @@ class Cylinder final : public ComponentT<Cylinder> {
   // The energy balance of the cushioned end (the cap end's if both are;
   // cylinder_parts.hpp), from its cushion entry to the piston's first
   // standstill or reversal.
+  // Walls that exchange heat (wall_alpha > 0) with nothing connected are at
+  // the ambient temperature.
+  bool unconnected_heat_port_at_ambient(int port) const override {
+    return p_.wall_alpha > 0 && (port == kHeatCap || port == kHeatRod);
+  }
+
   std::optional<EnergyAuditSpec> energy_audit(const GasModel& gas) const override {
     if (!p_.cap.cushioned() && !p_.rod.cushioned()) return std::nullopt;
     const std::string end = p_.cap.cushioned() ? "cap" : "rod", other = p_.cap.cushioned() ? "rod" : "cap";

@@ -497,7 +497,9 @@ struct Piston {
         P::scalar("stop_stiffness", "N/m", "end stop stiffness", 1e7).positive(),
         P::scalar("stop_damping", "N*s/m", "end stop damping", 3000.0).non_negative(),
         P::scalar("wall_alpha", "W/(m2*K)",
-                  "gas-to-wall heat transfer coefficient; 0: heat ports at gas temperature (external convection)", 0.0)
+                  "gas-to-wall heat transfer coefficient; 0: heat ports at gas temperature (external convection); "
+                  "> 0 with a heat port unconnected: that wall at the ambient temperature",
+                  0.0)
             .non_negative(),
     };
     for (auto& f : FrictionLaw::parameters(false)) out.push_back(std::move(f));

@@ -468,11 +468,14 @@ TEST(FullRigCli, SimulateWithOverridesWritesTheRigColumns) {
   ASSERT_FALSE(table.rows.empty());
   EXPECT_NEAR(table.rows.back()[0], kTEnd, 1e-9);
   for (const char* name : {"x", "v", "p_A", "p_EC", "T_EC", "T_EC_gas"}) EXPECT_GE(table.column(name), 0) << name;
-  EXPECT_EQ(table.units[table.column("p_EC")], "Pa");
-  EXPECT_EQ(table.units[table.column("T_EC")], "K");
+  // The netlist's display: what an engineer reads, converted from SI.
+  EXPECT_EQ(table.units[table.column("p_EC")], "barg");
+  EXPECT_EQ(table.units[table.column("T_EC")], "degC");
+  EXPECT_EQ(table.units[table.column("x")], "mm");
   // The run of the CLI is the run of the library (same netlist, same overrides).
   const Trace& lib = full(7e5, 0.1);
-  EXPECT_NEAR(table.rows.back()[table.column("x")], lib["x"].back(), 1e-9);
+  EXPECT_NEAR(table.rows.back()[table.column("x")], 1e3 * lib["x"].back(), 1e-6);
+  EXPECT_NEAR(table.rows.back()[table.column("p_EC")], (lib["p_EC"].back() - 101325.0) / 1e5, 1e-6);
 }
 
 }  // namespace

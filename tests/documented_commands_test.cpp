@@ -175,5 +175,29 @@ TEST(DocumentedCommands, TheConcreteSimulatePlotDrawAndComponentsCommandsRun) {
   EXPECT_GT(ran, 15);
 }
 
+// Every relative link and image of README.md, docs/ and examples/ names a
+// file or folder that exists (a newcomer following "where to go next" never
+// meets a dead end); anchors (#...) are cut, web addresses skipped.
+TEST(DocumentedCommands, EveryRelativeLinkOfTheDocsLeadsToAFileThatExists) {
+  std::vector<fs::path> files{kSource / "README.md"};
+  for (const char* dir : {"docs", "examples"})
+    for (const auto& e : fs::recursive_directory_iterator(kSource / dir))
+      if (e.path().extension() == ".md") files.push_back(e.path());
+  const std::regex link(R"(\]\(([^)\s]+)\))");
+  int checked = 0;
+  for (const auto& f : files) {
+    const std::string text = read_file(f);
+    for (auto it = std::sregex_iterator(text.begin(), text.end(), link); it != std::sregex_iterator(); ++it) {
+      std::string target = (*it)[1];
+      if (target.find("://") != std::string::npos || target.rfind("mailto:", 0) == 0 || target[0] == '#') continue;
+      target = target.substr(0, target.find('#'));
+      EXPECT_TRUE(fs::exists(f.parent_path() / target))
+          << fs::relative(f, kSource).string() << " links to " << target << ", which does not exist";
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 30);
+}
+
 }  // namespace
 }  // namespace pneumo

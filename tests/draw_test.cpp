@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "framework/io/results.hpp"
+#include "framework/draw/diagram.hpp"
 #include "test_support.hpp"
 
 namespace {
@@ -38,6 +39,8 @@ struct Net {
   std::string cls, domain;
   std::vector<std::string> ports;
   std::vector<Seg> segs;
+  std::string ref;                // a signal drawn as tagged stubs: its tag
+  std::vector<std::string> tags;  // the texts at the stubs
 };
 struct Svg {
   std::vector<Rect> symbols;
@@ -72,7 +75,10 @@ Svg parse(const std::string& svg) {
       }
       out.symbols.push_back(r);
     } else if (tag.find("class=\"net") != std::string::npos) {
-      Net n{attr(tag, "class"), attr(tag, "data-domain"), {}, {}};
+      Net n{attr(tag, "class"), attr(tag, "data-domain"), {}, {}, attr(tag, "data-ref"), {}};
+      const std::regex text("<text class=\"ref\"[^>]*>([^<]*)</text>");
+      for (auto it = std::sregex_iterator(body.begin(), body.end(), text); it != std::sregex_iterator(); ++it)
+        n.tags.push_back((*it)[1]);
       std::stringstream ports(attr(tag, "data-ports"));
       for (std::string p; ports >> p;) n.ports.push_back(p);
       const std::regex line("<line class=\"wire\"[^>]*>");
@@ -131,7 +137,13 @@ TEST(Draw, EveryConnectionOfEveryShippedNetlistEndsOnTheAnchorsOfItsPortsAsOneLi
     std::map<std::string, const Rect*> by_name;
     for (const auto& s : d.symbols) by_name[s.name] = &s;
     for (const auto& n : d.nets) {
-      EXPECT_EQ(n.cls, "net") << nl << ": an unrouted connection " << n.ports.front();
+      if (!n.ref.empty()) {  // a signal drawn as tagged stubs: one at each port, each tagged
+        EXPECT_EQ(n.cls, "net ref") << nl << ": " << n.ports.front();
+        EXPECT_EQ(n.segs.size(), n.ports.size()) << nl << ": " << n.ref;
+        EXPECT_EQ(n.tags, std::vector<std::string>(n.ports.size(), n.ref)) << nl << ": " << n.ref;
+      } else {
+        EXPECT_EQ(n.cls, "net") << nl << ": an unrouted connection " << n.ports.front();
+      }
       ASSERT_GE(n.ports.size(), 2u);
       for (const auto& p : n.ports) {
         const auto dot = p.find('.');
@@ -144,6 +156,7 @@ TEST(Draw, EveryConnectionOfEveryShippedNetlistEndsOnTheAnchorsOfItsPortsAsOneLi
                      (std::abs(seg.x1 - a->second.first) < 1e-6 && std::abs(seg.y1 - a->second.second) < 1e-6);
         EXPECT_TRUE(reached) << nl << ": the line of " << n.ports.front() << " does not end on " << p;
       }
+      if (!n.ref.empty()) continue;
       // one connected line: flood over touching segments
       std::vector<bool> seen(n.segs.size(), false);
       std::vector<std::size_t> stack{0};
@@ -179,6 +192,32 @@ TEST(Draw, NoTwoSymbolsOverlapAndNoLinePassesThroughASymbol) {
                                      << ")-(" << s.x1 << "," << s.y1 << ") passes through " << r.name;
       }
     EXPECT_GT(lines, 0) << nl;
+  }
+}
+
+// A signal that would run across the sheet (a limit switch at one
+// cylinder to the sequencer at the side) is drawn as a stub at each port
+// tagged with the signal's source, as electro-pneumatic diagrams do; the
+// lines left are short. Before, the six-cylinder line's switches looped
+// their lines around every column.
+TEST(Draw, SignalsThatWouldCrossTheSheetAreTaggedStubsAndTheLinesLeftAreShort) {
+  TempDir dir;
+  for (const char* name : {"assembly_line.yaml", "sequence_ab.yaml"}) {
+    const Svg d = draw(dir, fs::path(PNEUMO_SOURCE_DIR) / "netlists" / name);
+    int refs = 0;
+    for (const auto& n : d.nets) {
+      if (n.domain != "signal") continue;
+      double length = 0;
+      for (const auto& s : n.segs) length += std::abs(s.x1 - s.x0) + std::abs(s.y1 - s.y0);
+      if (n.ref.empty()) {
+        EXPECT_LE(length, 2 * pneumo::draw::kReferenceLength) << name << ": the line of " << n.ports.front();
+        continue;
+      }
+      ++refs;
+      EXPECT_NE(std::find(n.ports.begin(), n.ports.end(), n.ref), n.ports.end()) << name << ": tag " << n.ref;
+      EXPECT_LE(length, 30.0 * static_cast<double>(n.ports.size())) << name << ": stubs of " << n.ref;
+    }
+    EXPECT_GE(refs, 4) << name << ": the limit switches' signals to the sequencer";
   }
 }
 
@@ -264,10 +303,10 @@ TEST(Draw, ResultsViewInHeadlessChromiumDrawsThePistonHalfWayWhenTheCylinderIsHa
   const pneumo::ResultsTable r = pneumo::read_csv(csv);
   const int cx = r.column("x_A");
   ASSERT_GE(cx, 0);
-  ASSERT_EQ(r.units[static_cast<std::size_t>(cx)], "m");
-  double t_half = -1, x_half = 0;
+  ASSERT_EQ(r.units[static_cast<std::size_t>(cx)], "mm");  // the netlist's display; the view converts
+  double t_half = -1, x_half = 0;  // mm
   for (const auto& row : r.rows)
-    if (row[static_cast<std::size_t>(cx)] >= 0.05) {
+    if (row[static_cast<std::size_t>(cx)] >= 50.0) {
       t_half = row[0];
       x_half = row[static_cast<std::size_t>(cx)];
       break;
@@ -299,7 +338,7 @@ TEST(Draw, ResultsViewInHeadlessChromiumDrawsThePistonHalfWayWhenTheCylinderIsHa
   const double w = std::stod(mh[2]), x = std::stod(mh[1]) + std::stod(mp[1]) + w / 2;
   const double travel_from = barrel_x + std::stod(mh[1]) + w / 2 - barrel_x;  // at x = 0
   const double travel = barrel_w - 2 * travel_from;
-  EXPECT_NEAR((x - travel_from) / travel, x_half / 0.1, 0.01) << "piston at " << x << " px";
+  EXPECT_NEAR((x - travel_from) / travel, x_half / 100.0, 0.01) << "piston at " << x << " px";
   EXPECT_NEAR((x - travel_from) / travel, 0.5, 0.03);
   // The cylinder's cap line is coloured by its pressure.
   EXPECT_NE(d.find("data-p-barg="), std::string::npos);

@@ -38,10 +38,12 @@ double rms_against_measured(const std::string& sets) {
   std::vector<double> ts, ps;
   std::ifstream f(out);
   std::string line;
-  std::getline(f, line);  // header t [s], p [Pa]
+  std::getline(f, line);  // header "t [s],p [UNIT]": the netlist's display unit
+  const auto open = line.rfind('['), close = line.rfind(']');
+  const std::string unit = open < close && close != std::string::npos ? line.substr(open + 1, close - open - 1) : "";
   while (std::getline(f, line)) {
     double t, p;
-    if (std::sscanf(line.c_str(), "%lf,%lf", &t, &p) == 2) ts.push_back(t), ps.push_back(p);
+    if (std::sscanf(line.c_str(), "%lf,%lf", &t, &p) == 2) ts.push_back(t), ps.push_back(test_support::to_si(p, unit));
   }
   if (ts.size() < 2) return INFINITY;
   DataFileSpec spec;

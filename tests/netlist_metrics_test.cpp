@@ -279,18 +279,22 @@ std::map<std::string, std::vector<double>> sweep_columns(const std::string& path
   std::ifstream in(path);
   std::string line;
   std::getline(in, line);
-  std::vector<std::string> names;
+  std::vector<std::string> names, unit;
   {
     std::stringstream ss(line);
     std::string cell;
-    while (std::getline(ss, cell, ',')) names.push_back(cell.substr(0, cell.find(" [")));
+    while (std::getline(ss, cell, ',')) {
+      const auto open = cell.find(" [");
+      names.push_back(cell.substr(0, open));
+      unit.push_back(open == std::string::npos ? "" : cell.substr(open + 2, cell.size() - open - 3));
+    }
   }
   std::map<std::string, std::vector<double>> out;
   while (std::getline(in, line)) {
     std::stringstream ss(line);
     std::string cell;
     for (std::size_t i = 0; std::getline(ss, cell, ',') && i < names.size(); ++i)
-      if (i >= 4 && names[i] != "reason") out[names[i]].push_back(std::stod(cell));
+      if (i >= 4 && names[i] != "reason") out[names[i]].push_back(test_support::to_si(std::stod(cell), unit[i]));
   }
   return out;
 }

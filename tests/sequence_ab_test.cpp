@@ -108,7 +108,9 @@ TEST(SequenceAB, BargColumnsAreSIPressureLessAmbient) {
   const int c = shown.column("p_cap_A");
   ASSERT_GE(c, 0);
   EXPECT_EQ(shown.units[c], "barg");
-  EXPECT_EQ(shown.units[shown.column("x_A")], "m");
+  EXPECT_EQ(shown.units[shown.column("x_A")], "mm");  // the netlist's display: length
+  for (std::size_t k = 0; k < r.table.rows.size(); k += 97)
+    EXPECT_NEAR(shown.rows[k][shown.column("x_A")], 1e3 * r.table.rows[k][r.table.column("x_A")], 1e-6);
   for (std::size_t k = 0; k < r.table.rows.size(); k += 97)
     EXPECT_NEAR(shown.rows[k][c], (r.table.rows[k][c] - 101325.0) / 1e5, 1e-8);
   std::remove(path.c_str());

@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <regex>
 #include <string>
 
 #include "tests/test_support.hpp"
@@ -106,12 +107,11 @@ TEST(SolverRobustness, ChatteringEventsEndTheRunNamingThem) {
   EXPECT_LT(r.solver.t_reached, 1e-5);
 }
 
-TEST(SolverRobustness, NodeWithoutConsistentStartIsNamed) {
-  // At the start cv1 feeds the node choked from the tank (a flow that does
-  // not depend on the node's pressure) and cv2 is closed against it: the
-  // node has no volume to store the gas and no way out, and no equation
-  // determines its pressure.
-  const RunResult r = run_netlist(R"(
+// At the start cv1 feeds the node choked from the tank (a flow that does
+// not depend on the node's pressure) and cv2 is closed against it: the node
+// has no volume to store the gas and no way out, and no equation determines
+// its pressure.
+const std::string kBlockedNode = R"(
 components:
   tank: {type: volume, V: 1 L, p0: 3 bar}
   cv1:  {type: check_valve, C: 0.5 dm3/(s*bar)}
@@ -122,14 +122,35 @@ connections:
   - [cv1.out, cv2.out]
   - [cv2.in, air.port]
 simulation: {t_end: 0.1 s}
-)",
-                                  "blocked_node");
+)";
+
+TEST(SolverRobustness, NodeWithoutConsistentStartIsNamed) {
+  const RunResult r = run_netlist(kBlockedNode, "blocked_node");
   ASSERT_FALSE(r.solver.ok);
   const std::string& m = r.solver.message;
   EXPECT_NE(m.find("consistent initial values"), std::string::npos) << m;
   EXPECT_NE(m.find("p at {cv1.out, cv2.out}"), std::string::npos) << m;
   EXPECT_NE(m.find("cv2: check valve mass flow"), std::string::npos) << m;
   EXPECT_NE(m.find("add a volume"), std::string::npos) << m;
+}
+
+// `pneumo simulate --stats` after a run that could not start says what was
+// being solved (issue #30: it printed "0 variables", as if the circuit were
+// empty).
+TEST(SolverRobustness, TheStatisticsOfARunThatCouldNotStartCountTheProblemSolved) {
+  TempDir dir;
+  const std::string path = dir.write("blocked.yaml", kBlockedNode + "outputs:\n  p: tank.p\n");
+  const auto [status, out] = run_cli("simulate '" + path + "' --stats -o '" + (dir.path() / "r.csv").string() + "'");
+  EXPECT_EQ(status, 1) << out;
+  EXPECT_NE(out.find("consistent initial values"), std::string::npos) << out;
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(out, m, std::regex(R"(solver: IDA \+ KLU, (\d+) variables, (\d+) Jacobian nonzeros)")))
+      << out;
+  EXPECT_GT(std::stoi(m[1]), 0) << out;
+  EXPECT_GT(std::stoi(m[2]), 0) << out;
+  ASSERT_TRUE(std::regex_search(out, m, std::regex(R"(the netlist's (\d+) unknowns)"))) << out;
+  // The tank's state, the node's pressure and the valves' flows at least.
+  EXPECT_GE(std::stoi(m[1]), 4) << out;
 }
 
 }  // namespace

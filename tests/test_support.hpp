@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "components/builtin.hpp"
+#include "framework/core/units.hpp"
 #include "framework/netlist/netlist.hpp"
 #include "framework/run/run.hpp"
 
@@ -88,6 +89,13 @@ inline std::string replace_once(std::string s, const std::string& from, const st
   EXPECT_NE(at, std::string::npos) << from;
   if (at != std::string::npos) s.replace(at, from.size(), to);
   return s;
+}
+
+// A number a results or sweep file shows in `unit` (its header's "[barg]",
+// "[mm]", "[degC]"), back in SI; gauge pressures on `ambient_pa`.
+inline double to_si(double shown, const std::string& unit, double ambient_pa = 101325.0) {
+  if (unit.empty()) return shown;
+  return units::to_si(units::parse_unit(unit), shown, ambient_pa);
 }
 
 inline double rel_err(double actual, double expected) { return std::abs(actual - expected) / std::abs(expected); }

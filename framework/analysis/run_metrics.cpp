@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
 #include <limits>
 #include <map>
+#include <sstream>
 
 #include "framework/core/expression.hpp"
 
@@ -146,6 +148,76 @@ class Evaluator {
 
 }  // namespace
 
+namespace {
+
+int event_count(const RunResult& r, const std::string& component, const std::string& tag) {
+  int n = 0;
+  for (const auto& e : r.solver.events) n += e.component == component && e.tag == tag;
+  return n;
+}
+
+// "" if `ref` names a time the run reached, else why it does not.
+std::string missing_time(const RunResult& r, const TimeRef& ref) {
+  if (!ref.is_event()) return "";
+  const int n = event_count(r, ref.component, ref.tag);
+  if (n >= ref.occurrence) return "";
+  const std::string name = ref.component + "." + ref.tag;
+  return n == 0 ? "event " + name + " did not happen"
+                : "event " + name + " happened " + std::to_string(n) + " time" + (n > 1 ? "s" : "") + ", not " +
+                      std::to_string(ref.occurrence);
+}
+
+// A level in the unit its column is shown in ("5 barg"), so the reason
+// reads as the netlist was written.
+std::string level_text(const ResultsTable& tab, int c, double si) {
+  const units::DisplayUnit d = tab.shown_as(static_cast<std::size_t>(c));
+  std::ostringstream s;
+  s << std::setprecision(6) << d.shown(si) << (d.unit.empty() || d.unit == "1" ? "" : " " + d.unit);
+  return s.str();
+}
+
+std::string reason(const Netlist& nl, const std::vector<double>& values, const RunResult& run, const MetricDecl& m) {
+  for (const auto* ref : {m.from ? &*m.from : nullptr, m.to ? &*m.to : nullptr, m.at ? &*m.at : nullptr,
+                          m.kind == Kind::event_time ? &m.event : nullptr})
+    if (ref)
+      if (std::string why = missing_time(run, *ref); !why.empty()) return why;
+  const ResultsTable& tab = run.table;
+  const int c = tab.column(m.output);
+  const std::string window = m.from || m.to ? " within its window" : "";
+  switch (m.kind) {
+    case Kind::max:
+    case Kind::min: return "no sample of " + m.output + window;
+    case Kind::value: return "the run ended before that time";
+    case Kind::crossing: {
+      if (c < 0) break;
+      const char* how = m.direction > 0 ? " never rose through " : m.direction < 0 ? " never fell through " : " never crossed ";
+      return m.output + how + level_text(tab, c, m.level.si_value) + window +
+             (m.occurrence > 1 ? " " + std::to_string(m.occurrence) + " times" : "");
+    }
+    case Kind::audit: return "the energy audit of " + m.output.substr(0, m.output.find('.')) + " did not open";
+    case Kind::expression:
+      for (const auto& n : Expression(m.expression).names()) {
+        const int j = index_of(nl, n);
+        if (j >= 0 && std::isnan(values[j])) return "it uses " + n + ", which is undefined";
+        if (j < 0 && n.find('.') != std::string::npos && std::isnan(event_time(run, n)))
+          return "event " + n + " did not happen";
+      }
+      return "the expression has no value there (a division by zero or a root of a negative number)";
+    default: break;
+  }
+  return "the run gave it no value";
+}
+
+}  // namespace
+
+std::vector<std::string> undefined_metric_reasons(const Netlist& nl, const std::vector<double>& values,
+                                                  const RunResult& run) {
+  std::vector<std::string> out(nl.metrics.size());
+  for (std::size_t i = 0; i < nl.metrics.size() && i < values.size(); ++i)
+    if (std::isnan(values[i])) out[i] = reason(nl, values, run, nl.metrics[i]);
+  return out;
+}
+
 std::vector<bool> metric_closure(const Netlist& nl, std::vector<bool> wanted) {
   wanted.resize(nl.metrics.size(), false);
   for (bool grew = true; grew;) {
@@ -249,8 +321,11 @@ std::vector<units::DisplayUnit> metric_units(const Netlist& nl, const Circuit& c
       out.push_back(probe[m.output]->display);  // the unit the output is shown in
       continue;
     }
+    // Without a unit of its own, a metric that is not an output's value is
+    // shown in `display:`'s unit for its dimension, read as a difference.
+    const std::string unit = m.unit.empty() ? units::difference_unit(nl.display_unit_for(dims[i])) : m.unit;
     try {
-      out.push_back(units::display_unit(m.unit, dims[i], nl.gas.p_ambient));
+      out.push_back(units::display_unit(unit, dims[i], nl.gas.p_ambient));
     } catch (const std::exception& e) {  // ParseError was caught when reading; a dimension that does not fit
       throw InputError(m.where, "", "metrics." + m.name,
                        "metric '" + m.name + "': unit " + e.what() + "; give a unit of " + units::si_unit_name(dims[i]) +

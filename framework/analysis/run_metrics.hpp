@@ -39,4 +39,11 @@ std::vector<units::DisplayUnit> metric_units(const Netlist& netlist, const Circu
 std::vector<double> evaluate_metrics(const Netlist& netlist, const std::vector<bool>& marked, const RunResult& run,
                                      const std::vector<EnergyAudit>& audits);
 
+// Why each metric of `values` (evaluate_metrics' result) that is NaN is
+// undefined - "event cylinder.cushion_in did not happen", "p_A never rose
+// through 5 bar within the window" - so that a user reading `nan` learns
+// what the run did not do; "" for the defined ones.
+std::vector<std::string> undefined_metric_reasons(const Netlist& netlist, const std::vector<double>& values,
+                                                  const RunResult& run);
+
 }  // namespace pneumo

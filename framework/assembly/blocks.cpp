@@ -115,8 +115,9 @@ class KinematicBlock final : public Block {
   void residual(double, const Pattern* y, const Pattern* yp, Pattern* r, const EvalContext&) const override { eval(y, yp, r); }
 };
 
-// An unconnected optional signal input holds its default value.
-class SignalDefaultBlock final : public Block {
+// An unknown held at a constant (an unconnected input's default, an
+// unconnected heat port's ambient temperature).
+class FixedValueBlock final : public Block {
  public:
   double value = 0.0;
   template <class T>
@@ -150,8 +151,8 @@ std::unique_ptr<Block> make_flow_sum_block(bool total_first) { return std::make_
 std::unique_ptr<Block> make_stream_mix_block(int ports) { return std::make_unique<StreamMixBlock>(ports); }
 std::unique_ptr<Block> make_stream_sum_block() { return std::make_unique<StreamSumBlock>(); }
 std::unique_ptr<Block> make_kinematic_block() { return std::make_unique<KinematicBlock>(); }
-std::unique_ptr<Block> make_signal_default_block(double value) {
-  auto b = std::make_unique<SignalDefaultBlock>();
+std::unique_ptr<Block> make_fixed_value_block(double value) {
+  auto b = std::make_unique<FixedValueBlock>();
   b->value = value;
   return b;
 }

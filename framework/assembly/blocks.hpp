@@ -77,8 +77,11 @@ std::unique_ptr<Block> make_stream_mix_block(int ports);
 std::unique_ptr<Block> make_stream_sum_block();
 // ... ds/dt = v of a translational node, vars: [s, v],
 std::unique_ptr<Block> make_kinematic_block();
-// ... and the default value of an unconnected optional input, vars: [it].
-std::unique_ptr<Block> make_signal_default_block(double value);
+// ... an unknown held at a constant: the default value of an unconnected
+// optional input, or the ambient temperature of an unconnected heat port its
+// component holds there (Component::unconnected_heat_port_at_ambient),
+// vars: [it].
+std::unique_ptr<Block> make_fixed_value_block(double value);
 // ... the heat flow into an unconnected (insulated) heat port, *conductance
 // (T_ambient - T), vars: [Q, T] (a steady start's rest; 0 in the run),
 std::unique_ptr<Block> make_rest_heat_block(const double* conductance, double T_ambient);

@@ -438,7 +438,7 @@ void System::add_node_balances(NodeLayout& l) {
       const bool driven = std::any_of(ports.begin(), ports.end(),
                                       [&](const PortId& p) { return spec(c, p).causality == Causality::output; });
       if (driven) continue;
-      auto def = make_signal_default_block(ps.default_value);
+      auto def = make_fixed_value_block(ps.default_value);
       def->vars = {l.across[ni]};
       add_node_block(std::move(def), "default of unconnected input " + c.port_name(ports[0]), {}, l, node);
       continue;
@@ -450,6 +450,13 @@ void System::add_node_balances(NodeLayout& l) {
     }
     const char* what = ps.domain == Domain::pneumatic ? "mass" : ps.domain == Domain::thermal ? "heat" : "force";
     const std::string at = node_text(c, ports);
+    if (ps.domain == Domain::thermal && ports.size() == 1 &&
+        c.components[ports[0].component]->unconnected_heat_port_at_ambient(ports[0].port)) {
+      auto wall = make_fixed_value_block(c.gas.T_ambient);
+      wall->vars = {l.across[ni]};
+      add_node_block(std::move(wall), "ambient temperature at the unconnected " + at, {}, l, node);
+      continue;
+    }
     if (rest_heat_ports_ && ps.domain == Domain::thermal && ports.size() == 1) {
       auto rest = make_rest_heat_block(&rest_heat_, c.gas.T_ambient);
       rest->vars = {l.vars(ports[0]).flow, l.across[ni]};

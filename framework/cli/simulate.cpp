@@ -62,10 +62,12 @@ void write_energy_audit(const std::vector<EnergyAudit>& audits, const std::strin
   }
 }
 
-void print_metrics(const Netlist& nl, const std::vector<double>& values, const std::vector<units::DisplayUnit>& units) {
+void print_metrics(const Netlist& nl, const std::vector<double>& values, const std::vector<units::DisplayUnit>& units,
+                   const std::vector<std::string>& why) {
   for (std::size_t i = 0; i < nl.metrics.size(); ++i)
     std::cout << "metric " << nl.metrics[i].name << " = " << std::setprecision(6) << units[i].shown(values[i])
-              << (units[i].unit == "1" ? "" : " " + units[i].unit) << "\n";
+              << (units[i].unit == "1" ? "" : " " + units[i].unit)
+              << (why[i].empty() ? "" : " (undefined: " + why[i] + ")") << "\n";
 }
 
 void write_metrics_csv(const std::string& path, const Netlist& nl, const std::vector<double>& values,
@@ -168,7 +170,7 @@ int simulate_command(const SimulateArgs& a) {
   if (!a.metrics_path.empty()) write_metrics_csv(a.metrics_path, nl, metric_values, metric_unit);
   if (!audit_path.empty()) write_energy_audit(audits, audit_path, quiet);
   if (!quiet) print_written(run.table, output);
-  if (!quiet) print_metrics(nl, metric_values, metric_unit);
+  if (!quiet) print_metrics(nl, metric_values, metric_unit, undefined_metric_reasons(nl, metric_values, run));
   if (stats) print_stats(run.solver, seconds, std::cout);
   if (!plot_prefix.empty()) {
     plot_results(output, plot_prefix, split_list(plot_columns), nl.file);

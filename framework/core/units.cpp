@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <map>
 #include <numbers>
@@ -676,6 +677,23 @@ DisplayUnit display_unit(std::string_view unit_text, Dimension dim, double ambie
   if (!(u.dim == dim))
     throw DimensionMismatch("'" + std::string(unit_text) + "' measures " + si_unit_name(u.dim) + ", not " + si_unit_name(dim));
   return {std::string(unit_text), u.scale, u.offset + (u.gauge ? ambient_pressure_pa : 0.0)};
+}
+
+const std::vector<NamedQuantity>& named_quantities() {
+  static const std::vector<NamedQuantity> q{
+      {"pressure", dims::pressure},   {"length", dims::length},       {"temperature", dims::temperature},
+      {"time", dims::time},           {"velocity", dims::velocity},   {"acceleration", dims::acceleration},
+      {"force", dims::force},         {"mass", dims::mass},           {"area", dims::area},
+      {"volume", dims::volume},       {"mass_flow", dims::mass_flow}, {"volume_flow", dims::volume_flow},
+      {"energy", dims::energy},       {"power", dims::power}};
+  return q;
+}
+
+std::string difference_unit(std::string_view unit_text) {
+  if (unit_text.empty() || !parse_unit(unit_text).gauge) return std::string(unit_text);
+  for (const char* suffix : {"(g)", "_rel", "_g", "g"})  // the spellings unit_table() gives gauge units
+    if (unit_text.ends_with(suffix)) return std::string(unit_text.substr(0, unit_text.size() - std::strlen(suffix)));
+  return std::string(unit_text);
 }
 
 std::string habitual_unit_if_implausible(double v, Dimension dim) {

@@ -151,6 +151,19 @@ struct DimensionMismatch : std::invalid_argument {
 };
 DisplayUnit display_unit(std::string_view unit_text, Dimension dim, double ambient_pressure_pa = 101325.0);
 
+// The quantities a netlist's `display:` names ("pressure", "length",
+// "temperature", "time", ...) and their dimensions, in a fixed order.
+struct NamedQuantity {
+  const char* name;
+  Dimension dim;
+};
+const std::vector<NamedQuantity>& named_quantities();
+
+// The unit `unit_text` read as a difference, for values that are not an
+// absolute pressure (a pressure difference, a sum of pressures): a gauge
+// unit's plain twin ("barg" -> "bar", "psig" -> "psi"), any other unit as is.
+std::string difference_unit(std::string_view unit_text);
+
 // A number written without a unit is SI. For the dimensions people habitually
 // write in other units, a bare number far outside what its SI value
 // plausibly is - `bore: 40` (40 m), `p: 6` (6 Pa), `T: 20` (20 K),

@@ -474,8 +474,11 @@ class Router {
       }
     }
     (void)c;
+    for (std::size_t k = 0; k < d_.wires.size(); ++k)
+      if (!d_.wires[k].reference.empty()) stubs(static_cast<int>(k));
     std::sort(order.begin(), order.end());
-    for (auto [len, k] : order) route(k);
+    for (auto [len, k] : order)
+      if (d_.wires[k].reference.empty()) route(k);
   }
 
  private:
@@ -562,6 +565,23 @@ class Router {
     }
   }
 
+  // A reference: from each port a stub kStub cells outward, its text beyond;
+  // the cells are the net's, so no other line runs along them.
+  static constexpr int kStub = 2;
+  void stubs(int k) {
+    Wire& w = d_.wires[k];
+    for (const auto& e : w.ends) {
+      const Anchor a = anchor(e);
+      const int dir = dir_of(a.side), gx = gi(a.x), gy = gi(a.y);
+      for (int s = 0; s <= kStub; ++s)
+        if (inside(gx + s * kDx[dir], gy + s * kDy[dir]))
+          use_[0][at(gx + s * kDx[dir], gy + s * kDy[dir])] = use_[1][at(gx + s * kDx[dir], gy + s * kDy[dir])] = k;
+      const double x1 = a.x + kStub * kGrid * kDx[dir], y1 = a.y + kStub * kGrid * kDy[dir];
+      w.segments.push_back({a.x, a.y, x1, y1});
+      w.reference_labels.push_back({x1, y1, static_cast<double>(a.side)});
+    }
+  }
+
   void route(int k) {
     Wire& w = d_.wires[k];
     std::set<std::size_t> tree;
@@ -633,6 +653,26 @@ class Router {
   std::vector<int> use_[2];  // the net running through a point horizontally / vertically
 };
 
+// Half the perimeter of the bounding box of a wire's ports (px).
+double span(const Diagram& d, const Wire& w) {
+  double x0 = 1e18, x1 = -1e18, y0 = 1e18, y1 = -1e18;
+  for (const auto& e : w.ends) {
+    const auto& s = d.symbols[e.symbol];
+    const SymbolAnchor* a = s.symbol.anchor(e.port);
+    x0 = std::min(x0, s.x + a->x), x1 = std::max(x1, s.x + a->x);
+    y0 = std::min(y0, s.y + a->y), y1 = std::max(y1, s.y + a->y);
+  }
+  return (x1 - x0) + (y1 - y0);
+}
+
+// A signal's tag: the port that drives it (an output), else its first port.
+std::string signal_name(const Circuit& c, const Connection& k) {
+  PortId source = k.ports.front();
+  for (const auto& p : k.ports)
+    if (c.components[p.component]->info().ports[p.port].causality == Causality::output) source = p;
+  return c.components[source.component]->name() + "." + c.components[source.component]->info().ports[source.port].name;
+}
+
 }  // namespace
 
 Diagram layout(const Netlist& netlist, const Circuit& circuit) {
@@ -659,6 +699,9 @@ Diagram layout(const Netlist& netlist, const Circuit& circuit) {
   for (const auto& w : d.wires)
     for (const auto& e : w.ends) d.symbols[e.symbol].connected.insert(e.port);
   Placer(circuit, d).run();
+  for (std::size_t k = 0; k < d.wires.size(); ++k)
+    if (d.wires[k].domain == "signal" && span(d, d.wires[k]) > kReferenceLength)
+      d.wires[k].reference = signal_name(circuit, circuit.connections[k]);
   Router router(d);
   router.route_all(circuit);
   return d;
@@ -763,6 +806,7 @@ std::string to_svg(const Diagram& d) {
        ".net line{stroke:#000;stroke-width:1.6}.net circle.junction{fill:#000}"
        ".net[data-domain=signal] line{stroke:#1a5fb4;stroke-width:1;stroke-dasharray:6 3}"
        ".net[data-domain=signal] circle.junction{fill:#1a5fb4}"
+       "text.ref{font-size:9px;fill:#1a5fb4}"
        ".net[data-domain=translational] line{stroke:#666;stroke-width:1;stroke-dasharray:10 3 2 3}"
        ".net[data-domain=thermal] line{stroke:#c01c28;stroke-width:1;stroke-dasharray:2 3}"
        ".net.unrouted line{stroke:#e01b24;stroke-dasharray:3 3}</style>\n"
@@ -772,8 +816,15 @@ std::string to_svg(const Diagram& d) {
     const Wire& w = d.wires[k];
     std::string ports;
     for (const auto& e : w.ends) ports += (ports.empty() ? "" : " ") + d.symbols[e.symbol].name + "." + e.port;
-    o << "<g class=\"net" << (w.routed ? "" : " unrouted") << "\" id=\"net" << k << "\" data-net=\"" << k
-      << "\" data-domain=\"" << w.domain << "\" data-ports=\"" << esc(ports) << "\">";
+    o << "<g class=\"net" << (w.routed ? "" : " unrouted") << (w.reference.empty() ? "" : " ref") << "\" id=\"net"
+      << k << "\" data-net=\"" << k << "\" data-domain=\"" << w.domain << "\" data-ports=\"" << esc(ports) << "\""
+      << (w.reference.empty() ? "" : " data-ref=\"" + esc(w.reference) + "\"") << ">";
+    for (const auto& [x, y, side] : w.reference_labels) {
+      const char s = static_cast<char>(side);
+      const double tx = x + (s == 'r' ? 3 : s == 'l' ? -3 : 0), ty = y + (s == 'b' ? 11 : s == 't' ? -4 : 4);
+      o << "<text class=\"ref\" x=\"" << num(tx) << "\" y=\"" << num(ty) << "\" text-anchor=\""
+        << (s == 'r' ? "start" : s == 'l' ? "end" : "middle") << "\">" << esc(w.reference) << "</text>";
+    }
     for (const auto& s : w.segments)
       o << "<line class=\"wire\" x1=\"" << num(s[0]) << "\" y1=\"" << num(s[1]) << "\" x2=\"" << num(s[2])
         << "\" y2=\"" << num(s[3]) << "\"/>";

@@ -47,6 +47,12 @@ struct Wire {
   std::vector<std::array<double, 4>> segments;  // x0 y0 x1 y1, horizontal or vertical
   std::vector<std::array<double, 2>> junctions;
   bool routed = true;  // false: no free path was found; drawn straight (dashed red)
+  // A signal that would cross the sheet is drawn as a short stub at each of
+  // its ports carrying its name (`reference`, the driving port's
+  // COMPONENT.PORT), as electro-pneumatic diagrams refer to a switch's
+  // signal by its tag instead of a line across every column.
+  std::string reference;
+  std::vector<std::array<double, 3>> reference_labels;  // x, y, side of the text ('r', 'l', 't', 'b')
 };
 
 struct Diagram {
@@ -60,7 +66,10 @@ struct Diagram {
 // port (missing ones along the top edge), or a box with the ports named.
 Symbol complete_symbol(const ComponentInfo& info);
 
-// Lays out and routes the elaborated circuit of `netlist`.
+// Lays out and routes the elaborated circuit of `netlist`. A signal line
+// longer than kReferenceLength (its ports' bounding box, half perimeter, px)
+// becomes a reference (Wire::reference).
+inline constexpr double kReferenceLength = 500.0;
 Diagram layout(const Netlist& netlist, const Circuit& circuit);
 
 // Ids and attributes the results view animates: each symbol is a <g

@@ -9,6 +9,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "framework/core/units.hpp"
 #include "framework/io/files.hpp"
 #include "framework/io/results.hpp"
 #include "framework/io/spawn.hpp"
@@ -115,27 +116,87 @@ void write_rows(const std::string& path, const std::vector<std::vector<double>>&
 
 }  // namespace
 
+namespace {
+
+// Column `c` of `table` (read from `path`) in `unit`, the first file's unit
+// for it: as is when the units agree, scaled between two units of one
+// quantity, refused otherwise.
+std::vector<double> column_in(const ResultsTable& table, int c, const std::string& unit, const std::string& path) {
+  const std::string& own = table.units[c];
+  double scale = 1.0, offset = 0.0;  // shown in `unit` = scale * own + offset
+  if (own != unit) {
+    units::Unit from, to;
+    try {
+      from = units::parse_unit(own), to = units::parse_unit(unit);
+    } catch (const units::ParseError&) {
+      from.dim = units::dims::none, to.dim = units::dims::length;  // unknown: not comparable
+    }
+    if (!(from.dim == to.dim) || from.gauge != to.gauge)
+      throw std::runtime_error("plot: column '" + table.names[c] + "' of " + path + " is in '" + own +
+                               "' but the first file shows it in '" + unit + "'" +
+                               (from.gauge != to.gauge && from.dim == to.dim
+                                    ? "; a gauge and an absolute pressure need the ambient pressure, which the files "
+                                      "do not hold: write both runs with the same display unit"
+                                    : ", another quantity"));
+    scale = from.scale / to.scale, offset = (from.offset - to.offset) / to.scale;
+  }
+  std::vector<double> out;
+  for (const auto& row : table.rows) out.push_back(scale * row[c] + offset);
+  return out;
+}
+
+std::string file_label(const std::string& path) { return fs::path(path).stem().string(); }
+
+}  // namespace
+
 void plot_results(const std::string& csv_path, const std::string& prefix, const std::vector<std::string>& columns,
                   const std::string& title) {
-  const ResultsTable table = read_csv(csv_path);
-  const auto panels = panels_of(table, columns, csv_path);
+  plot_overlay({csv_path}, prefix, columns, title);
+}
+
+void plot_overlay(const std::vector<std::string>& csv_paths, const std::string& prefix,
+                  const std::vector<std::string>& columns, const std::string& title) {
+  if (csv_paths.empty()) throw std::runtime_error("plot: no results file");
+  std::vector<ResultsTable> tables;
+  for (const auto& path : csv_paths) tables.push_back(read_csv(path));
+  const ResultsTable& table = tables.front();
+  const auto panels = panels_of(table, columns, csv_paths.front());
+  const bool overlay = tables.size() > 1;
   const int n = static_cast<int>(panels.size());
   run_gnuplot(prefix, 220 * n + 60, title, [&](std::ostream& gp, const std::string& t, const PrivateFolder& folder) {
-    const std::string data = folder.path("data.csv");
-    write_rows(data, table.rows);
+    // Each file's time and panel columns, in the first file's units.
+    for (std::size_t f = 0; f < tables.size(); ++f) {
+      std::vector<std::vector<double>> rows(tables[f].rows.size());
+      for (std::size_t r = 0; r < rows.size(); ++r) rows[r].push_back(tables[f].rows[r][0]);
+      for (const auto& panel : panels)
+        for (int c : panel) {
+          const int own = column_of(tables[f], table.names[c], csv_paths[f]);
+          const auto values = column_in(tables[f], own, table.units[c], csv_paths[f]);
+          for (std::size_t r = 0; r < rows.size(); ++r) rows[r].push_back(values[r]);
+        }
+      write_rows(folder.path("data" + std::to_string(f) + ".csv"), rows);
+    }
     gp << "set multiplot layout " << n << ",1 title " << quoted(t) << "\n"
        << "set lmargin 12\n";  // the panels' time axes aligned whatever their labels
+    int field = 2;             // gnuplot's column of the panel's first curve in every data file
     for (int k = 0; k < n; ++k) {
       const auto& panel = panels[k];
       const std::string label = panel_label(table, panel);
-      gp << (panel.size() > 1 ? "set key top right\n" : "set key off\n")
+      gp << (panel.size() > 1 || overlay ? "set key top right\n" : "set key off\n")
          << "set ylabel " << quoted(label.empty() ? "" : label) << "\n"
          << (k + 1 == n ? "set xlabel 't [s]'\n" : "unset xlabel\n") << "plot ";
       for (std::size_t j = 0; j < panel.size(); ++j) {
         const int c = panel[j];
-        gp << (j ? ", " : "") << quoted(data) << " using 1:" << (c + 1) << " with lines lw 2 title "
-           << quoted(label.empty() ? with_unit(table, c) : table.names[c]);
+        const std::string curve = label.empty() ? with_unit(table, c) : table.names[c];
+        for (std::size_t f = 0; f < tables.size(); ++f) {
+          const std::string name = !overlay ? curve : panel.size() > 1 ? curve + " (" + file_label(csv_paths[f]) + ")"
+                                                                       : file_label(csv_paths[f]);
+          gp << (j || f ? ", " : "") << quoted(folder.path("data" + std::to_string(f) + ".csv")) << " using 1:"
+             << field + static_cast<int>(j) << " with lines lw 2" << (f ? " dt " + std::to_string(f + 1) : "")
+             << " title " << quoted(name);
+        }
       }
+      field += static_cast<int>(panel.size());
       gp << "\n";
     }
     gp << "unset multiplot\n";

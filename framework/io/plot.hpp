@@ -15,6 +15,15 @@ namespace pneumo {
 void plot_results(const std::string& csv_path, const std::string& prefix, const std::vector<std::string>& columns,
                   const std::string& title = "");
 
+// The same panels with the curves of several results files overlaid (runs
+// to compare), each curve's legend naming its file. The panels are those of
+// the first file; every file must have their columns. A file that shows a
+// column in another unit of the same quantity is converted to the first
+// file's unit; a gauge pressure beside an absolute one is refused, because
+// the files do not say their ambient pressure.
+void plot_overlay(const std::vector<std::string>& csv_paths, const std::string& prefix,
+                  const std::vector<std::string>& columns, const std::string& title = "");
+
 // The displacement-step diagram of a sequence (VDI 3260): one lane per
 // column of `columns` (an actuator's travel, normalised to 0 .. 1 over the
 // run), over a step axis on which each step - the time between two changes

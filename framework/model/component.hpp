@@ -442,6 +442,16 @@ class Component {
     return {};
   }
 
+  // Whether optional heat port `port`, left unconnected, is held at the
+  // ambient temperature (a wall at ambient temperature) instead of being
+  // insulated (no heat flows, the default): a cylinder given a gas-to-wall
+  // heat transfer coefficient means walls that exchange heat, and with
+  // nothing connected to them those are walls at the ambient temperature.
+  virtual bool unconnected_heat_port_at_ambient(int port) const {
+    (void)port;
+    return false;
+  }
+
   // What a run that ended here leaves unfinished and a user should hear -
   // a step chain still waiting for a switch that never closed - as one
   // sentence, or "" (the default). Asked once, after a run that succeeded.

@@ -287,7 +287,10 @@ Probe make_probe(const Netlist& nl, const Circuit& circuit, const std::map<std::
   }
   if (o.integral) {
     probe.integral = true;
-    probe.unit = probe.unit == "W" ? "J" : probe.unit == "kg/s" ? "kg" : probe.unit + "*s";
+    probe.unit = probe.unit == "W"                              ? "J"
+                 : probe.unit == "kg/s"                         ? "kg"
+                 : probe.unit.find('/') != std::string::npos ? "(" + probe.unit + ")*s"  // "m/s*s" is ambiguous
+                                                                : probe.unit + "*s";
   }
   if (!o.unit.empty()) {
     try {
@@ -296,6 +299,13 @@ Probe make_probe(const Netlist& nl, const Circuit& circuit, const std::map<std::
       throw InputError(o.unit_where, o.component, "",
                        "output '" + o.name + "': unit '" + o.unit + "' does not fit '" + o.quantity + "' in " + probe.unit +
                            ": " + e.what());
+    }
+  } else if (!nl.display.empty()) {
+    try {  // a variable's unit text (a plugin's) that is no unit expression has no default display
+      const units::Dimension dim = units::dimension_of(probe.unit);
+      if (const std::string unit = nl.display_unit_for(dim); !unit.empty())
+        probe.display = units::display_unit(unit, dim, nl.gas.p_ambient);
+    } catch (const units::ParseError&) {
     }
   }
   return probe;

@@ -130,6 +130,12 @@ const TopParameter* Netlist::parameter(const std::string& name) const {
   return nullptr;
 }
 
+std::string Netlist::display_unit_for(units::Dimension dim) const {
+  for (const auto& d : display)
+    if (d.dim == dim) return d.unit;
+  return "";
+}
+
 Netlist load_netlist(const std::string& path) {
   // There is no line to point at: the message names the file only.
   const SourceLocation where{path, 0, 0};
@@ -491,6 +497,26 @@ void read_outputs(Reader& r, const YAML::Node& node, Netlist& nl) {
   }
 }
 
+// display: {pressure: barg, length: mm, temperature: degC, ...}: each key
+// a quantity, each unit one of that quantity's.
+void read_display(Reader& r, const YAML::Node& node, Netlist& nl) {
+  std::vector<std::string> names;
+  for (const auto& q : units::named_quantities()) names.push_back(q.name);
+  for (const auto& e : r.mapping(node, "display")) {
+    const auto q = std::find_if(units::named_quantities().begin(), units::named_quantities().end(),
+                                [&](const units::NamedQuantity& n) { return e.key == n.name; });
+    if (q == units::named_quantities().end())
+      r.fail(e.key_node, "", "", "display: unknown quantity '" + e.key + "'; " + choices_hint(e.key, names));
+    const std::string unit = r.scalar_text(e.value, "", "", "a display unit");
+    try {
+      units::display_unit(unit, q->dim, nl.gas.p_ambient);
+    } catch (const std::exception& err) {  // an unknown unit, or one of another quantity
+      r.fail(e.value, "", "", "display: " + e.key + ": " + err.what());
+    }
+    nl.display.push_back({e.key, q->dim, unit, r.at(e.value)});
+  }
+}
+
 // plugins: shared libraries, relative to the netlist's folder.
 void read_plugins(Reader& r, const YAML::Node& node, Netlist& nl) {
   const auto& ps = node;
@@ -519,7 +545,8 @@ Netlist parse_netlist(const std::string& text, const std::string& file_name) {
   nl.parameters_where = SourceLocation{file_name, 1, 1};
   static const std::vector<std::string> kTopKeys{"title",      "description", "gas",     "ambient",
                                                  "parameters", "components",  "connections", "outputs",
-                                                 "simulation", "plugins",     "metrics"};
+                                                 "simulation", "plugins",     "metrics",
+                                                 "display"};
   std::map<std::string, YAML::Node> top;
   std::map<std::string, YAML::Node> top_key;
   for (const auto& e : r.mapping(root, "the netlist")) {
@@ -540,6 +567,7 @@ Netlist parse_netlist(const std::string& text, const std::string& file_name) {
   if (top.count("connections") && !top["connections"].IsNull()) read_connections(r, top["connections"], nl);
   if (top.count("outputs") && !top["outputs"].IsNull()) read_outputs(r, top["outputs"], nl);
   if (top.count("plugins") && !top["plugins"].IsNull()) read_plugins(r, top["plugins"], nl);
+  if (top.count("display") && !top["display"].IsNull()) read_display(r, top["display"], nl);
   if (top.count("simulation") && !top["simulation"].IsNull()) read_simulation(r, top["simulation"], nl);
   if (top.count("metrics")) nl.metrics = read_metrics(top["metrics"], nl);
   return nl;

@@ -136,6 +136,19 @@ struct PluginDecl {
   SourceLocation where;
 };
 
+// `display:` - the unit result files, plots and printed figures show a
+// quantity in when its output or metric names none; inside, values stay SI.
+// A pressure output is an absolute pressure, so a gauge default shows it
+// gauge; a metric computed from pressures (an expression, an integral) is
+// shown in the default's plain twin (barg -> bar), which is true of a
+// difference and of an absolute value alike.
+struct DisplayDefault {
+  std::string quantity;  // "pressure", "length", ... (units::named_quantities)
+  units::Dimension dim;
+  std::string unit;  // "barg", "mm", "degC"
+  SourceLocation where;
+};
+
 struct Netlist {
   std::string file;
   GasModel gas;
@@ -147,8 +160,11 @@ struct Netlist {
   SimulationSettings simulation;
   SourceLocation parameters_where;  // of the 'parameters:' key; file:1:1 if there is none
   std::vector<PluginDecl> plugins;
+  std::vector<DisplayDefault> display;
 
   const TopParameter* parameter(const std::string& name) const;
+  // The unit `display:` gives values of dimension `dim`, or "" (SI).
+  std::string display_unit_for(units::Dimension dim) const;
 };
 
 // Read and check the structure of a netlist file (not yet the components'

@@ -461,7 +461,14 @@ void Integration::emit_at(double t_out, N_Vector yy, N_Vector yyp) {
 SolverResult Integration::run() {
   const auto start = std::chrono::steady_clock::now();
   integrate();
-  result_.stats.seconds_total = seconds_since(start);
+  // The problem's size, also after a failed start (--stats then says what
+  // was being solved).
+  auto& s = result_.stats;
+  s.variables = n_;
+  s.netlist_variables = system_.full_size();
+  s.explicit_variables = system_.explicit_size();
+  s.nonzeros = system_.nnz();
+  s.seconds_total = seconds_since(start);
   return result_;
 }
 
@@ -697,10 +704,6 @@ void Integration::finish() {
   s.jacobian_recombinations = user_.parts.recombined;
   s.jacobian_evals -= user_.parts.recombined;
   s.pattern_misses = system_.pattern_misses();
-  s.variables = n_;
-  s.netlist_variables = system_.full_size();
-  s.explicit_variables = system_.explicit_size();
-  s.nonzeros = system_.nnz();
   s.part_steps_max = s.steps;
   s.lu = lu_;
   s.seconds_residual = user_.seconds_residual;

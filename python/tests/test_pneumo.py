@@ -32,6 +32,17 @@ def read_csv(path):
     return rows[0], rows[1:]
 
 
+# What the command line shows in a netlist's display units, back in SI (the
+# module keeps SI): scale and offset of the units the shipped netlists use.
+DISPLAY = {"": (1, 0), "1": (1, 0), "m": (1, 0), "s": (1, 0), "Pa": (1, 0), "K": (1, 0), "m/s": (1, 0), "J": (1, 0),
+           "mm": (1e-3, 0), "bar": (1e5, 0), "barg": (1e5, 101325.0), "degC": (1, 273.15)}
+
+
+def si(value, unit):
+    scale, offset = DISPLAY[unit]
+    return scale * value + offset
+
+
 def rig_with_event_metrics(tmp_path):
     """The cushion rig with two more metrics, so that the command line writes
     the final x and the cushion entry time with all 17 digits (--metrics-out)."""
@@ -77,7 +88,7 @@ def test_cushion_rig_equals_the_command_lines_results(tmp_path):
     run = cli("simulate", path, "-q", "-o", out, "--metrics-out", metrics_out)
     assert run.returncode == 0, run.stderr
     _, metric_rows = read_csv(metrics_out)
-    cli_metric = {r[0]: float(r[1]) for r in metric_rows}
+    cli_metric = {r[0]: si(float(r[1]), r[2]) for r in metric_rows}
 
     res = pneumo.load(path).simulate()
     entry = res.events_of("cylinder", "cushion_entry")
@@ -89,7 +100,7 @@ def test_cushion_rig_equals_the_command_lines_results(tmp_path):
     assert 0.01 < entry[0].t < entry[0].t + res.metrics["t_cushion"]
     # The results file holds 10 significant digits: every row of x agrees to those.
     header, rows = read_csv(out)
-    cli_x = np.array([float(r[header.index("x [m]")]) for r in rows])
+    cli_x = np.array([si(float(r[header.index("x [mm]")]), "mm") for r in rows])
     assert len(cli_x) == len(res)
     np.testing.assert_allclose(res["x"], cli_x, rtol=5e-10, atol=1e-12)
     assert res.units["p_EC"] == "Pa"
@@ -109,8 +120,10 @@ def test_sweep_equals_pneumo_sweep_on_the_same_grid(tmp_path):
     assert len(study) == len(rows) == 8
     assert all(study.ok)
     names = [h.split(" [")[0] for h in header]
+    units = [h.split(" [")[1].rstrip("]") if " [" in h else "" for h in header]
     for name in ("z_EC", "m_load", "t_cushion", "p_EC_peak", "steps"):
-        cli_values = np.array([float(r[names.index(name)]) for r in rows])
+        k = names.index(name)
+        cli_values = np.array([si(float(r[k]), units[k] if name in ("t_cushion", "p_EC_peak") else "") for r in rows])
         values = study.steps if name == "steps" else study[name]
         np.testing.assert_allclose(values, cli_values, rtol=1e-12, atol=0, err_msg=name)
     assert study.units["p_EC_peak"] == "Pa"
