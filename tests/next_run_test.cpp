@@ -127,6 +127,7 @@ TEST(NextRun, TheProposedRunDecidesAndSeparatesAsPredicted) {
   EXPECT_LE(p_supply, 7e5 + 1);
   EXPECT_LT(next.separation_measured, 2.0);
   EXPECT_GT(next.separation, 5.0);
+  EXPECT_TRUE(next.decisive);
   EXPECT_EQ(next.failed_simulations, 0);
   EXPECT_NE(diagnose::verdict_sentence(first).find("would tell"), std::string::npos) << diagnose::verdict_sentence(first);
   EXPECT_NE(diagnose::next_run_sentence(next).find("C_bleed = "), std::string::npos)
@@ -154,6 +155,40 @@ TEST(NextRun, TheProposedRunDecidesAndSeparatesAsPredicted) {
   const double realised = std::sqrt(excess / static_cast<double>(n_new));
   EXPECT_GT(realised, next.separation / 2) << "predicted " << next.separation << ", realised " << realised;
   EXPECT_LT(realised, next.separation * 2) << "predicted " << next.separation << ", realised " << realised;
+}
+
+TEST(NextRun, TwinsThatNoRunSeparatesGetNoProposal) {
+  // The same volume change as an effect and as a re-calibration: no
+  // operating point can tell them apart, and the report does not pretend one can.
+  TempDir dir;
+  const std::string model = dir.write("tank.yaml", tank_model("0.5 L"));
+  const std::string catalogue = dir.write("catalogue.yaml", std::string(R"(
+effects:
+  larger_tank:
+    parameters:
+      V: {initial: 5.0e-4, lower: 1.25e-4, upper: 2.0e-3, null: 5.0e-4, unit: m3}
+    set: {tank.V: "${V}"}
+)") + kCatalogue);
+  const fs::path runs = dir.path() / "runs";
+  fs::create_directories(runs);
+  write_run(runs, "cal5", "calibration", {{"p_supply", 5e5}}, 1);
+  write_run(runs, "val7", "validation", {{"p_supply", 7e5}}, 2);
+  auto o = options();
+  const auto r = diagnose::diagnose(model, runs.string(), catalogue, builtin_registry(), o);
+  ASSERT_FALSE(r.verdict_groups.empty());
+  const auto& group = r.verdict_groups[0];
+  ASSERT_NE(std::find(group.begin(), group.end(), "larger_tank"), group.end());
+  ASSERT_NE(std::find(group.begin(), group.end(), "tank.V"), group.end());
+  bool twins_searched = false;
+  for (const auto& n : r.next_runs)
+    if ((n.effect_a == "larger_tank" && n.effect_b == "tank.V") || (n.effect_a == "tank.V" && n.effect_b == "larger_tank")) {
+      twins_searched = true;
+      EXPECT_FALSE(n.decisive);
+      EXPECT_LT(n.separation, 0.1);
+      EXPECT_NE(diagnose::next_run_sentence(n).find("no run within the ranges searched tells"), std::string::npos);
+    }
+  EXPECT_TRUE(twins_searched);
+  EXPECT_EQ(diagnose::verdict_sentence(r).find("would tell"), std::string::npos) << diagnose::verdict_sentence(r);
 }
 
 TEST(NextRun, AnExperimentOnAParameterTheModelLacksIsRefused) {

@@ -865,7 +865,8 @@ class Diagnosis {
     n.effect_a = names[f.member_a];
     n.effect_b = names[f.member_b];
     n.signal = tmpl.signals[f.signal];
-    n.phase = phase_of(f, kTemplate);
+    n.decisive = f.separation >= 1.0 && f.separation > f.separation_measured;
+    n.phase = n.decisive ? phase_of(f, kTemplate) : "";
     for (const auto& c : rep_.sensors)
       if ((c.effect_a == n.effect_a && c.effect_b == n.effect_b) || (c.effect_a == n.effect_b && c.effect_b == n.effect_a))
         n.sensor = sensor_clause(c);

@@ -199,7 +199,12 @@ struct NextRun {
   double separation_measured = 0;    // the same measure, best of the measured runs' operating points
   std::string effect_a, effect_b;    // the pair closest there
   std::string signal, phase;         // where they differ most (phase: most of that signal's difference)
-  std::string sensor;                // the sensor that would separate the same pair (sensor_sentence), if any
+  std::string sensor;                // the sensor that would separate the same pair (sensor_clause), if any
+  // The run decides: its separation is at least one noise sd (one noise
+  // variance of mean square, as an effect must remove to be named) and
+  // more than the measured runs' points give. Else no run in the ranges
+  // searched tells them apart (twins, or effects the signals cannot see).
+  bool decisive = false;
   long simulations = 0, failed_simulations = 0, points = 0;  // the search's cost; failed ones never scored
 };
 

@@ -271,6 +271,10 @@ std::string settings_text(const NextRun& n) {
 }  // namespace
 
 std::string next_run_sentence(const NextRun& n) {
+  if (!n.decisive)
+    return "no run within the ranges searched tells " + n.effect_a + " from " + n.effect_b + " (at best " +
+           rounded(n.separation, 2) + " noise sd apart, at " + settings_text(n) + ")" +
+           (n.sensor.empty() ? "" : "; " + n.sensor);
   return "to tell " + n.effect_a + " from " + n.effect_b + ", run at " + settings_text(n) + ": " +
          rounded(n.separation, 2) + " noise sd apart in " + n.signal +
          (n.phase.empty() ? "" : ", mostly during " + n.phase) + " (" + rounded(n.separation_measured, 2) +
@@ -287,8 +291,9 @@ std::string verdict_sentence(const DiagnosisReport& r) {
                          : "none needed: the model explains the data within noise (validation gap " + left +
                                ", noise = 1)";
   std::string next;
-  if (!r.next_runs.empty()) {
-    const NextRun& n = r.next_runs.front();
+  const auto decisive = std::find_if(r.next_runs.begin(), r.next_runs.end(), [](const NextRun& n) { return n.decisive; });
+  if (decisive != r.next_runs.end()) {
+    const NextRun& n = *decisive;
     next = "; a run at " + settings_text(n) + " would tell " + n.effect_a + " from " + n.effect_b + " (" +
            rounded(n.separation, 2) + " noise sd apart in " + n.signal + ")";
   }
@@ -396,7 +401,7 @@ void write_report_json(const DiagnosisReport& r, const std::string& path) {
     o << "}, \"template_run\": " << str(n.template_run) << ", \"separation\": " << num(n.separation)
       << ", \"separation_measured\": " << num(n.separation_measured) << ", \"closest\": [" << str(n.effect_a) << ", "
       << str(n.effect_b) << "], \"signal\": " << str(n.signal) << ", \"phase\": " << str(n.phase)
-      << ", \"sentence\": " << str(next_run_sentence(n)) << ", \"points\": " << n.points
+      << ", \"decisive\": " << (n.decisive ? "true" : "false") << ", \"sentence\": " << str(next_run_sentence(n)) << ", \"points\": " << n.points
       << ", \"simulations\": " << n.simulations << ", \"failed_simulations\": " << n.failed_simulations << "}";
   }
   o << "],\n\"unexplained\": " << unexplained_json(r.unexplained, num, str);
@@ -570,7 +575,7 @@ void write_report_html(const DiagnosisReport& r, const std::string& path) {
   for (const auto& c : r.sensors)
     if (!c.best.empty()) o << "<p class=\"sensor\">To tell them apart: " << html(sensor_sentence(c)) << ".</p>\n";
   for (const auto& n : r.next_runs)
-    o << "<p class=\"next-run\">The next run: " << html(next_run_sentence(n)) << ".</p>\n";
+    o << "<p class=\"next-run\">" << (n.decisive ? "The next run: " : "") << html(next_run_sentence(n)) << ".</p>\n";
   o << unexplained_html(r.unexplained, html);
 
   gap_section(o, r);

@@ -144,7 +144,7 @@ std::string sensor_sentence(const SensorChoice& c) {
 }
 
 std::string sensor_clause(const SensorChoice& c) {
-  if (c.best.empty()) return {};
+  if (c.best.empty() || c.best.front().separation < 1) return {};  // a sensor that sees less than its noise decides nothing
   const auto& s = c.best.front();
   return "measure " + s.quantity + " (" + kind_of(s.unit)->words + ": " + rounded(s.separation, 2) +
          " noise sd over the measured runs)";
