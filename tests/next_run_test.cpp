@@ -14,9 +14,13 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
+#include <iostream>
 #include <filesystem>
 #include <fstream>
 #include <random>
+
+#include <yaml-cpp/yaml.h>
 
 #include "components/builtin.hpp"
 #include "framework/diagnose/diagnose.hpp"
@@ -133,6 +137,18 @@ TEST(NextRun, TheProposedRunDecidesAndSeparatesAsPredicted) {
   EXPECT_NE(diagnose::next_run_sentence(next).find("C_bleed = "), std::string::npos)
       << diagnose::next_run_sentence(next);
 
+  // report.json says the same (a YAML reader reads JSON), the HTML too.
+  diagnose::write_report_json(first, (dir.path() / "report.json").string());
+  diagnose::write_report_html(first, (dir.path() / "report.html").string());
+  const YAML::Node json = YAML::LoadFile((dir.path() / "report.json").string());
+  ASSERT_TRUE(json["next_run"].IsSequence());
+  ASSERT_EQ(json["next_run"].size(), 1u);
+  EXPECT_DOUBLE_EQ(json["next_run"][0]["operating_point"]["C_bleed"]["value"].as<double>(), bleed);
+  EXPECT_EQ(json["next_run"][0]["signal"].as<std::string>(), next.signal);
+  EXPECT_TRUE(json["next_run"][0]["decisive"].as<bool>());
+  EXPECT_NE(json["verdict_sentence"].as<std::string>().find("would tell"), std::string::npos);
+  EXPECT_NE(read_file(dir.path() / "report.html").find("The next run: to tell"), std::string::npos);
+
   // The proposed run, measured on the true rig, re-diagnosed.
   const std::size_t n_new =
       write_run(runs, "proposed", "validation", {{"p_supply", p_supply}, {"C_bleed", bleed}}, 4);
@@ -153,6 +169,8 @@ TEST(NextRun, TheProposedRunDecidesAndSeparatesAsPredicted) {
   const double excess = wrong.validation_after.by_signal[s].ssr - right.validation_after.by_signal[s].ssr;
   ASSERT_GT(excess, 0);
   const double realised = std::sqrt(excess / static_cast<double>(n_new));
+  if (std::getenv("NEXT_RUN_LOG"))
+    std::cerr << "next run in " << next.signal << ": predicted " << next.separation << ", realised " << realised << "\n";
   EXPECT_GT(realised, next.separation / 2) << "predicted " << next.separation << ", realised " << realised;
   EXPECT_LT(realised, next.separation * 2) << "predicted " << next.separation << ", realised " << realised;
 }
