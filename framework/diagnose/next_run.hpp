@@ -11,7 +11,8 @@
 // whose outcome the rival models predict most differently.
 //
 // Cheap by construction: a coarse grid over the parameters in scaled
-// coordinates (3-9 levels per parameter, at most kGridPoints points) and the
+// coordinates (9 levels for one parameter, fewer for more, at most kGridPoints
+// points) and the
 // measured runs' own points, then a local pattern search from the best;
 // every member simulated once per point, points in parallel. A point at
 // which a member's simulation fails is skipped and counted, never scored.
