@@ -1,4 +1,5 @@
-// pneumo diagnose MODEL.yaml --runs DIR [--effects CATALOGUE.yaml] [--faults A,B] --out REPORT_DIR
+// pneumo diagnose MODEL.yaml --runs DIR [--effects CATALOGUE.yaml] [--faults A,B] [--experiment NAME=LOW:HIGH]
+//                 --out REPORT_DIR
 // Candidates: the faults the circuit's components declare and the measured
 // signals' measurement faults, plus (or, with --effects-only, instead) the
 // catalogue's effects.
@@ -17,7 +18,7 @@ namespace {
 
 struct DiagnoseArgs {
   std::string model, runs, effects, out;
-  std::vector<std::string> faults, sets;
+  std::vector<std::string> faults, sets, experiments;
   int threads = 2, max_effects = 2;
   bool quiet = false, effects_only = false;
 };
@@ -55,6 +56,7 @@ int diagnose_command(const DiagnoseArgs& a) {
   opt.declared_faults = !a.effects_only;
   opt.faults = a.faults;
   opt.sets = a.sets;
+  opt.experiments = a.experiments;
   const auto rep = diagnose::diagnose(a.model, a.runs, a.effects, builtin_registry(), opt);
   std::filesystem::create_directories(a.out);
   diagnose::write_report_json(rep, (std::filesystem::path(a.out) / "report.json").string());
@@ -82,6 +84,9 @@ Command add_diagnose_command(CLI::App& app) {
                   "only these candidates: COMPONENT.FAULT, a component, a measured output or a fault name "
                   "(comma-separated)")
       ->delimiter(',');
+  cmd->add_option("--experiment", a->experiments,
+                  "NAME=LOW:HIGH: a top-level parameter the proposed next run may set, and its range (values as "
+                  "--set takes them; repeatable; default: what the runs vary, within their span)");
   cmd->add_option("--out", a->out, "report directory (report.json, report.html)")->required();
   cmd->add_option("--threads", a->threads, "parallel simulations (default 2)");
   cmd->add_option("--max-effects", a->max_effects, "forward selection depth (default 2)");

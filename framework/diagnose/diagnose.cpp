@@ -14,7 +14,10 @@
 
 #include "framework/analysis/run_metrics.hpp"
 #include "framework/core/parallel.hpp"
+#include "framework/core/text.hpp"
+#include "framework/core/units.hpp"
 #include "framework/diagnose/engine.hpp"
+#include "framework/diagnose/next_run.hpp"
 #include "framework/diagnose/phases.hpp"
 #include "framework/diagnose/ranking.hpp"
 #include "framework/diagnose/sensors.hpp"
@@ -152,6 +155,7 @@ class Diagnosis {
     eng_.runs = load_runs(runs_dir, eng_.base(), eng_.base_probes());
     cat_ = candidates(catalogue_file, eng_.registry());
     refuse_recalibrating_operating_points();
+    axes_ = experiment_axes();
     rep_.model_file = model_file;
     rep_.catalogue_file = catalogue_file;
     rep_.runs_dir = runs_dir;
@@ -255,6 +259,100 @@ class Diagnosis {
             throw InputError(e.where, "", op.first,
                              "recalibrate: '" + op.first + "' is set by the operating point of run '" + run.name +
                                  "', so it cannot be re-calibrated");
+  }
+
+  // The operating-point parameters the next run may set: those the runs
+  // vary, over the span they cover, and --experiment's, over its range (a
+  // run without a value has the model's).
+  std::vector<NextRunSetting> experiment_axes() const {
+    const Netlist& nl = eng_.base();
+    std::vector<NextRunSetting> axes;
+    auto value_in = [&](const MeasuredRun& run, const std::string& name) {
+      for (const auto& [n, v] : run.operating_point)
+        if (n == name) return std::stod(v);  // SI numbers (load_runs)
+      return nl.parameter(name)->si_value;
+    };
+    for (const auto& run : eng_.runs)
+      for (const auto& op : run.operating_point) {
+        if (std::any_of(axes.begin(), axes.end(), [&](const auto& a) { return a.name == op.first; })) continue;
+        NextRunSetting a;
+        a.name = op.first;
+        a.lower = INFINITY;
+        a.upper = -INFINITY;
+        a.unit = units::si_unit_name(nl.parameter(op.first)->dim);
+        for (const auto& r : eng_.runs) a.lower = std::min(a.lower, value_in(r, a.name)), a.upper = std::max(a.upper, value_in(r, a.name));
+        if (a.upper > a.lower) axes.push_back(a);
+      }
+    std::vector<std::string> given;
+    for (const auto& spec : opt_.experiments) {
+      NextRunSetting a = experiment_range(spec);
+      if (std::find(given.begin(), given.end(), a.name) != given.end())
+        throw InputError(SourceLocation{"--experiment", 0, 0}, "", a.name,
+                         "--experiment " + spec + ": '" + a.name + "' is given twice; give each parameter once");
+      given.push_back(a.name);
+      const auto same = std::find_if(axes.begin(), axes.end(), [&](const auto& x) { return x.name == a.name; });
+      if (same != axes.end()) *same = a;
+      else axes.push_back(a);
+    }
+    return axes;
+  }
+
+  // --experiment NAME=LOW:HIGH: a top-level parameter of the model that no
+  // candidate re-calibrates, its bounds SI numbers or quantities of its
+  // dimension, LOW < HIGH.
+  NextRunSetting experiment_range(const std::string& spec) const {
+    const Netlist& nl = eng_.base();
+    const SourceLocation where{"--experiment", 0, 0};
+    const auto eq = spec.find('='), colon = spec.find(':', eq == std::string::npos ? 0 : eq);
+    if (eq == std::string::npos || eq == 0 || colon == std::string::npos || spec.find(':', colon + 1) != std::string::npos)
+      throw InputError(where, "", "", "--experiment " + spec + ": expected NAME=LOW:HIGH, e.g. p_supply=4bar:7bar");
+    NextRunSetting a;
+    a.name = trim(spec.substr(0, eq));
+    const TopParameter* tp = nl.parameter(a.name);
+    if (!tp) {
+      std::string names;
+      for (const auto& t : nl.parameters) names += (names.empty() ? "" : ", ") + t.name;
+      throw InputError(where, "", a.name,
+                       "--experiment " + spec + ": the model has no top-level parameter '" + a.name +
+                           "' (top-level parameters: " + (names.empty() ? "none" : names) + ")");
+    }
+    for (const auto& e : cat_.effects)
+      if (e.recalibrates == a.name)
+        throw InputError(where, "", a.name,
+                         "--experiment " + spec + ": '" + a.name + "' is re-calibrated by the catalogue, so a run cannot set it");
+    a.unit = units::si_unit_name(tp->dim);
+    auto bound = [&](const std::string& text) {
+      units::Quantity q{};
+      try {
+        q = units::parse_quantity(trim(text), nl.gas.p_ambient);
+      } catch (const units::ParseError& e) {
+        throw InputError(where, "", a.name, "--experiment " + spec + ": cannot read '" + text + "': " + e.what());
+      }
+      if (q.had_unit && !(q.dim == tp->dim))
+        throw InputError(where, "", a.name,
+                         "--experiment " + spec + ": '" + text + "' is not in " + a.unit + " (" + tp->dim.to_string() + ")");
+      return q;
+    };
+    const std::string low = spec.substr(eq + 1, colon - eq - 1), high = spec.substr(colon + 1);
+    a.lower = bound(low).si_value;
+    a.upper = bound(high).si_value;
+    if (!(a.upper > a.lower))
+      throw InputError(where, "", a.name, "--experiment " + spec + ": HIGH must be greater than LOW");
+    // Shown in the unit the range was given in.
+    const std::string t = trim(low);
+    std::size_t used = 0;
+    try {
+      (void)std::stod(t, &used);
+    } catch (const std::exception&) {
+      used = t.size();
+    }
+    if (const std::string unit = trim(t.substr(used)); !unit.empty()) {
+      const units::DisplayUnit d = units::display_unit(unit, tp->dim, nl.gas.p_ambient);
+      a.shown_unit = d.unit;
+      a.shown_scale = d.scale;
+      a.shown_offset = d.offset;
+    }
+    return a;
   }
 
   // The runs, the noise each signal shows (median over runs), the signals'
@@ -682,6 +780,7 @@ class Diagnosis {
       return a.rank < b.rank;
     });
     rep_.sensors = decisive_sensors(eng_, rep_, slot_fits_);
+    for (const auto& [names, fits] : rivals()) propose_next_run(names, fits);
     auto logger = [this](const std::string& s) { log(s); };
     if (!explains_the_data(rep_.validation_after, opt_))
       rep_.unexplained = leftover(eng_, eng_.model(chosen_), rep_, cal_, val_, r_cal_cur_, r_val_cur_, logger);
@@ -691,6 +790,116 @@ class Diagnosis {
     for (const auto& n : rep_.verdict) v += (v.empty() ? "" : ", ") + n;
     log(fmt("verdict: [", 0) + v + fmt("]; validation gap %.3g -> %.3g; %.1f s", rep_.validation_before.total.rms,
                                        rep_.validation_after.total.rms, rep_.seconds));
+  }
+
+  // Candidates the data cannot tell apart, each with the effects it was
+  // fitted with: every verdict slot's group, and the verdict's first effect
+  // with its runner-up (the best-ranked other fitted candidate) when
+  // neither fit is practically better than the other on the validation runs.
+  std::vector<std::pair<std::vector<std::string>, std::vector<std::vector<EffectInstance>>>> rivals() const {
+    std::vector<std::pair<std::vector<std::string>, std::vector<std::vector<EffectInstance>>>> out;
+    for (std::size_t i = 0; i < rep_.verdict_groups.size() && i < slot_fits_.size(); ++i) {
+      std::pair<std::vector<std::string>, std::vector<std::vector<EffectInstance>>> r;
+      for (const auto& n : rep_.verdict_groups[i])
+        if (slot_fits_[i].count(n)) r.first.push_back(n), r.second.push_back(slot_fits_[i].at(n));
+      if (r.first.size() >= 2) out.push_back(std::move(r));
+    }
+    if (rep_.verdict_groups.empty() || rep_.verdict_groups[0].size() > 1) return out;
+    const Cand* first = cand_of(rep_.verdict[0]);
+    if (!first) return out;
+    const GapTable first_gap = eng_.gaps(first->r_val, val_);
+    for (int k : order_) {
+      const Cand* c = cand_of(results_[k].name);
+      if (!c || c == first || results_[k].failed_validation_runs > 0) continue;
+      const GapTable gap = eng_.gaps(c->r_val, val_);
+      if (!practically_significant(gap, first_gap, opt_) && !practically_significant(first_gap, gap, opt_))
+        out.push_back({{first->e->name, c->e->name}, {first->fit.effects, c->fit.effects}});
+      break;
+    }
+    return out;
+  }
+
+  // The run that would tell `names` apart (framework/diagnose/next_run.hpp):
+  // searched on the first run's span, sampling and signals.
+  void propose_next_run(const std::vector<std::string>& names, const std::vector<std::vector<EffectInstance>>& fits) {
+    if (axes_.empty() || eng_.runs.empty()) return;
+    constexpr int kTemplate = 0;
+    const MeasuredRun& tmpl = eng_.runs[kTemplate];
+    std::vector<Model> models;
+    for (const auto& f : fits) models.push_back(eng_.model(f));
+    NextRunSearch s;
+    for (const auto& a : axes_) s.axes.push_back({a.name, a.lower, a.upper});
+    s.members = names;
+    for (const auto& signal : tmpl.signals)
+      for (const auto& [n, sigma] : rep_.noise)
+        if (n == signal) s.sigma.push_back(sigma);
+    for (const auto& run : eng_.runs) {
+      std::vector<double> x;
+      for (const auto& a : axes_) {
+        double v = eng_.base().parameter(a.name)->si_value;
+        for (const auto& [n, text] : run.operating_point)
+          if (n == a.name) v = std::stod(text);
+        x.push_back(v);
+      }
+      s.measured_points.push_back(std::move(x));
+    }
+    s.simulate = [&](int member, const std::vector<double>& point) {
+      return eng_.simulate(models[member], kTemplate, {}, setting(point));
+    };
+    s.threads = opt_.threads;
+    log("  next run: searching where " + join(names) + " differ" + fmt("  [%.1f s]", elapsed()));
+    const NextRunFound f = search_next_run(s);
+    if (!f.found) {
+      log(fmt("  next run: no point ran for every candidate (%.0f simulations failed)", f.failed));
+      return;
+    }
+    NextRun n;
+    n.effects = names;
+    n.template_run = tmpl.name;
+    for (std::size_t k = 0; k < axes_.size(); ++k) {
+      n.operating_point.push_back(axes_[k]);
+      n.operating_point.back().value = f.point[k];
+    }
+    n.separation = f.separation;
+    n.separation_measured = f.separation_measured;
+    n.effect_a = names[f.member_a];
+    n.effect_b = names[f.member_b];
+    n.signal = tmpl.signals[f.signal];
+    n.decisive = f.separation >= 1.0 && f.separation > f.separation_measured;
+    n.phase = n.decisive ? phase_of(f, kTemplate) : "";
+    for (const auto& c : rep_.sensors)
+      if ((c.effect_a == n.effect_a && c.effect_b == n.effect_b) || (c.effect_a == n.effect_b && c.effect_b == n.effect_a))
+        n.sensor = sensor_clause(c);
+    n.simulations = f.simulations;
+    n.failed_simulations = f.failed;
+    n.points = f.points;
+    log("  next run: " + next_run_sentence(n) + fmt(" (%.0f points, %.0f simulations", n.points, n.simulations) +
+        fmt(", %.0f failed)  [%.1f s]", n.failed_simulations, elapsed()));
+    rep_.next_runs.push_back(std::move(n));
+  }
+
+  Setting setting(const std::vector<double>& point) const {
+    Setting at;
+    for (std::size_t k = 0; k < axes_.size(); ++k) at.emplace_back(axes_[k].name, point[k]);
+    return at;
+  }
+
+  // The phase holding most of the separating signal's difference (one run
+  // of the unpatched model there); empty with a single phase.
+  std::string phase_of(const NextRunFound& f, int tmpl) {
+    if (eng_.phase_names.size() < 2) return "";
+    const std::vector<int> ph = eng_.phases_at(tmpl, setting(f.point));
+    std::vector<double> by_phase(eng_.phase_names.size(), 0.0);
+    for (std::size_t i = 0; i < ph.size() && i < f.d2.size(); ++i)
+      if (ph[i] >= 0) by_phase[ph[i]] += f.d2[i];
+    const auto most = std::max_element(by_phase.begin(), by_phase.end());
+    return *most > 0 ? eng_.phase_names[most - by_phase.begin()] : "";
+  }
+
+  static std::string join(const std::vector<std::string>& names) {
+    std::string out;
+    for (std::size_t i = 0; i < names.size(); ++i) out += (i ? (i + 1 == names.size() ? " and " : ", ") : "") + names[i];
+    return out;
   }
 
   const std::chrono::steady_clock::time_point t_start_ = std::chrono::steady_clock::now();
@@ -707,6 +916,7 @@ class Diagnosis {
   std::vector<int> order_;
   std::vector<EffectInstance> chosen_;
   std::set<std::string> dropped_;  // named, then dropped on re-test: not offered again
+  std::vector<NextRunSetting> axes_;  // what the next run may set (experiment_axes())
 };
 
 }  // namespace

@@ -88,6 +88,10 @@ struct DiagnoseOptions {
   bool declared_faults = false;
   std::vector<std::string> faults;  // non-empty: only these candidates (narrow_catalogue())
   std::vector<std::string> sets;    // --set on the model, before any run's operating point
+  // --experiment NAME=LOW:HIGH: a top-level parameter the next run may set
+  // and its range (values as --set takes them: SI numbers or quantities).
+  // Without any, the next run varies what the runs vary, within their span.
+  std::vector<std::string> experiments;
   bool progress = true;
   std::function<void(const std::string&)> log;  // progress lines (default: stderr)
 };
@@ -174,6 +178,36 @@ struct Unexplained {
   double seconds = 0;
 };
 
+// The next run that would decide (docs/how-to/diagnose.md,
+// framework/diagnose/next_run.hpp): for candidates the data cannot tell
+// apart, the operating point where their fitted models lie furthest apart
+// in the measured signals.
+struct NextRunSetting {
+  std::string name;             // a top-level parameter of the model
+  double value = 0;             // SI
+  double lower = 0, upper = 0;  // the range searched, SI
+  std::string unit;             // SI unit
+  std::string shown_unit;       // the unit --experiment gave it in (empty: the report's engineering unit)
+  double shown_scale = 1, shown_offset = 0;  // si = scale * shown + offset
+};
+
+struct NextRun {
+  std::vector<std::string> effects;  // the candidates it would tell apart (a verdict slot's group, or the verdict and its runner-up)
+  std::vector<NextRunSetting> operating_point;  // the parameters searched; the rest as in `template_run`
+  std::string template_run;          // the run whose span, sampling, signals and other settings it keeps
+  double separation = 0;             // the smallest pairwise separation there, noise sd (RMS over the run, best signal)
+  double separation_measured = 0;    // the same measure, best of the measured runs' operating points
+  std::string effect_a, effect_b;    // the pair closest there
+  std::string signal, phase;         // where they differ most (phase: most of that signal's difference)
+  std::string sensor;                // the sensor that would separate the same pair (sensor_clause), if any
+  // The run decides: its separation is at least one noise sd (one noise
+  // variance of mean square, as an effect must remove to be named) and
+  // more than the measured runs' points give. Else no run in the ranges
+  // searched tells them apart (twins, or effects the signals cannot see).
+  bool decisive = false;
+  long simulations = 0, failed_simulations = 0, points = 0;  // the search's cost; failed ones never scored
+};
+
 struct DiagnosisReport {
   std::string model_file, catalogue_file, runs_dir;
   std::vector<std::string> phase_names;  // the catalogue's phases, or the model's tagged events
@@ -189,6 +223,7 @@ struct DiagnosisReport {
   std::vector<std::pair<std::string, std::vector<double>>> final_values;  // effect -> fitted values in the verdict model
   std::vector<SensorChoice> sensors;  // per verdict effect and one the data cannot tell from it: what would
   std::optional<Unexplained> unexplained;  // empty: the verdict brings the gap down to noise
+  std::vector<NextRun> next_runs;          // per group the data cannot tell apart
   long base_failed_runs = 0;                 // runs of the unpatched model that failed
   std::vector<std::string> base_run_failures;  // why (the first few)
   double seconds = 0;
@@ -206,6 +241,11 @@ DiagnosisReport diagnose(const std::string& model_file, const std::string& runs_
 // within noise or no candidate explains the gap left (its size in noise
 // units) - an empty verdict is not "within noise" when a gap remains.
 std::string verdict_sentence(const DiagnosisReport& report);
+
+// The next run in one sentence, with the sensor advice for the same pair:
+// "to tell a from b, run at z = 0.1 rev: 14 noise sd apart in p_ch, mostly
+// during cushioning (0.8 at the measured runs); or a pressure sensor at ...".
+std::string next_run_sentence(const NextRun& n);
 
 void write_report_json(const DiagnosisReport& report, const std::string& path);
 void write_report_html(const DiagnosisReport& report, const std::string& path);

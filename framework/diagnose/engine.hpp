@@ -40,6 +40,9 @@ struct Layout {
   std::size_t size = 0;
 };
 
+// Top-level parameters set on top of a run's operating point (SI values).
+using Setting = std::vector<std::pair<std::string, double>>;
+
 struct Model {  // a patched model ready to run
   Netlist netlist;
   MeasurementModel measurement;
@@ -120,11 +123,13 @@ class Engine {
     return m;
   }
 
-  // The model at run `k`'s operating point over its measured span.
-  Netlist netlist_of(const Model& m, int k) const {
+  // The model at run `k`'s operating point over its measured span; `at`
+  // (top-level parameter, SI value) set on top: an operating point no run has.
+  Netlist netlist_of(const Model& m, int k, const Setting& at = {}) const {
     const MeasuredRun& run = runs[k];
     Netlist nl = m.netlist;
     for (const auto& [name, value] : run.operating_point) apply_override(nl, name + "=" + value);
+    for (const auto& [name, value] : at) apply_override(nl, name + "=" + si_text(value));
     nl.simulation.t_end = run.t.back() + 1e-9;
     const double dt = (run.t.back() - run.t.front()) / std::max<std::size_t>(1, run.t.size() - 1);
     nl.simulation.output_interval = std::min(nl.simulation.output_interval, dt);
@@ -132,12 +137,13 @@ class Engine {
   }
 
   // Simulated signals of run `k` at its measurement times; empty if the run failed.
-  std::vector<std::vector<double>> simulate(const Model& m, int k, const std::vector<Disturbance>& disturbances = {}) {
+  std::vector<std::vector<double>> simulate(const Model& m, int k, const std::vector<Disturbance>& disturbances = {},
+                                           const Setting& at = {}) {
     ++simulations;
     const MeasuredRun& run = runs[k];
     RunResult res;
     try {
-      const Netlist nl = netlist_of(m, k);
+      const Netlist nl = netlist_of(m, k, at);
       SolverOptions so = solver_options(nl.simulation);
       so.disturbances = disturbances;
       // A disturbance that drives a state out of its domain (a chamber's
@@ -312,33 +318,31 @@ class Engine {
   // phases (framework/diagnose/phases.hpp): its events' first times and
   // its metrics' values.
   void compute_phases(const std::vector<PhaseDecl>& declared) {
-    const Model base = model({});
-    std::vector<PhaseStarts> starts(runs.size());
+    declared_phases_ = declared;
+    phase_starts_.clear();
     std::vector<std::vector<double>> times;
     for (std::size_t k = 0; k < runs.size(); ++k) {
       times.push_back(runs[k].t);
-      Netlist nl = netlist_of(base, static_cast<int>(k));
-      const std::vector<bool> all(nl.metrics.size(), true);
-      add_metric_outputs(nl, all);
-      RunResult res;
-      try {
-        res = run_simulation(nl, loaded_.registry);
-      } catch (const std::exception& ex) {
-        note_failure(runs[k].name, ex.what());  // input errors surfaced when the model was loaded
-        continue;                               // a failed run gets one phase
-      }
-      ++simulations;
-      for (const auto& e : res.solver.events)
-        if (!e.tag.empty()) starts[k].emplace(e.component + "." + e.tag, e.t);
-      if (!declared.empty() && res.solver.ok) {
-        const auto values = evaluate_metrics(nl, all, res, {});
-        for (std::size_t i = 0; i < nl.metrics.size(); ++i) starts[k][nl.metrics[i].name] = values[i];
-      }
+      phase_starts_.push_back(phase_starts(static_cast<int>(k), {}));
     }
-    Phases ph = assign_phases(declared, times, starts);
+    Phases ph = assign_phases(declared, times, phase_starts_);
     phase_names = std::move(ph.names);
     phases = std::move(ph.of_sample);
     phase_times = std::move(ph.times);
+  }
+
+  // The phase of each sample of run `k`'s span at the operating point `at`
+  // (one more run of the unpatched model), the measured runs' phases named
+  // as they are: the phases assigned over the measured runs and this one.
+  std::vector<int> phases_at(int k, const Setting& at) {
+    std::vector<std::vector<double>> times;
+    for (const auto& r : runs) times.push_back(r.t);
+    times.push_back(runs[k].t);
+    auto starts = phase_starts_;
+    starts.push_back(phase_starts(k, at));
+    Phases ph = assign_phases(declared_phases_, times, starts);
+    if (ph.names != phase_names) return std::vector<int>(runs[k].t.size(), -1);  // renamed: no phase to show
+    return ph.of_sample.back();
   }
 
   // Why runs failed, in the order noted (a failed run's residuals are
@@ -450,6 +454,38 @@ class Engine {
     return false;
   }
 
+  // What the unpatched model's run at run `k`'s span and operating point
+  // (with `at` on top) tells the phases: its events' first times and its
+  // metrics' values; empty when it fails (a failed run gets one phase).
+  PhaseStarts phase_starts(int k, const Setting& at) {
+    Netlist nl = netlist_of(model({}), k, at);
+    const std::vector<bool> all(nl.metrics.size(), true);
+    add_metric_outputs(nl, all);
+    PhaseStarts starts;
+    RunResult res;
+    try {
+      res = run_simulation(nl, loaded_.registry);
+    } catch (const std::exception& ex) {
+      note_failure(runs[k].name, ex.what());  // input errors surfaced when the model was loaded
+      return starts;
+    }
+    ++simulations;
+    for (const auto& e : res.solver.events)
+      if (!e.tag.empty()) starts.emplace(e.component + "." + e.tag, e.t);
+    if (!declared_phases_.empty() && res.solver.ok) {
+      const auto values = evaluate_metrics(nl, all, res, {});
+      for (std::size_t i = 0; i < nl.metrics.size(); ++i) starts[nl.metrics[i].name] = values[i];
+    }
+    return starts;
+  }
+
+  static std::string si_text(double v) {
+    std::ostringstream o;
+    o.precision(17);
+    o << v;
+    return o.str();
+  }
+
   void note_failure(const std::string& run, const std::string& why) {
     const std::lock_guard<std::mutex> lock(failures_mutex_);
     failures_.push_back("run " + run + ": " + why);
@@ -460,6 +496,8 @@ class Engine {
   mutable std::mutex failures_mutex_;
   std::vector<std::string> failures_;
   std::vector<Probe> base_probes_;
+  std::vector<PhaseDecl> declared_phases_;
+  std::vector<PhaseStarts> phase_starts_;  // per measured run
 };
 
 }  // namespace pneumo::diagnose::engine

@@ -253,7 +253,33 @@ std::string svg_phase_bars(const DiagnosisReport& r) {
   return o.str();
 }
 
+// A next run's setting in the unit --experiment gave, else the report's
+// engineering unit, three digits: "z_EC = 0.1 rev", "p_supply = 6.5 bar abs".
+std::string setting_text(const NextRunSetting& s) {
+  if (!s.shown_unit.empty())
+    return s.name + " = " + rounded((s.value - s.shown_offset) / s.shown_scale, 3) + " " + s.shown_unit;
+  const Shown u = shown(s.unit);
+  return s.name + " = " + rounded(u(s.value), 3) + (u.label.empty() || u.label == "1" ? "" : " " + u.label);
+}
+
+std::string settings_text(const NextRun& n) {
+  std::string out;
+  for (const auto& s : n.operating_point) out += (out.empty() ? "" : ", ") + setting_text(s);
+  return out;
+}
+
 }  // namespace
+
+std::string next_run_sentence(const NextRun& n) {
+  if (!n.decisive)
+    return "no run within the ranges searched tells " + n.effect_a + " from " + n.effect_b + " (at best " +
+           rounded(n.separation, 2) + " noise sd apart, at " + settings_text(n) + ")" +
+           (n.sensor.empty() ? "" : "; " + n.sensor);
+  return "to tell " + n.effect_a + " from " + n.effect_b + ", run at " + settings_text(n) + ": " +
+         rounded(n.separation, 2) + " noise sd apart in " + n.signal +
+         (n.phase.empty() ? "" : ", mostly during " + n.phase) + " (" + rounded(n.separation_measured, 2) +
+         " at the measured runs' points)" + (n.sensor.empty() ? "" : "; or " + n.sensor);
+}
 
 std::string verdict_sentence(const DiagnosisReport& r) {
   std::string named;
@@ -264,8 +290,15 @@ std::string verdict_sentence(const DiagnosisReport& r) {
                                " times the noise (validation gap " + left + ", noise = 1)"
                          : "none needed: the model explains the data within noise (validation gap " + left +
                                ", noise = 1)";
+  std::string next;
+  const auto decisive = std::find_if(r.next_runs.begin(), r.next_runs.end(), [](const NextRun& n) { return n.decisive; });
+  if (decisive != r.next_runs.end()) {
+    const NextRun& n = *decisive;
+    next = "; a run at " + settings_text(n) + " would tell " + n.effect_a + " from " + n.effect_b + " (" +
+           rounded(n.separation, 2) + " noise sd apart in " + n.signal + ")";
+  }
   return named + (r.unexplained ? "; a gap of " + left + " times the noise remains unexplained"
-                                : "; the validation gap is then " + left + " (noise = 1)");
+                                : "; the validation gap is then " + left + " (noise = 1)") + next;
 }
 
 void write_report_json(const DiagnosisReport& r, const std::string& path) {
@@ -353,6 +386,23 @@ void write_report_json(const DiagnosisReport& r, const std::string& path) {
       o << (j ? ", " : "") << "{\"quantity\": " << str(c.best[j].quantity) << ", \"unit\": " << str(c.best[j].unit)
         << ", \"sigma\": " << num(c.best[j].sigma) << ", \"separation\": " << num(c.best[j].separation) << "}";
     o << "]}";
+  }
+  o << "],\n\"next_run\": [";
+  for (std::size_t i = 0; i < r.next_runs.size(); ++i) {
+    const auto& n = r.next_runs[i];
+    o << (i ? ",\n  " : "\n  ") << "{\"effects\": [";
+    for (std::size_t j = 0; j < n.effects.size(); ++j) o << (j ? ", " : "") << str(n.effects[j]);
+    o << "], \"operating_point\": {";
+    for (std::size_t j = 0; j < n.operating_point.size(); ++j) {
+      const auto& p = n.operating_point[j];
+      o << (j ? ", " : "") << str(p.name) << ": {\"value\": " << num(p.value) << ", \"unit\": " << str(p.unit)
+        << ", \"searched\": [" << num(p.lower) << ", " << num(p.upper) << "], \"shown\": " << str(setting_text(p)) << "}";
+    }
+    o << "}, \"template_run\": " << str(n.template_run) << ", \"separation\": " << num(n.separation)
+      << ", \"separation_measured\": " << num(n.separation_measured) << ", \"closest\": [" << str(n.effect_a) << ", "
+      << str(n.effect_b) << "], \"signal\": " << str(n.signal) << ", \"phase\": " << str(n.phase)
+      << ", \"decisive\": " << (n.decisive ? "true" : "false") << ", \"sentence\": " << str(next_run_sentence(n)) << ", \"points\": " << n.points
+      << ", \"simulations\": " << n.simulations << ", \"failed_simulations\": " << n.failed_simulations << "}";
   }
   o << "],\n\"unexplained\": " << unexplained_json(r.unexplained, num, str);
   o << ",\n\"seconds\": " << num(r.seconds) << ",\n\"simulations\": " << r.simulations << "\n}\n";
@@ -524,6 +574,8 @@ void write_report_html(const DiagnosisReport& r, const std::string& path) {
     << gap(r.validation_before.total.rms) << "</b>, after <b>" << gap(r.validation_after.total.rms) << "</b>.</p>\n";
   for (const auto& c : r.sensors)
     if (!c.best.empty()) o << "<p class=\"sensor\">To tell them apart: " << html(sensor_sentence(c)) << ".</p>\n";
+  for (const auto& n : r.next_runs)
+    o << "<p class=\"next-run\">" << (n.decisive ? "The next run: " : "") << html(next_run_sentence(n)) << ".</p>\n";
   o << unexplained_html(r.unexplained, html);
 
   gap_section(o, r);

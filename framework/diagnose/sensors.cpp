@@ -143,4 +143,11 @@ std::string sensor_sentence(const SensorChoice& c) {
          rounded(c.measured_separation, 2) + " at best)";
 }
 
+std::string sensor_clause(const SensorChoice& c) {
+  if (c.best.empty() || c.best.front().separation < 1) return {};  // a sensor that sees less than its noise decides nothing
+  const auto& s = c.best.front();
+  return "measure " + s.quantity + " (" + kind_of(s.unit)->words + ": " + rounded(s.separation, 2) +
+         " noise sd over the measured runs)";
+}
+
 }  // namespace pneumo::diagnose

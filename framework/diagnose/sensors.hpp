@@ -64,4 +64,9 @@ SensorChoice choose_sensor(const std::string& effect_a, const std::string& effec
 // signals: 0.8 at best)".
 std::string sensor_sentence(const SensorChoice& c);
 
+// The same advice as a clause to follow another ("measure cyl.A.p (a
+// pressure sensor: 12 noise sd over the measured runs)"); empty without one
+// that separates them by at least its noise.
+std::string sensor_clause(const SensorChoice& c);
+
 }  // namespace pneumo::diagnose
