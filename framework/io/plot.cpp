@@ -119,29 +119,31 @@ void write_rows(const std::string& path, const std::vector<std::vector<double>>&
 namespace {
 
 // Column `c` of `table` (read from `path`) in `unit`, the first file's unit
-// for it: as is when the units agree, scaled between two units of one
-// quantity, refused otherwise.
+// for it: as is when the units agree, through SI (units::to_si) between two
+// units of one quantity, refused otherwise. Both gauge or both absolute, the
+// ambient pressure cancels, so the standard one serves.
 std::vector<double> column_in(const ResultsTable& table, int c, const std::string& unit, const std::string& path) {
   const std::string& own = table.units[c];
-  double scale = 1.0, offset = 0.0;  // shown in `unit` = scale * own + offset
-  if (own != unit) {
-    units::Unit from, to;
-    try {
-      from = units::parse_unit(own), to = units::parse_unit(unit);
-    } catch (const units::ParseError&) {
-      from.dim = units::dims::none, to.dim = units::dims::length;  // unknown: not comparable
-    }
-    if (!(from.dim == to.dim) || from.gauge != to.gauge)
-      throw std::runtime_error("plot: column '" + table.names[c] + "' of " + path + " is in '" + own +
-                               "' but the first file shows it in '" + unit + "'" +
-                               (from.gauge != to.gauge && from.dim == to.dim
-                                    ? "; a gauge and an absolute pressure need the ambient pressure, which the files "
-                                      "do not hold: write both runs with the same display unit"
-                                    : ", another quantity"));
-    scale = from.scale / to.scale, offset = (from.offset - to.offset) / to.scale;
-  }
   std::vector<double> out;
-  for (const auto& row : table.rows) out.push_back(scale * row[c] + offset);
+  if (own == unit) {
+    for (const auto& row : table.rows) out.push_back(row[c]);
+    return out;
+  }
+  units::Unit from, to;
+  try {
+    from = units::parse_unit(own), to = units::parse_unit(unit);
+  } catch (const units::ParseError&) {
+    from.dim = units::dims::none, to.dim = units::dims::length;  // unknown: not comparable
+  }
+  if (!(from.dim == to.dim) || from.gauge != to.gauge)
+    throw std::runtime_error("plot: column '" + table.names[c] + "' of " + path + " is in '" + own +
+                             "' but the first file shows it in '" + unit + "'" +
+                             (from.gauge != to.gauge && from.dim == to.dim
+                                  ? "; a gauge and an absolute pressure need the ambient pressure, which the files "
+                                    "do not hold: write both runs with the same display unit"
+                                  : ", another quantity"));
+  const double zero = units::to_si(to, 0.0);  // SI value of 0 in `unit`
+  for (const auto& row : table.rows) out.push_back((units::to_si(from, row[c]) - zero) / to.scale);
   return out;
 }
 
