@@ -50,3 +50,26 @@ grid assembly_line "$here/../netlists/assembly_line.yaml" \
 grid meter_out_direct "$here/meter_out_direct_grid.yaml" \
   --grid p_s=501325:801325:7 --grid m_load=1:10:6 \
   --grid C_cap=0.5e-9:3e-9:6 --grid C_rod=0.5e-9:3e-9:6
+
+# the cushion rig as shipped: p_supply 3-9 bar, load 1-20 kg, cushion
+# throttle 0.2-3 rev, valve opening 5-50 ms: 5 x 5 x 5 x 4 = 500 points.
+grid cushion_rig "$here/../netlists/cushion_rig.yaml" \
+  --grid "p_supply=3 bar:9 bar:5" --grid "m_load=1 kg:20 kg:5" --grid "z_EC=0.2 rev:3 rev:5" \
+  --grid "t_switch=5 ms:50 ms:4"
+
+# tank filling: source 1.5-10 bar at -20-80 degC into 0.1-20 L:
+# 10 x 5 x 10 = 500 points.
+grid tank_filling "$here/../netlists/tank_filling.yaml" \
+  --grid "p_source=1.5 bar:10 bar:10" --grid "T_source=253.15 K:353.15 K:5" --grid "V_tank=0.1 L:20 L:10"
+
+# the energy-balance cylinder of paper [3]: inlet area, supply 2-8 bar g,
+# load 0.2-5 kg, wall heat 5-100 W/(m2 K): 5 x 5 x 5 x 4 = 500 points.
+grid bracha_cylinder "$here/../netlists/bracha_cylinder.yaml" \
+  --grid "A_in=0.001 mm2:0.01 mm2:5" --grid "p_supply=2 barg:8 barg:5" --grid "m_load=0.2 kg:5 kg:5" \
+  --grid "wall_alpha=5 W/(m2*K):100 W/(m2*K):4"
+
+# the movement-time rig of paper [2]: supply 0.3-0.7 MPa g, load 0.5-10 kg,
+# throttle 0.3-3 mm2 (impacts up to 3 m/s on the rubber bumper):
+# 5 x 10 x 10 = 500 points.
+grid movement_time_rig "$here/../netlists/movement_time_rig.yaml" \
+  --grid "p_supply=0.3 MPag:0.7 MPag:5" --grid "m_load=0.5 kg:10 kg:10" --grid "A_throttle=0.3 mm2:3 mm2:10"

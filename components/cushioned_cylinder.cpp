@@ -174,6 +174,7 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
       throw ParameterError("cushion_length", "cushion length must be shorter than the stroke");
     cap_.cushion({p["cushion_length"], circle_area(p["plug_diameter"]), p["dead_volume_cushion"], read_cushion(p, "")});
     if (p.has("rod_plug_diameter")) add_rod_cushioning(p);
+    stops_.hold_before_empty(rod_side_.travel_to_empty(), cap_.travel_to_empty());  // x = 0 is the rod end
     if (taps_) {
       cap_.tap(kTapEC);
       rod_side_.tap(kTapECr);  // none without rod cushioning
@@ -443,7 +444,7 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
       // At rest against the rod-end stop: the stop carries the net pressure
       // force (friction is zero at v = 0).
       const double F = p0_A_ * (A_B_ - A_R_) + gas.p_ambient * A_R_ - p0_cap_ * A_B_;
-      x = F < 0 ? F / stops_.k : 0.0;
+      x = F < 0 ? -stops_.rest_penetration_low(-F) : 0.0;
     }
     sv.fix_position(kFlange, x);
     rod_side_.start(sv, gas, kA, kHeatA, p0_A_, T0_, x);

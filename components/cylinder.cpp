@@ -298,7 +298,7 @@ class Cylinder final : public ComponentT<Cylinder> {
       // At rest against the stop at x = 0: the stop carries the net pressure
       // force (friction is zero at rest).
       const double F = p_.p0_cap * p_.A - p_.p0_rod * (p_.A - p_.A_rod) - gas.p_ambient * p_.A_rod;
-      x = F < 0 ? F / p_.stops.k : 0.0;
+      x = F < 0 ? -p_.stops.rest_penetration_low(-F) : 0.0;
     }
     sv.fix_position(kFlange, x);
     p_.cap.start(sv, gas, kCap, kHeatCap, p_.p0_cap, p_.T0, x);

@@ -105,6 +105,7 @@ class SingleActingCylinder final : public ComponentT<SingleActingCylinder> {
     p_.cap.set_first_variable(0);
     p_.rod.set_first_variable(2);
     z_var_ = closed_ ? 4 : 2;
+    if (!closed_) p_.stops.hold_before_empty(p_.cap.travel_to_empty(), 0.0);  // the open side holds no gas
   }
 
   template <class T>
@@ -183,7 +184,7 @@ class SingleActingCylinder final : public ComponentT<SingleActingCylinder> {
       // pressures leave (k_stop (-x) = -(F - k x)).
       const double side = closed_ ? p_.p0_rod * (p_.A - p_.A_rod) + gas.p_ambient * p_.A_rod : gas.p_ambient * p_.A;
       const double F = p_.p0_cap * p_.A - side - F0_;
-      x = F < 0 ? F / (p_.stops.k + k_) : 0.0;
+      x = F < 0 ? -p_.stops.rest_penetration_low(-F, k_) : 0.0;
     }
     sv.fix_position(kFlange, x);
     p_.cap.start(sv, gas, kCap, kHeatCap, p_.p0_cap, p_.T0, x);
