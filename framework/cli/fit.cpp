@@ -66,6 +66,12 @@ void check_fit_result(const FitReport& r, const std::string& file) {
                      "values too large for a measurement; check their units");
 }
 
+std::string rms_text(double N) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3g", N);
+  return buf;
+}
+
 class FitCommand {
  public:
   explicit FitCommand(CLI::App& app) {
@@ -85,6 +91,10 @@ class FitCommand {
     fric_->add_flag("--offset", offset_,
                     "also fit a constant force offset F0 (a load cell's zero): F signed, positive along v, "
                     "F = sign(v) law + F0");
+    fric_->add_option("--validate", validate_,
+                      "data files (same columns) the fitted law is checked on: RMS force error in N on each, e.g. "
+                      "another supply pressure or a held-out run")
+        ->take_all();
     fric_->add_option("-o,--output", output_, "write the netlist-ready friction preset (YAML) here");
 
     thr_ = fit_->add_subcommand("throttle",
@@ -123,6 +133,11 @@ class FitCommand {
     check_fit_data(d, {"v"}, "a fit needs friction measured at several speeds");
     check_fit_data(d, {"F"}, "a constant force leaves nothing to fit (R2 is undefined)");
     const auto points = friction_points(d, pressure);
+    std::vector<std::vector<FrictionPoint>> held_out;  // read before the fit: bad input stops it
+    for (const auto& file : validate_) {
+      check_output(output_, file);
+      held_out.push_back(friction_points(read_data_table(file), pressure));
+    }
     const std::string cmd = "pneumo fit friction " + one_line(data_) + " --model " + model_ +
                             (pressure == components::FrictionPressure::none ? "" : " --pressure " +
                                                                                       friction_pressure_name(pressure));
@@ -136,6 +151,9 @@ class FitCommand {
     } else {
       groups.emplace_back(NAN, points);
     }
+    if (groups.size() > 1 && !validate_.empty())
+      throw data_error(data_, "--validate: eq. 7 with a p0 column is fitted per supply pressure; validate one "
+                              "pressure's fit at a time (a file without p0)");
     std::ostringstream yaml;
     bool all_converged = true;
     for (const auto& [p0, pts] : groups) {
@@ -164,6 +182,7 @@ class FitCommand {
         header += "\nforce offset F0 = " + std::to_string(r.value("F0")) + " N (+- " +
                   std::to_string(r.parameter("F0").std_error) + "): the sensor's, not the seal's";
       yaml << friction_preset_yaml(c, r, m, pressure == components::FrictionPressure::ec, header);
+      print_rms(m, r, pts, held_out);
     }
     if (!output_.empty()) {
       write_text_atomic(output_, yaml.str());
@@ -171,6 +190,16 @@ class FitCommand {
     }
     if (!all_converged) std::cerr << "pneumo: the fit did not converge (see above)\n";
     return all_converged ? 0 : 1;
+  }
+
+  // The law's RMS force error on its own points and on each --validate file.
+  void print_rms(FrictionModel m, const FitReport& r, const std::vector<FrictionPoint>& own,
+                 const std::vector<std::vector<FrictionPoint>>& held_out) const {
+    std::cout << "RMS force error: " << rms_text(friction_rms(m, r, own)) << " N on the " << own.size()
+              << " fitted points\n";
+    for (std::size_t i = 0; i < held_out.size(); ++i)
+      std::cout << "  " << rms_text(friction_rms(m, r, held_out[i])) << " N on " << validate_[i] << " ("
+                << held_out[i].size() << " points)\n";
   }
 
   int run_throttle() {
@@ -214,7 +243,7 @@ class FitCommand {
 
   CLI::App *fit_ = nullptr, *fric_ = nullptr, *thr_ = nullptr;
   std::string data_, model_, pressure_, output_, tdata_, toutput_;
-  std::vector<std::string> init_, lower_, upper_, fix_;
+  std::vector<std::string> init_, lower_, upper_, fix_, validate_;
   bool offset_ = false;
 };
 
@@ -226,3 +255,4 @@ Command add_fit_command(CLI::App& app) {
 }
 
 }  // namespace pneumo::cli
+

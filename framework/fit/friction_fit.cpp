@@ -240,6 +240,19 @@ double friction_model_force(FrictionModel m, const std::vector<double>& c, doubl
   return model_force<double>(m, [&](int i) { return c.at(static_cast<std::size_t>(i)); }, v, p_bar);
 }
 
+double friction_rms(FrictionModel m, const FitReport& r, const std::vector<FrictionPoint>& points) {
+  if (points.empty()) return NAN;
+  const bool offset = has_offset(m, r.parameters);
+  const std::vector<double> c = r.values();
+  const int k = static_cast<int>(c.size());
+  double s = 0;
+  for (const auto& pt : points)
+    s += std::pow(point_force<double>(m, offset, k, [&](int i) { return c[static_cast<std::size_t>(i)]; }, pt) -
+                      observed(offset, pt),
+                  2);
+  return std::sqrt(s / static_cast<double>(points.size()));
+}
+
 FitReport fit_friction(FrictionModel m, const std::vector<FrictionPoint>& points, std::vector<FitParameter> params) {
   const bool offset = has_offset(m, params);
   if (params.size() != default_friction_parameters(m).size() && !offset)

@@ -59,6 +59,11 @@ double friction_model_force(FrictionModel m, const std::vector<double>& c, doubl
 FitReport fit_friction(FrictionModel m, const std::vector<FrictionPoint>& points,
                        std::vector<FitParameter> params);
 
+// The RMS force error (N) of a fitted law on points it may not have seen
+// (another pressure, a held-out run), in the fit's own sense: |F| against
+// the law, or the signed force with the fitted offset.
+double friction_rms(FrictionModel m, const FitReport& r, const std::vector<FrictionPoint>& points);
+
 // Points from a data table with columns v, F and, by pressure, p_A and p_B
 // (pAB-, pAB+) or p_EC (pEC). Throws InputError naming file and line.
 std::vector<FrictionPoint> friction_points(const DataTable& data, components::FrictionPressure pressure,
