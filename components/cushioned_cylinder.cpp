@@ -529,11 +529,15 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
     return {
         P::scalar("x0", "m", "initial position; default: at rest against the stop at x = 0 at force equilibrium",
                   kNaN),
-        P::scalar("p0_A", "Pa", "initial rod-side pressure (with rod cushioning also ECr), absolute", 101325.0)
-            .positive().absolute(),
-        P::scalar("p0_cap", "Pa", "initial cap-side pressure (cushion volume and channel), absolute", 101325.0)
-            .positive().absolute(),
-        P::scalar("T0", "K", "initial gas temperature", 293.15).positive(),
+        P::scalar("p0_A", "Pa", "initial rod-side pressure (with rod cushioning also ECr), absolute; default: ambient")
+            .positive()
+            .absolute()
+            .ambient_pressure_by_default(),
+        P::scalar("p0_cap", "Pa", "initial cap-side pressure (cushion volume and channel), absolute; default: ambient")
+            .positive()
+            .absolute()
+            .ambient_pressure_by_default(),
+        P::scalar("T0", "K", "initial gas temperature; default: ambient").positive().ambient_temperature_by_default(),
     };
   }
 

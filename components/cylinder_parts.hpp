@@ -586,9 +586,15 @@ struct Piston {
     const std::vector<ParameterSpec> initial = {
         P::scalar("x0", "m", "initial position; default: at rest against the stop at x = 0 at force equilibrium",
                   std::numeric_limits<double>::quiet_NaN()),
-        P::scalar("p0_cap", "Pa", "initial cap-side pressure, absolute", 101325.0).positive().absolute(),
-        P::scalar("p0_rod", "Pa", "initial " + p0_rod_meaning + " pressure, absolute", 101325.0).positive().absolute(),
-        P::scalar("T0", "K", "initial gas temperature", 293.15).positive(),
+        P::scalar("p0_cap", "Pa", "initial cap-side pressure, absolute; default: ambient")
+            .positive()
+            .absolute()
+            .ambient_pressure_by_default(),
+        P::scalar("p0_rod", "Pa", "initial " + p0_rod_meaning + " pressure, absolute; default: ambient")
+            .positive()
+            .absolute()
+            .ambient_pressure_by_default(),
+        P::scalar("T0", "K", "initial gas temperature; default: ambient").positive().ambient_temperature_by_default(),
     };
     out.insert(out.end(), initial.begin(), initial.end());
     const std::vector<ParameterSpec> faults = {

@@ -56,8 +56,13 @@ class Hose final : public ComponentT<Hose> {
         ParameterSpec::text("inertia", {"false", "true"}, "momentum balance of the gas in each flow element", "false"),
         ParameterSpec::scalar("mu", "Pa*s", "dynamic viscosity of the gas (air at 20 degC: 1.81e-5 Pa*s)", 1.81e-5)
             .positive(),
-        ParameterSpec::scalar("p0", "Pa", "initial pressure, absolute", 101325.0).positive().absolute(),
-        ParameterSpec::scalar("T0", "K", "initial gas temperature", 293.15).positive(),
+        ParameterSpec::scalar("p0", "Pa", "initial pressure, absolute; default: ambient")
+            .positive()
+            .absolute()
+            .ambient_pressure_by_default(),
+        ParameterSpec::scalar("T0", "K", "initial gas temperature; default: ambient")
+            .positive()
+            .ambient_temperature_by_default(),
     };
     i.ports = {{"a", Domain::pneumatic, Causality::acausal, "end a"},
                {"b", Domain::pneumatic, Causality::acausal, "end b"}};

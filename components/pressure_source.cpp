@@ -18,7 +18,9 @@ class PressureSource final : public ComponentT<PressureSource> {
     i.symbol = symbols::pressure_source();
     i.parameters = {
         ParameterSpec::scalar("p", "Pa", "pressure, absolute (write '6 barg' for gauge)").positive().absolute(),
-        ParameterSpec::scalar("T", "K", "temperature of the delivered gas", 293.15).positive(),
+        ParameterSpec::scalar("T", "K", "temperature of the delivered gas; default: ambient")
+            .positive()
+            .ambient_temperature_by_default(),
         fault_parameter("fault_resistance", "Pa*s/kg",
                         "the port's pressure falls by this times the delivered mass flow (a long or throttled supply "
                         "line, an undersized compressor)")

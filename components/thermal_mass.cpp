@@ -13,7 +13,7 @@ class ThermalMass final : public ComponentT<ThermalMass> {
     i.symbol = symbols::thermal_box("C");
     i.parameters = {
         ParameterSpec::scalar("C", "J/K", "heat capacity (mass times specific heat)").positive(),
-        ParameterSpec::scalar("T0", "K", "initial temperature", 293.15).positive(),
+        ParameterSpec::scalar("T0", "K", "initial temperature; default: ambient").positive().ambient_temperature_by_default(),
     };
     i.ports = {{"port", Domain::thermal, Causality::acausal, "heat port"}};
     i.equations = {"energy balance"};

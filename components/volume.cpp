@@ -29,8 +29,13 @@ class Volume final : public ComponentT<Volume> {
     i.symbol = symbols::volume();
     i.parameters = {
         ParameterSpec::scalar("V", "m3", "volume").positive(),
-        ParameterSpec::scalar("p0", "Pa", "initial pressure, absolute", 101325.0).positive().absolute(),
-        ParameterSpec::scalar("T0", "K", "initial gas temperature", 293.15).positive(),
+        ParameterSpec::scalar("p0", "Pa", "initial pressure, absolute; default: ambient")
+            .positive()
+            .absolute()
+            .ambient_pressure_by_default(),
+        ParameterSpec::scalar("T0", "K", "initial gas temperature; default: ambient")
+            .positive()
+            .ambient_temperature_by_default(),
     };
     i.ports = {{"port", Domain::pneumatic, Causality::acausal, "gas port"},
                {"heat", Domain::thermal, Causality::acausal, "heat port to the wall (insulated if unconnected)", true},

@@ -43,7 +43,7 @@ void print_component(const ComponentInfo& info, std::ostream& out) {
     out << "    " << p.name;
     if (p.kind == ParameterKind::scalar) {
       out << " [" << unit_text(p) << "]";
-      if (p.default_value) out << " default " << *p.default_value;
+      if (p.default_value) out << " default " << p.default_text_of_scalar();
       else out << (p.is_optional ? " optional" : " required");
       out << ", " << p.range_text();
     } else if (p.kind == ParameterKind::table) {
@@ -104,7 +104,7 @@ std::string reference_markdown(const Registry& reg) {
       for (const auto& p : info.parameters) {
         std::ostringstream def;
         if (p.kind == ParameterKind::scalar) {
-          if (p.default_value) def << *p.default_value;
+          if (p.default_value) def << p.default_text_of_scalar();
           else def << (p.is_optional ? "optional" : "required");
         } else if (p.kind == ParameterKind::table) {
           def << (p.required_table ? "required" : "optional") << " table";

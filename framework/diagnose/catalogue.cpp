@@ -401,7 +401,7 @@ NetlistValue netlist_value(const std::string& path, const YAML::Node& key_node, 
                "': re-calibrate that parameter");
     v.value = parameter_value(nl, *decl, *spec, written->second);
   } else if (spec->default_value) {
-    v.value = *spec->default_value;
+    v.value = *spec->default_at(nl.gas.p_ambient, nl.gas.T_ambient);
   } else {
     fail(path, key_node, key, name, "recalibrate: the netlist gives no value for '" + key + "'");
   }

@@ -117,6 +117,14 @@ std::string ParameterSpec::range_text() const {
   return std::string(b.lo_open ? "(" : "[") + num(b.lo) + ", " + num(b.hi) + (b.hi_open ? ")" : "]");
 }
 
+std::string ParameterSpec::default_text_of_scalar() const {
+  if (ambient_default == Ambient::pressure) return "ambient pressure";
+  if (ambient_default == Ambient::temperature) return "ambient temperature";
+  std::ostringstream o;
+  if (default_value) o << *default_value;
+  return o.str();
+}
+
 bool ParameterSpec::in_range(double v) const {
   if (!std::isfinite(v)) return false;
   const Bounds b = bounds_of(*this);

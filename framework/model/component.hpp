@@ -94,6 +94,12 @@ struct ParameterSpec {
   // from its dimension's (units::habitual_unit_if_implausible): a hose of
   // 20 m is plausible where a bore of 40 m is not. 0: the dimension's.
   double bare_max = 0.0;
+  // A start value or gas temperature that, left out, is the netlist's
+  // ambient pressure or temperature (`ambient:`): a chamber written without
+  // p0 is at rest with its surroundings whatever they are. default_value
+  // holds the standard ambient for where no netlist is at hand.
+  enum class Ambient { none, pressure, temperature };
+  Ambient ambient_default = Ambient::none;
   // text parameters: allowed values (empty = any), default
   std::vector<std::string> choices;
   std::optional<std::string> default_text;
@@ -134,6 +140,24 @@ struct ParameterSpec {
   // May be left out (the component checks ParameterValues::has()).
   ParameterSpec optional() && { required_table = false; is_optional = true; return std::move(*this); }
   ParameterSpec absolute() && { is_absolute = true; return std::move(*this); }
+  ParameterSpec ambient_pressure_by_default() && {
+    ambient_default = Ambient::pressure;
+    default_value = 101325.0;
+    return std::move(*this);
+  }
+  ParameterSpec ambient_temperature_by_default() && {
+    ambient_default = Ambient::temperature;
+    default_value = 293.15;
+    return std::move(*this);
+  }
+  // The value a left-out scalar takes in a netlist of this ambient.
+  std::optional<double> default_at(double p_ambient, double T_ambient) const {
+    if (ambient_default == Ambient::pressure) return p_ambient;
+    if (ambient_default == Ambient::temperature) return T_ambient;
+    return default_value;
+  }
+  // The default as the reference shows it.
+  std::string default_text_of_scalar() const;
   ParameterSpec path() && { is_path = true; return std::move(*this); }
   ParameterSpec bare_up_to(double si) && { bare_max = si; return std::move(*this); }
   ParameterSpec positive() && { min = 0.0; min_exclusive = true; return std::move(*this); }

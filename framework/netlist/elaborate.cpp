@@ -176,12 +176,12 @@ std::set<std::string> given_parameters(const Reader& r, const Netlist& nl, const
 }
 
 // Defaults of the parameters not given; a required one missing is an error.
-void default_parameters(const ComponentDecl& c, const ComponentInfo& info, const std::set<std::string>& given,
-                        ParameterValues& out) {
+void default_parameters(const Netlist& nl, const ComponentDecl& c, const ComponentInfo& info,
+                        const std::set<std::string>& given, ParameterValues& out) {
   for (const auto& spec : info.parameters) {
     if (given.count(spec.name)) continue;
     if (spec.kind == ParameterKind::scalar && spec.default_value) {
-      out.set_scalar(spec.name, *spec.default_value);
+      out.set_scalar(spec.name, *spec.default_at(nl.gas.p_ambient, nl.gas.T_ambient));
     } else if (spec.kind == ParameterKind::text && spec.default_text) {
       out.set_text(spec.name, *spec.default_text);
     } else if (spec.is_optional || (spec.kind == ParameterKind::table && !spec.required_table)) {
@@ -201,7 +201,7 @@ std::unique_ptr<Component> make_component(const Reader& r, const Netlist& nl, co
   Construction k;
   k.name = c.name;
   const auto given = given_parameters(r, nl, c, *entry.info, k.params);
-  default_parameters(c, *entry.info, given, k.params);
+  default_parameters(nl, c, *entry.info, given, k.params);
   try {
     k.info = entry.instance_info(k.params);
     return entry.make(k);
