@@ -58,13 +58,22 @@ bool lm_step(const BatchResiduals& residuals, State& s, BoundedLmResult& out, bo
   const long np = s.u.size();
   const Eigen::MatrixXd J = jacobian(residuals, s, out.evaluations);
   const Eigen::Map<const Eigen::VectorXd> rv(s.r.data(), static_cast<long>(s.r.size()));
-  const Eigen::MatrixXd A = J.transpose() * J;
-  const Eigen::VectorXd g = J.transpose() * rv;
+  Eigen::MatrixXd A = J.transpose() * J;
+  Eigen::VectorXd g = J.transpose() * rv;
   if (first) {
     const Eigen::VectorXd d = A.ldlt().solve(-g);
     out.screening = std::clamp(-(g.dot(d)) / std::max(s.cost, 1e-300), 0.0, 1.0);
     if (out.screening < screen_cutoff) return false;
   }
+  // A parameter on a bound whose descent points out of the box is held
+  // there: the others' step is then the one of the problem without it, not
+  // a coupled step cut off at the bound.
+  for (long k = 0; k < np; ++k)
+    if ((s.u[k] <= 0.0 && g[k] > 0) || (s.u[k] >= 1.0 && g[k] < 0)) {
+      A.row(k).setZero();
+      A.col(k).setZero();
+      g[k] = 0;
+    }
   for (int tries = 0; tries < 6; ++tries) {
     Eigen::MatrixXd M = A;
     for (long k = 0; k < np; ++k) M(k, k) += s.lambda * std::max(A(k, k), 1e-12) + 1e-12;
