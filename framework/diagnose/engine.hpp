@@ -1,29 +1,21 @@
 // The diagnosis's engine (framework/diagnose/diagnose.cpp's only helper
 // class): the model and its patched variants, their runs at the measured
 // operating points, normalised residuals, gap tables, the whitened
-// significance test, the bounded Levenberg-Marquardt fit and the phases.
-// Included by diagnose.cpp alone.
+// significance test, the fits (framework/fit/bounded_lm.hpp) and the phases.
 #pragma once
 
-#include <Eigen/Dense>
-#include <algorithm>
 #include <atomic>
-#include <cmath>
-#include <fstream>
-#include <map>
 #include <mutex>
-#include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
 
-#include "framework/analysis/run_metrics.hpp"
-#include "framework/core/parallel.hpp"
 #include "framework/diagnose/diagnose.hpp"
 #include "framework/diagnose/phases.hpp"
-#include "framework/diagnose/statistics.hpp"
 #include "framework/run/model.hpp"
-#include "framework/run/run.hpp"
+#include "framework/solver/ida_solver.hpp"
 
 namespace pneumo::diagnose::engine {
-
 
 constexpr long kDisturbedMaxSteps = 20000;  // a disturbed run's step budget (the cushion rig's nominal run takes 1225)
 constexpr double kFailedResidual = 1e4;  // per sample, for a run the solver could not finish
@@ -48,243 +40,51 @@ struct Model {  // a patched model ready to run
   MeasurementModel measurement;
 };
 
-// The fitted effects' parameters, each mapped onto u in [0, 1] between its
-// bounds (logarithmically for a log-scale parameter) so that one step size
-// and one damping suit them all.
-class ScaledParameters {
- public:
-  explicit ScaledParameters(std::vector<EffectInstance> start) : start_(std::move(start)) {
-    for (int e = 0; e < static_cast<int>(start_.size()); ++e)
-      for (int i = 0; i < static_cast<int>(start_[e].effect->parameters.size()); ++i)
-        ps_.push_back({&start_[e].effect->parameters[i], e, i});
-  }
-  int size() const { return static_cast<int>(ps_.size()); }
-
-  Eigen::VectorXd start_point() const {
-    Eigen::VectorXd u(size());
-    for (int k = 0; k < size(); ++k) u[k] = to_u(*ps_[k].spec, start_[ps_[k].effect].values[ps_[k].index]);
-    return u;
-  }
-  std::vector<EffectInstance> instances(const Eigen::VectorXd& u) const {
-    auto inst = start_;
-    for (int k = 0; k < size(); ++k) inst[ps_[k].effect].values[ps_[k].index] = from_u(*ps_[k].spec, u[k]);
-    return inst;
-  }
-  // Indices of the last effect's parameters (the one a grid start explores).
-  std::vector<int> last_effect() const {
-    std::vector<int> last;
-    for (int k = 0; k < size(); ++k)
-      if (ps_[k].effect == static_cast<int>(start_.size()) - 1) last.push_back(k);
-    return last;
-  }
-
- private:
-  struct P {
-    const EffectParameter* spec;
-    int effect, index;
-  };
-  static double to_u(const EffectParameter& s, double v) {
-    return s.log_scale ? std::log(v / s.lower) / std::log(s.upper / s.lower) : (v - s.lower) / (s.upper - s.lower);
-  }
-  static double from_u(const EffectParameter& s, double u) {
-    u = std::clamp(u, 0.0, 1.0);
-    return s.log_scale ? s.lower * std::pow(s.upper / s.lower, u) : s.lower + u * (s.upper - s.lower);
-  }
-  std::vector<EffectInstance> start_;
-  std::vector<P> ps_;
-};
-
-// The Levenberg-Marquardt iterate: point, its residuals and cost, damping.
-struct LmState {
-  Eigen::VectorXd u;
-  std::vector<double> r;
-  double cost = 0, lambda = 1e-2;
-};
-
 class Engine {
  public:
-  // `base`: the registry the model's plugins are added to.
-  Engine(const std::string& model_file, const Registry& base, const DiagnoseOptions& options)
-      : loaded_(load_model(model_file, base, options.sets)), options_(options) {
-    base_probes_ = elaborate(loaded_.netlist, loaded_.registry).probes;  // input errors now
-  }
+  // `base`: the registry the model's plugins are added to. Input errors of
+  // the model are thrown here.
+  Engine(const std::string& model_file, const Registry& base, const DiagnoseOptions& options);
 
   const Netlist& base() const { return loaded_.netlist; }
   const std::vector<Probe>& base_probes() const { return base_probes_; }
+  const DiagnoseOptions& options() const { return options_; }
+  const Registry& registry() const { return loaded_.registry; }
+
   std::vector<MeasuredRun> runs;
   std::vector<std::string> phase_names;
   std::vector<std::vector<int>> phases;            // per run, per sample
   std::vector<std::vector<double>> phase_times;    // per run: each phase's start, then the run's end
   std::atomic<long> simulations{0};
+  double screen_cutoff_ = -1;  // fits stop after the screening figure below this; < 0: never
 
-  Model model(const std::vector<EffectInstance>& effects) const {
-    Model m;
-    m.netlist = apply_effects(loaded_.netlist, effects, &m.measurement);
-    return m;
-  }
+  Model model(const std::vector<EffectInstance>& effects) const;
 
   // The model at run `k`'s operating point over its measured span; `at`
   // (top-level parameter, SI value) set on top: an operating point no run has.
-  Netlist netlist_of(const Model& m, int k, const Setting& at = {}) const {
-    const MeasuredRun& run = runs[k];
-    Netlist nl = m.netlist;
-    for (const auto& [name, value] : run.operating_point) apply_override(nl, name + "=" + value);
-    for (const auto& [name, value] : at) apply_override(nl, name + "=" + si_text(value));
-    nl.simulation.t_end = run.t.back() + 1e-9;
-    const double dt = (run.t.back() - run.t.front()) / std::max<std::size_t>(1, run.t.size() - 1);
-    nl.simulation.output_interval = std::min(nl.simulation.output_interval, dt);
-    return nl;
-  }
+  Netlist netlist_of(const Model& m, int k, const Setting& at = {}) const;
 
-  // Simulated signals of run `k` at its measurement times; empty if the run failed.
+  // Simulated signals of run `k` at its measurement times; empty if the run
+  // failed (the reason kept, failures_since()).
   std::vector<std::vector<double>> simulate(const Model& m, int k, const std::vector<Disturbance>& disturbances = {},
-                                           const Setting& at = {}) {
-    ++simulations;
-    const MeasuredRun& run = runs[k];
-    RunResult res;
-    try {
-      const Netlist nl = netlist_of(m, k, at);
-      SolverOptions so = solver_options(nl.simulation);
-      so.disturbances = disturbances;
-      // A disturbance that drives a state out of its domain (a chamber's
-      // mass below zero) leaves the solver crawling: such a run fails.
-      if (!disturbances.empty()) so.max_steps = kDisturbedMaxSteps;
-      res = run_circuit(elaborate(nl, loaded_.registry), so);
-    } catch (const std::exception& ex) {
-      note_failure(run.name, ex.what());
-      return {};
-    }
-    if (!res.solver.ok || res.table.rows.size() < 2) {
-      note_failure(run.name, res.solver.ok ? "fewer than two output rows" : res.solver.message);
-      return {};
-    }
-    std::vector<double> ts;
-    for (const auto& row : res.table.rows) ts.push_back(row[0]);
-    std::vector<std::vector<double>> out;
-    for (const auto& s : run.signals) {
-      const int c = res.table.column(s);
-      std::vector<double> ys;
-      for (const auto& row : res.table.rows) ys.push_back(row[c]);
-      if (auto it = m.measurement.lag.find(s); it != m.measurement.lag.end() && it->second > 0) {
-        ys = lag_filter(ts, ys, it->second);
-      }
-      read_through(m.measurement, s, ys);
-      std::vector<double> at;
-      at.reserve(run.t.size());
-      for (double t : run.t) at.push_back(interp(ts, ys, t));
-      out.push_back(std::move(at));
-    }
-    return out;
-  }
+                                           const Setting& at = {});
 
-  // The reading gain * y + offset of a signal whose measurement model has them.
-  static void read_through(const MeasurementModel& mm, const std::string& signal, std::vector<double>& ys) {
-    const auto g = mm.gain.find(signal), o = mm.offset.find(signal);
-    const double gain = g == mm.gain.end() ? 1.0 : g->second, offset = o == mm.offset.end() ? 0.0 : o->second;
-    if (gain == 1.0 && offset == 0.0) return;
-    for (double& y : ys) y = gain * y + offset;
-  }
+  Layout layout(Role role) const;
 
-  static std::vector<double> lag_filter(const std::vector<double>& ts, const std::vector<double>& u, double tau) {
-    std::vector<double> y(u.size());
-    y[0] = u[0];
-    for (std::size_t i = 1; i < u.size(); ++i) {
-      const double h = ts[i] - ts[i - 1], a = std::exp(-h / tau);
-      const double slope = h > 0 ? (u[i] - u[i - 1]) / h : 0.0;
-      // y' = (u - y)/tau with u linear over the step: exact solution.
-      y[i] = a * y[i - 1] + (1 - a) * u[i - 1] + slope * (h - tau * (1 - a));
-    }
-    return y;
-  }
+  // Normalised residuals (measured - simulated)/sigma for several models at
+  // once (runs in parallel); a failed run's are kFailedResidual.
+  std::vector<std::vector<double>> residuals(const std::vector<Model>& models, const Layout& L);
 
-  Layout layout(Role role) const {
-    Layout L;
-    for (int k = 0; k < static_cast<int>(runs.size()); ++k) {
-      if (runs[k].role != role) continue;
-      L.runs.push_back(k);
-      for (int s = 0; s < static_cast<int>(runs[k].signals.size()); ++s) {
-        L.segments.push_back({k, s, L.size, runs[k].t.size()});
-        L.size += runs[k].t.size();
-      }
-    }
-    return L;
-  }
-
-  // Normalised residuals (measured - simulated)/sigma for several models at once.
-  std::vector<std::vector<double>> residuals(const std::vector<Model>& models, const Layout& L) {
-    const int nr = static_cast<int>(L.runs.size());
-    std::vector<std::vector<std::vector<double>>> out_sim(models.size() * nr);
-    parallel_for(static_cast<long>(models.size()) * nr, options_.threads,
-                 [&](int, long j) { out_sim[j] = simulate(models[j / nr], L.runs[j % nr]); });
-    std::vector<std::vector<double>> r(models.size(), std::vector<double>(L.size));
-    for (std::size_t m = 0; m < models.size(); ++m)
-      for (const auto& seg : L.segments) {
-        const int j = static_cast<int>(m) * nr +
-                      static_cast<int>(std::find(L.runs.begin(), L.runs.end(), seg.run) - L.runs.begin());
-        const auto& run = runs[seg.run];
-        for (std::size_t i = 0; i < seg.n; ++i)
-          r[m][seg.offset + i] = out_sim[j].empty() ? kFailedResidual
-                                                    : (run.y[seg.signal][i] - out_sim[j][seg.signal][i]) /
-                                                          run.sigma[seg.signal];
-      }
-    return r;
-  }
-
-  GapTable gaps(const std::vector<double>& r, const Layout& L) const {
-    GapTable g;
-    std::map<std::string, int> idx;
-    for (const auto& seg : L.segments) {
-      const auto& name = runs[seg.run].signals[seg.signal];
-      if (!idx.count(name)) {
-        idx[name] = static_cast<int>(g.signals.size());
-        g.signals.push_back(name);
-      }
-    }
-    g.by_signal.assign(g.signals.size(), {});
-    g.by_phase.assign(g.signals.size(), std::vector<Gap>(phase_names.size()));
-    g.phase_total.assign(phase_names.size(), {});
-    for (const auto& seg : L.segments) {
-      const int s = idx[runs[seg.run].signals[seg.signal]];
-      for (std::size_t i = 0; i < seg.n; ++i) {
-        const double q = r[seg.offset + i] * r[seg.offset + i];
-        const int ph = phases[seg.run][i];
-        for (Gap* gp : {&g.total, &g.by_signal[s], &g.by_phase[s][ph], &g.phase_total[ph]}) {
-          gp->ssr += q;
-          gp->n += 1;
-        }
-      }
-    }
-    auto fin = [](Gap& x) { x.rms = x.n ? std::sqrt(x.ssr / x.n) : 0.0; };
-    fin(g.total);
-    for (auto& x : g.by_signal) fin(x);
-    for (auto& a : g.by_phase)
-      for (auto& x : a) fin(x);
-    for (auto& x : g.phase_total) fin(x);
-    return g;
-  }
+  GapTable gaps(const std::vector<double>& r, const Layout& L) const;
 
   struct Significance {
     double lr = 0, n_eff = 0, delta_bic = 0, p = 1;
   };
   // Likelihood ratio of model 1 over model 0 after whitening both residual
   // series with the AR(p) model of model 1's (each signal of each run its
-  // own series): under "model 0 is as good" the whitened residuals are near
-  // white, so a change that is smooth like the residual it leaves - the
-  // kind an AR(1) effective sample size over-credits - counts only as much
-  // as it stands out of that residual's own predictable course.
+  // own series), less a BIC penalty per added parameter.
   Significance significance(const std::vector<double>& r0, const std::vector<double>& r1, const Layout& L,
-                            int added_parameters) const {
-    Significance s;
-    for (const auto& seg : L.segments) {
-      double m = 0;
-      s.lr += whitened_log_ratio(&r0[seg.offset], &r1[seg.offset], seg.n, &m);
-      s.n_eff += m;
-    }
-    s.delta_bic = s.lr - added_parameters * std::log(std::max(2.0, s.n_eff));
-    // A switch without free parameters (k = 0) has no chi-square reference.
-    s.p = s.lr <= 0 ? 1.0 : added_parameters > 0 ? gamma_q(0.5 * added_parameters, 0.5 * s.lr) : NAN;
-    return s;
-  }
+                            int added_parameters) const;
 
   struct Fit {
     std::vector<EffectInstance> effects;
@@ -292,204 +92,32 @@ class Engine {
     double screening = 0;  // linearised share of SSR removed at the start
     int evaluations = 0;
   };
-
-  // Bounded Levenberg-Marquardt in scaled coordinates u in [0, 1]; with
+  // The effects' parameters fitted on the calibration layout from `start`
+  // (framework/fit/bounded_lm.hpp, scaled between each parameter's bounds);
+  // `r_start_hint`: the residuals at the start, if known. With
   // `grid_start`, a coarse grid over the last effect's parameters (the
-  // others held at their start values) picks the starting point.
+  // others held at their start values) may replace the start.
   Fit fit(std::vector<EffectInstance> start, const Layout& cal, const std::vector<double>& r_start_hint,
-          int max_iterations, bool grid_start = false) {
-    const ScaledParameters sp(std::move(start));
-    Fit f;
-    LmState s;
-    s.u = sp.start_point();
-    s.r = r_start_hint.empty() ? residuals({model(sp.instances(s.u))}, cal)[0] : r_start_hint;
-    f.evaluations += 1;
-    if (grid_start) start_from_grid(sp, cal, s, f);
-    s.cost = ssr_of(s.r.data(), s.r.size());
-    for (int it = 0; it < max_iterations && sp.size() > 0; ++it)
-      if (!lm_step(sp, cal, s, f, it == 0)) break;
-    f.effects = sp.instances(s.u);
-    f.r_cal = s.r;
-    return f;
-  }
-  double screen_cutoff_ = -1;  // < 0: never stop at screening
+          int max_iterations, bool grid_start = false);
 
   // What the unpatched model's run at each operating point tells the
   // phases (framework/diagnose/phases.hpp): its events' first times and
   // its metrics' values.
-  void compute_phases(const std::vector<PhaseDecl>& declared) {
-    declared_phases_ = declared;
-    phase_starts_.clear();
-    std::vector<std::vector<double>> times;
-    for (std::size_t k = 0; k < runs.size(); ++k) {
-      times.push_back(runs[k].t);
-      phase_starts_.push_back(phase_starts(static_cast<int>(k), {}));
-    }
-    Phases ph = assign_phases(declared, times, phase_starts_);
-    phase_names = std::move(ph.names);
-    phases = std::move(ph.of_sample);
-    phase_times = std::move(ph.times);
-  }
+  void compute_phases(const std::vector<PhaseDecl>& declared);
 
   // The phase of each sample of run `k`'s span at the operating point `at`
   // (one more run of the unpatched model), the measured runs' phases named
-  // as they are: the phases assigned over the measured runs and this one.
-  std::vector<int> phases_at(int k, const Setting& at) {
-    std::vector<std::vector<double>> times;
-    for (const auto& r : runs) times.push_back(r.t);
-    times.push_back(runs[k].t);
-    auto starts = phase_starts_;
-    starts.push_back(phase_starts(k, at));
-    Phases ph = assign_phases(declared_phases_, times, starts);
-    if (ph.names != phase_names) return std::vector<int>(runs[k].t.size(), -1);  // renamed: no phase to show
-    return ph.of_sample.back();
-  }
+  // as they are; all -1 when that run would rename them.
+  std::vector<int> phases_at(int k, const Setting& at);
 
   // Why runs failed, in the order noted (a failed run's residuals are
   // kFailedResidual): kept, so that what could not be judged says why.
-  std::size_t failure_count() const {
-    const std::lock_guard<std::mutex> lock(failures_mutex_);
-    return failures_.size();
-  }
-  std::vector<std::string> failures_since(std::size_t mark) const {
-    const std::lock_guard<std::mutex> lock(failures_mutex_);
-    return {failures_.begin() + static_cast<long>(std::min(mark, failures_.size())), failures_.end()};
-  }
-
-  const DiagnoseOptions& options() const { return options_; }
-  const Registry& registry() const { return loaded_.registry; }
+  std::size_t failure_count() const;
+  std::vector<std::string> failures_since(std::size_t mark) const;
 
  private:
-  // A coarse grid of starting points (in scaled coordinates) over the last
-  // effect's one or two parameters, against local minima: the best point,
-  // if better than the start, replaces it.
-  void start_from_grid(const ScaledParameters& sp, const Layout& cal, LmState& s, Fit& f) {
-    const std::vector<int> last = sp.last_effect();
-    if (last.size() != 1 && last.size() != 2) return;
-    const std::vector<double> levels = last.size() == 1 ? std::vector<double>{0.05, 0.25, 0.5, 0.75, 0.95}
-                                                        : std::vector<double>{0.15, 0.5, 0.85};
-    std::vector<Eigen::VectorXd> points;
-    for (double a : levels) {
-      Eigen::VectorXd p = s.u;
-      p[last[0]] = a;
-      if (last.size() == 1) {
-        points.push_back(p);
-      } else {
-        for (double b : levels) {
-          p[last[1]] = b;
-          points.push_back(p);
-        }
-      }
-    }
-    std::vector<Model> models;
-    for (const auto& p : points) models.push_back(model(sp.instances(p)));
-    const auto rs = residuals(models, cal);
-    f.evaluations += static_cast<int>(points.size());
-    double best = ssr_of(s.r.data(), s.r.size());
-    for (std::size_t k = 0; k < points.size(); ++k)
-      if (const double c = ssr_of(rs[k].data(), rs[k].size()); c < best) {
-        best = c;
-        s.u = points[k];
-        s.r = rs[k];
-      }
-  }
-
-  // Forward differences of the residuals in scaled coordinates; a step
-  // that would leave [0, 1] goes backwards instead.
-  Eigen::MatrixXd jacobian(const ScaledParameters& sp, const Layout& cal, const LmState& s, Fit& f) {
-    constexpr double h = 3e-3;
-    const int np = sp.size();
-    std::vector<Model> probes;
-    std::vector<double> steps(np);
-    for (int k = 0; k < np; ++k) {
-      Eigen::VectorXd up = s.u;
-      steps[k] = s.u[k] + h <= 1.0 ? h : -h;
-      up[k] += steps[k];
-      probes.push_back(model(sp.instances(up)));
-    }
-    const auto rp = residuals(probes, cal);
-    f.evaluations += np;
-    Eigen::MatrixXd J(s.r.size(), np);
-    for (int k = 0; k < np; ++k)
-      for (std::size_t i = 0; i < s.r.size(); ++i) J(i, k) = (rp[k][i] - s.r[i]) / steps[k];
-    return J;
-  }
-
-  // One Levenberg-Marquardt iteration: up to six damped steps, the first
-  // that lowers the cost is taken. On the first iteration the undamped
-  // Gauss-Newton step's predicted share of SSR removed is the screening
-  // figure, and below the cutoff no fit follows (the caller decides).
-  // Returns false when the fit stops: screened out, converged, or no step
-  // lowered the cost.
-  bool lm_step(const ScaledParameters& sp, const Layout& cal, LmState& s, Fit& f, bool first) {
-    const int np = sp.size();
-    const Eigen::MatrixXd J = jacobian(sp, cal, s, f);
-    const Eigen::Map<const Eigen::VectorXd> rv(s.r.data(), s.r.size());
-    const Eigen::MatrixXd A = J.transpose() * J;
-    const Eigen::VectorXd g = J.transpose() * rv;
-    if (first) {
-      const Eigen::VectorXd d = A.ldlt().solve(-g);
-      f.screening = std::clamp(-(g.dot(d)) / std::max(s.cost, 1e-300), 0.0, 1.0);
-      if (f.screening < screen_cutoff_) return false;
-    }
-    for (int tries = 0; tries < 6; ++tries) {
-      Eigen::MatrixXd M = A;
-      for (int k = 0; k < np; ++k) M(k, k) += s.lambda * std::max(A(k, k), 1e-12) + 1e-12;
-      const Eigen::VectorXd d = M.ldlt().solve(-g);
-      Eigen::VectorXd un = (s.u + d).cwiseMax(0.0).cwiseMin(1.0);
-      if ((un - s.u).norm() < 1e-7) return false;
-      const auto rn = residuals({model(sp.instances(un))}, cal)[0];
-      f.evaluations += 1;
-      const double cn = ssr_of(rn.data(), rn.size());
-      if (cn < s.cost) {
-        const double gain = (s.cost - cn) / s.cost;
-        s.u = un;
-        s.r = rn;
-        s.cost = cn;
-        s.lambda = std::max(s.lambda / 4, 1e-7);
-        return gain >= 1e-4;  // below: converged
-      }
-      s.lambda *= 8;
-    }
-    return false;
-  }
-
-  // What the unpatched model's run at run `k`'s span and operating point
-  // (with `at` on top) tells the phases: its events' first times and its
-  // metrics' values; empty when it fails (a failed run gets one phase).
-  PhaseStarts phase_starts(int k, const Setting& at) {
-    Netlist nl = netlist_of(model({}), k, at);
-    const std::vector<bool> all(nl.metrics.size(), true);
-    add_metric_outputs(nl, all);
-    PhaseStarts starts;
-    RunResult res;
-    try {
-      res = run_simulation(nl, loaded_.registry);
-    } catch (const std::exception& ex) {
-      note_failure(runs[k].name, ex.what());  // input errors surfaced when the model was loaded
-      return starts;
-    }
-    ++simulations;
-    for (const auto& e : res.solver.events)
-      if (!e.tag.empty()) starts.emplace(e.component + "." + e.tag, e.t);
-    if (!declared_phases_.empty() && res.solver.ok) {
-      const auto values = evaluate_metrics(nl, all, res, {});
-      for (std::size_t i = 0; i < nl.metrics.size(); ++i) starts[nl.metrics[i].name] = values[i];
-    }
-    return starts;
-  }
-
-  static std::string si_text(double v) {
-    std::ostringstream o;
-    o.precision(17);
-    o << v;
-    return o.str();
-  }
-
-  void note_failure(const std::string& run, const std::string& why) {
-    const std::lock_guard<std::mutex> lock(failures_mutex_);
-    failures_.push_back("run " + run + ": " + why);
-  }
+  PhaseStarts phase_starts(int k, const Setting& at);
+  void note_failure(const std::string& run, const std::string& why);
 
   pneumo::Model loaded_;  // the model file with its plugins
   DiagnoseOptions options_;

@@ -385,6 +385,8 @@ void write_report_json(const DiagnosisReport& r, const std::string& path) {
     for (std::size_t j = 0; j < c.best.size(); ++j)
       o << (j ? ", " : "") << "{\"quantity\": " << str(c.best[j].quantity) << ", \"unit\": " << str(c.best[j].unit)
         << ", \"sigma\": " << num(c.best[j].sigma) << ", \"separation\": " << num(c.best[j].separation) << "}";
+    o << "], \"run_failures\": [";
+    for (std::size_t j = 0; j < c.run_failures.size(); ++j) o << (j ? ", " : "") << str(c.run_failures[j]);
     o << "]}";
   }
   o << "],\n\"next_run\": [";

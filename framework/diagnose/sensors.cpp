@@ -76,7 +76,7 @@ SensorChoice choose_sensor(const std::string& effect_a, const std::string& effec
                            const std::vector<Netlist>& runs_a, const std::vector<Netlist>& runs_b,
                            const Registry& registry, const std::map<std::string, double>& noise_by_unit,
                            const std::map<std::string, std::string>& measured, int threads) {
-  SensorChoice choice{effect_a, effect_b, {}, 0, {}};
+  SensorChoice choice{effect_a, effect_b, {}, 0, {}, {}};
   if (runs_a.empty() || runs_a.size() != runs_b.size()) return choice;
   const auto qs = sensor_quantities(runs_a.front(), registry);
   const long nr = static_cast<long>(runs_a.size());
@@ -84,15 +84,22 @@ SensorChoice choose_sensor(const std::string& effect_a, const std::string& effec
   parallel_for(2 * nr, threads, [&](int, long j) {
     try {
       res[j] = run_simulation(with_all_outputs(j < nr ? runs_a[j] : runs_b[j - nr], qs), registry);
-    } catch (const std::exception&) {
+    } catch (const std::exception& ex) {
       res[j].solver.ok = false;  // a model that does not run here separates nothing
+      res[j].solver.message = ex.what();
     }
   });
   std::vector<double> ssr(qs.size(), 0.0);
   long n = 0;
   for (long k = 0; k < nr; ++k) {
     const RunResult &a = res[k], &b = res[nr + k];
-    if (!a.solver.ok || !b.solver.ok || a.table.rows.size() < 2 || b.table.rows.size() < 2) continue;
+    if (!a.solver.ok || !b.solver.ok || a.table.rows.size() < 2 || b.table.rows.size() < 2) {
+      for (const auto& [effect, r] : {std::pair{&effect_a, &a}, {&effect_b, &b}})
+        if (!r->solver.ok || r->table.rows.size() < 2)
+          choice.run_failures.push_back("run " + std::to_string(k + 1) + " of " + *effect + ": " +
+                                        (r->solver.ok ? "fewer than two output rows" : r->solver.message));
+      continue;
+    }
     std::vector<double> tb;
     for (const auto& row : b.table.rows) tb.push_back(row[0]);
     for (std::size_t q = 0; q < qs.size(); ++q) {

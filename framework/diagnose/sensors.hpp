@@ -35,6 +35,7 @@ struct SensorChoice {
   std::vector<SensorSeparation> best;  // unmeasured quantities, best first (at most a few)
   double measured_separation = 0;      // the best of the measured signals, same measure
   std::string measured_signal;
+  std::vector<std::string> run_failures;  // runs skipped because a model failed there, and why
 };
 
 // The quantities a sensor could measure: observables and local variables of
@@ -53,7 +54,7 @@ std::map<std::string, double> sensor_noise(const std::map<std::string, double>& 
 // Separates model a from model b: runs_a[k] and runs_b[k] are the two models
 // at run k's operating point and span; `measured` maps quantity names
 // (COMPONENT.QUANTITY) that are already measured to their signal name.
-// Runs that fail in either model are skipped.
+// Runs that fail in either model are skipped, their reasons kept.
 SensorChoice choose_sensor(const std::string& effect_a, const std::string& effect_b,
                            const std::vector<Netlist>& runs_a, const std::vector<Netlist>& runs_b,
                            const Registry& registry, const std::map<std::string, double>& noise_by_unit,

@@ -1,0 +1,132 @@
+#include "framework/fit/bounded_lm.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace pneumo::fit {
+
+double ScaledBound::to_u(double v) const {
+  return log_scale ? std::log(v / lower) / std::log(upper / lower) : (v - lower) / (upper - lower);
+}
+
+double ScaledBound::from_u(double u) const {
+  u = std::clamp(u, 0.0, 1.0);
+  return log_scale ? lower * std::pow(upper / lower, u) : lower + u * (upper - lower);
+}
+
+namespace {
+
+double sum_of_squares(const std::vector<double>& r) {
+  double s = 0;
+  for (double x : r) s += x * x;
+  return s;
+}
+
+// The iterate: point, residuals, cost, damping.
+struct State {
+  Eigen::VectorXd u;
+  std::vector<double> r;
+  double cost = 0, lambda = 1e-2;
+};
+
+// Forward differences of the residuals; a step that would leave [0, 1]
+// goes backwards instead.
+Eigen::MatrixXd jacobian(const BatchResiduals& residuals, const State& s, int& evaluations) {
+  constexpr double h = 3e-3;
+  const long np = s.u.size();
+  std::vector<Eigen::VectorXd> probes;
+  std::vector<double> steps(np);
+  for (long k = 0; k < np; ++k) {
+    Eigen::VectorXd up = s.u;
+    steps[k] = s.u[k] + h <= 1.0 ? h : -h;
+    up[k] += steps[k];
+    probes.push_back(up);
+  }
+  const auto rp = residuals(probes);
+  evaluations += static_cast<int>(np);
+  Eigen::MatrixXd J(s.r.size(), np);
+  for (long k = 0; k < np; ++k)
+    for (std::size_t i = 0; i < s.r.size(); ++i) J(i, k) = (rp[k][i] - s.r[i]) / steps[k];
+  return J;
+}
+
+// One iteration: up to six damped steps, the first that lowers the cost is
+// taken. On the first iteration the undamped Gauss-Newton step's predicted
+// share of the cost removed is the screening figure. Returns false when the
+// fit stops: screened out, converged, or no step lowered the cost.
+bool lm_step(const BatchResiduals& residuals, State& s, BoundedLmResult& out, bool first, double screen_cutoff) {
+  const long np = s.u.size();
+  const Eigen::MatrixXd J = jacobian(residuals, s, out.evaluations);
+  const Eigen::Map<const Eigen::VectorXd> rv(s.r.data(), static_cast<long>(s.r.size()));
+  Eigen::MatrixXd A = J.transpose() * J;
+  Eigen::VectorXd g = J.transpose() * rv;
+  if (first) {
+    const Eigen::VectorXd d = A.ldlt().solve(-g);
+    out.screening = std::clamp(-(g.dot(d)) / std::max(s.cost, 1e-300), 0.0, 1.0);
+    if (out.screening < screen_cutoff) return false;
+  }
+  // A parameter on a bound whose descent points out of the box is held
+  // there: the others' step is then the one of the problem without it, not
+  // a coupled step cut off at the bound.
+  for (long k = 0; k < np; ++k)
+    if ((s.u[k] <= 0.0 && g[k] > 0) || (s.u[k] >= 1.0 && g[k] < 0)) {
+      A.row(k).setZero();
+      A.col(k).setZero();
+      g[k] = 0;
+    }
+  for (int tries = 0; tries < 6; ++tries) {
+    Eigen::MatrixXd M = A;
+    for (long k = 0; k < np; ++k) M(k, k) += s.lambda * std::max(A(k, k), 1e-12) + 1e-12;
+    const Eigen::VectorXd d = M.ldlt().solve(-g);
+    Eigen::VectorXd un = (s.u + d).cwiseMax(0.0).cwiseMin(1.0);
+    if ((un - s.u).norm() < 1e-7) return false;
+    auto rn = residuals({un})[0];
+    out.evaluations += 1;
+    const double cn = sum_of_squares(rn);
+    if (cn < s.cost) {
+      const double gain = (s.cost - cn) / s.cost;
+      s.u = un;
+      s.r = std::move(rn);
+      s.cost = cn;
+      s.lambda = std::max(s.lambda / 4, 1e-7);
+      return gain >= 1e-4;  // below: converged
+    }
+    s.lambda *= 8;
+  }
+  return false;
+}
+
+}  // namespace
+
+BoundedLmResult bounded_lm(const BatchResiduals& residuals, const Eigen::VectorXd& u0, std::vector<double> r0,
+                           const std::vector<Eigen::VectorXd>& starts, const BoundedLmOptions& options) {
+  BoundedLmResult out;
+  State s;
+  s.u = u0;
+  if (r0.empty()) {
+    s.r = residuals({u0})[0];
+    out.evaluations += 1;
+  } else {
+    s.r = std::move(r0);
+  }
+  if (!starts.empty()) {
+    const auto rs = residuals(starts);
+    out.evaluations += static_cast<int>(starts.size());
+    double best = sum_of_squares(s.r);
+    for (std::size_t k = 0; k < starts.size(); ++k)
+      if (const double c = sum_of_squares(rs[k]); c < best) {
+        best = c;
+        s.u = starts[k];
+        s.r = rs[k];
+      }
+  }
+  s.cost = sum_of_squares(s.r);
+  for (int it = 0; it < options.max_iterations && s.u.size() > 0; ++it)
+    if (!lm_step(residuals, s, out, it == 0, options.screen_cutoff)) break;
+  out.u = std::move(s.u);
+  out.r = std::move(s.r);
+  out.cost = s.cost;
+  return out;
+}
+
+}  // namespace pneumo::fit

@@ -1,0 +1,54 @@
+// Bounded Levenberg-Marquardt in scaled coordinates: every parameter mapped
+// onto u in [0, 1] between its bounds (logarithmically for a log-scale one),
+// so that one finite-difference step and one damping suit them all, and a
+// bound is a face of the unit box the iterate is clamped onto. For residuals
+// that only a simulation gives (no derivatives, failures possible): the
+// Jacobian by forward differences, the points of each stage handed to the
+// caller together so that it may evaluate them in parallel. pneumo fit's
+// Ceres fits (least_squares.hpp) have automatic derivatives instead.
+#pragma once
+
+#include <Eigen/Dense>
+#include <functional>
+#include <vector>
+
+namespace pneumo::fit {
+
+// One parameter's range and its map onto [0, 1].
+struct ScaledBound {
+  double lower = 0, upper = 1;
+  bool log_scale = false;  // needs 0 < lower < upper
+
+  double to_u(double value) const;
+  double from_u(double u) const;  // u clamped to [0, 1]
+};
+
+// The residual vectors at several points of the unit box (all of one length).
+using BatchResiduals = std::function<std::vector<std::vector<double>>(const std::vector<Eigen::VectorXd>& points)>;
+
+struct BoundedLmOptions {
+  int max_iterations = 12;
+  // The first iteration's undamped Gauss-Newton step predicts a share of
+  // the cost removed (the screening figure); below this share the fit stops
+  // there. < 0: never.
+  double screen_cutoff = -1;
+};
+
+struct BoundedLmResult {
+  Eigen::VectorXd u;
+  std::vector<double> r;  // the residuals at u
+  double cost = 0;        // their sum of squares
+  double screening = 0;   // the first iteration's predicted share (0 without an iteration)
+  int evaluations = 0;    // points evaluated
+};
+
+// Minimises |r(u)|^2 over the unit box from `u0` (its residuals `r0`, or
+// empty to evaluate them). `starts`: further starting points against local
+// minima, evaluated together; the best, if better than u0, replaces it.
+// Stops after max_iterations, when an accepted step lowers the cost by less
+// than 1e-4 of it, when a step moves u by less than 1e-7, or when six
+// damped steps in a row fail to lower the cost.
+BoundedLmResult bounded_lm(const BatchResiduals& residuals, const Eigen::VectorXd& u0, std::vector<double> r0,
+                           const std::vector<Eigen::VectorXd>& starts, const BoundedLmOptions& options);
+
+}  // namespace pneumo::fit
