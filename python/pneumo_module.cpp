@@ -115,8 +115,9 @@ Simulation simulate(const LoadedNetlist& loaded, const std::vector<std::string>&
     for (const auto& a : sets) apply_override(nl, a);
     const std::vector<bool> all(nl.metrics.size(), true);
     add_metric_outputs(nl, all);
-    if (metrics_read_audit(nl, all)) audits = prepare_energy_audit(nl, loaded.registry());
-    system = std::make_unique<System>(elaborate(nl, loaded.registry()),
+    Circuit circuit = elaborate(nl, loaded.registry());
+    if (metrics_read_audit(nl, all)) audits = prepare_energy_audit(nl, circuit);
+    system = std::make_unique<System>(std::move(circuit),
                                       AssemblyOptions{.rest_heat = nl.simulation.steady_start});
     for (const auto& d : metric_dimensions(nl, system->circuit())) s.metric_units.push_back(units::si_unit_name(d));
     (void)metric_units(nl, system->circuit());  // a declared unit that does not fit is an error here too
@@ -206,7 +207,7 @@ study::Design samples_from(const LoadedNetlist& loaded, const std::vector<std::s
   return d;
 }
 
-// Every sample run by pneumo::study::run_one on `threads` threads, as
+// Every sample run by pneumo::study::SweepRunner on `threads` threads, as
 // run_sweep does (no journal, no file); the parsed netlist is shared.
 std::vector<study::RunRecord> run_design(const LoadedNetlist& loaded, const study::Design& d,
                                          const std::vector<study::Metric>& metrics,
@@ -214,8 +215,9 @@ std::vector<study::RunRecord> run_design(const LoadedNetlist& loaded, const stud
   Netlist nl = loaded.netlist();
   for (const auto& a : sets) apply_override(nl, a);
   std::vector<study::RunRecord> records(d.samples.size());
+  const study::SweepRunner runner(nl, loaded.registry(), d.parameters, metrics);
   parallel_for(static_cast<long>(d.samples.size()), threads, [&](int, long k) {
-    records[k] = study::run_one(nl, loaded.registry(), d.parameters, d.samples[k], metrics);
+    records[k] = runner.run(d.samples[k]);
     records[k].index = k;
   });
   return records;

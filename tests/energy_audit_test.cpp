@@ -48,8 +48,9 @@ double term(const std::vector<AuditTerm>& terms, const std::string& name) {
 }
 
 EnergyAudit audit_of(Netlist nl) {
-  const auto plans = prepare_energy_audit(nl, builtin_registry());
-  const RunResult r = run_simulation(nl, builtin_registry());
+  Circuit circuit = elaborate(nl, builtin_registry());
+  const auto plans = prepare_energy_audit(nl, circuit);
+  const RunResult r = run_circuit(std::move(circuit), solver_options(nl.simulation));
   EXPECT_TRUE(r.solver.ok) << r.solver.message;
   const auto audits = energy_audit(plans, r);
   EXPECT_EQ(audits.size(), 1u);

@@ -253,10 +253,11 @@ outputs: {s: piston.s}
 simulation: {t_end: 0.2 s, output_interval: 0.5 ms}
 )",
                              "air_spring.yaml");
-  const auto plans = prepare_energy_audit(nl, reg);
+  Circuit circuit = elaborate(nl, reg);
+  const auto plans = prepare_energy_audit(nl, circuit);
   ASSERT_EQ(plans.size(), 1u);
   ASSERT_EQ(plans[0].kinetic_columns.size(), 1u);  // the load's kinetic energy
-  const RunResult r = run_simulation(nl, reg);
+  const RunResult r = run_circuit(std::move(circuit), solver_options(nl.simulation));
   ASSERT_TRUE(r.solver.ok) << r.solver.message;
   const auto audits = energy_audit(plans, r);
   ASSERT_EQ(audits.size(), 1u);

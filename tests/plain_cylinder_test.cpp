@@ -177,8 +177,9 @@ TEST(PlainCylinder, IncompleteCushioningIsAnInputErrorAtItsLine) {
 // The audit of the cushioned end of `text` (one audit), printed.
 EnergyAudit audit_of(const std::string& text, const std::string& name) {
   Netlist nl = parse_netlist(text, name);
-  const auto plans = prepare_energy_audit(nl, builtin_registry());
-  const RunResult r = run_simulation(nl, builtin_registry());
+  Circuit circuit = elaborate(nl, builtin_registry());
+  const auto plans = prepare_energy_audit(nl, circuit);
+  const RunResult r = run_circuit(std::move(circuit), solver_options(nl.simulation));
   EXPECT_TRUE(r.solver.ok) << r.solver.message;
   const auto audits = energy_audit(plans, r);
   EXPECT_EQ(audits.size(), 1u);

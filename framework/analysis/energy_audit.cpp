@@ -44,8 +44,7 @@ int kinetic_observable(const Component& c) {
 
 }  // namespace
 
-std::vector<AuditPlan> prepare_energy_audit(Netlist& nl, const Registry& registry) {
-  const Circuit circuit = elaborate(nl, registry);
+std::vector<AuditPlan> prepare_energy_audit(const Netlist& nl, Circuit& circuit) {
   const SourceLocation where{nl.file, 1, 1};
   std::vector<AuditPlan> plans;
   for (std::size_t i = 0; i < circuit.components.size(); ++i) {
@@ -57,7 +56,7 @@ std::vector<AuditPlan> prepare_energy_audit(Netlist& nl, const Registry& registr
     auto add = [&](const std::string& quantity, bool integral) {
       const std::string account = (integral ? "int." : "") + quantity;
       if (!added.insert(account).second) return;
-      nl.outputs.push_back({column_of(c.name(), account), c.name(), quantity, where, integral, "", {}});
+      add_output(nl, circuit, {column_of(c.name(), account), c.name(), quantity, where, integral, "", {}});
     };
     if (!spec->closes_when_not_positive.empty()) add(spec->closes_when_not_positive, false);
     for (const auto& t : spec->terms) {
@@ -71,7 +70,7 @@ std::vector<AuditPlan> prepare_energy_audit(Netlist& nl, const Registry& registr
         const int k = kinetic_observable(mass);
         if (k < 0) continue;
         const std::string col = column_of(c.name(), "kinetic." + mass.name());
-        nl.outputs.push_back({col, mass.name(), mass.info().observables[k].name, where, false, "", {}});
+        add_output(nl, circuit, {col, mass.name(), mass.info().observables[k].name, where, false, "", {}});
         plan.kinetic_columns.push_back(col);
       }
     }

@@ -2,8 +2,9 @@
 // e.g. a cylinder's cushioning): where the energy that entered a window of
 // the motion went.
 //
-// prepare_energy_audit() elaborates the netlist once to ask every component
-// for its declaration and adds the outputs the audit reads: the declared
+// prepare_energy_audit() asks every component of the run's circuit (as
+// elaborated for the run: no second elaboration) for its declaration and
+// adds the outputs the audit reads to that circuit: the declared
 // observables (integrals as IDAS quadratures, so the accounts are as
 // accurate as the trajectory) and the kinetic energy of every mass on the
 // declared flange's node (observables of role "kinetic_energy"). After the
@@ -51,9 +52,10 @@ struct AuditPlan {
   std::vector<std::string> kinetic_columns;  // one per mass on the flange's node
 };
 
-// Adds the audits' outputs (named "audit.<component>. ...") to the netlist;
-// returns one plan per component that declares an audit (may be empty).
-std::vector<AuditPlan> prepare_energy_audit(Netlist& netlist, const Registry& registry);
+// Adds the audits' outputs (named "audit.<component>. ...") to `circuit`,
+// elaborated from `netlist` and not yet assembled; returns one plan per
+// component that declares an audit (may be empty).
+std::vector<AuditPlan> prepare_energy_audit(const Netlist& netlist, Circuit& circuit);
 
 // The audits of a finished run of a netlist prepared as above.
 std::vector<EnergyAudit> energy_audit(const std::vector<AuditPlan>& plans, const RunResult& run);

@@ -131,12 +131,12 @@ int simulate_command(const SimulateArgs& a) {
   // Every metric of the netlist is evaluated; integrals and audits are extra outputs.
   const std::vector<bool> all_metrics(nl.metrics.size(), true);
   add_metric_outputs(nl, all_metrics);
+  Circuit circuit = elaborate(nl, registry);  // the parameters' errors surface here, assembly's in run_circuit
   std::vector<AuditPlan> audit_plans;
-  if (!audit_path.empty() || metrics_read_audit(nl, all_metrics)) audit_plans = prepare_energy_audit(nl, registry);
+  if (!audit_path.empty() || metrics_read_audit(nl, all_metrics)) audit_plans = prepare_energy_audit(nl, circuit);
   if (!audit_path.empty() && audit_plans.empty())
     throw InputError(SourceLocation{nl.file, 1, 1}, "", "",
                      "--energy-audit: no component of this netlist declares an energy audit");
-  Circuit circuit = elaborate(nl, registry);  // the parameters' errors surface here, assembly's in run_circuit
   if (!user_outputs)
     throw InputError(SourceLocation{nl.file, 1, 1}, "", "",
                      "the netlist has no 'outputs:' (name: component.variable); nothing would be written");

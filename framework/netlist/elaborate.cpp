@@ -369,4 +369,11 @@ Circuit elaborate(const Netlist& nl, const Registry& registry) {
   return circuit;
 }
 
+void add_output(const Netlist& nl, Circuit& circuit, const OutputDecl& output) {
+  std::map<std::string, int> index;
+  for (std::size_t i = 0; i < circuit.components.size(); ++i)
+    index[circuit.components[i]->name()] = static_cast<int>(i);
+  circuit.probes.push_back(make_probe(nl, circuit, index, output));
+}
+
 }  // namespace pneumo

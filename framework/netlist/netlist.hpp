@@ -183,6 +183,10 @@ void apply_override(Netlist& netlist, const std::string& assignment);
 // Instantiate the components (parameters converted, defaulted and range
 // checked) and resolve the connections.
 Circuit elaborate(const Netlist& netlist, const Registry& registry);
+// Add one more output to a circuit elaborated from `netlist`, as if it had
+// been declared last under its `outputs:` (an analysis that learns from the
+// circuit which columns it needs adds them so, without elaborating again).
+void add_output(const Netlist& netlist, Circuit& circuit, const OutputDecl& output);
 
 // Parse one scalar parameter value against its spec (exposed for tests and
 // for the fitting tools): number, quantity with unit, or top-level name.

@@ -85,7 +85,7 @@ std::vector<Metric> select_metrics(const Netlist& nl, const Registry& registry, 
   return out;
 }
 
-MetricPlan prepare_metrics(Netlist& nl, const Registry& registry, const std::vector<Metric>& metrics) {
+MetricPlan prepare_metrics(Netlist& nl, const std::vector<Metric>& metrics) {
   MetricPlan plan;
   std::vector<bool> wanted(nl.metrics.size(), false);
   for (const auto& m : metrics)
@@ -93,13 +93,17 @@ MetricPlan prepare_metrics(Netlist& nl, const Registry& registry, const std::vec
   plan.netlist_marked = metric_closure(nl, wanted);
   plan.audit = metrics_read_audit(nl, plan.netlist_marked);
   add_metric_outputs(nl, plan.netlist_marked);
-  if (plan.audit) plan.audits = prepare_energy_audit(nl, registry);
   return plan;
 }
 
-std::vector<double> compute_metrics(const std::vector<Metric>& metrics, const MetricPlan& plan, const Netlist& nl,
+std::vector<AuditPlan> prepare_audits(const MetricPlan& plan, const Netlist& nl, Circuit& circuit) {
+  return plan.audit ? prepare_energy_audit(nl, circuit) : std::vector<AuditPlan>{};
+}
+
+std::vector<double> compute_metrics(const std::vector<Metric>& metrics, const MetricPlan& plan,
+                                    const std::vector<AuditPlan>& audit_plans, const Netlist& nl,
                                     const RunResult& run) {
-  const std::vector<EnergyAudit> audits = plan.audit ? energy_audit(plan.audits, run) : std::vector<EnergyAudit>{};
+  const std::vector<EnergyAudit> audits = plan.audit ? energy_audit(audit_plans, run) : std::vector<EnergyAudit>{};
   const std::vector<double> values = evaluate_metrics(nl, plan.netlist_marked, run, audits);
   std::vector<double> out;
   for (const auto& m : metrics) out.push_back(m.netlist_index >= 0 ? values[m.netlist_index] : m.compute(run));

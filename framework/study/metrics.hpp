@@ -33,17 +33,23 @@ std::vector<Metric> available_metrics(const Netlist& netlist, const Registry& re
 std::vector<Metric> select_metrics(const Netlist& netlist, const Registry& registry,
                                    const std::vector<std::string>& names);
 
-// What a run must carry for the metrics: the hidden outputs and the audits.
+// What a run must carry for the metrics: the hidden outputs and whether
+// the energy audits are read. The same for every run of a study (it depends
+// on the netlist's metric declarations, not on parameter values).
 struct MetricPlan {
   std::vector<bool> netlist_marked;  // the netlist metrics to evaluate (with their dependencies)
   bool audit = false;
-  std::vector<AuditPlan> audits;
 };
-// Adds the outputs the metrics read to `netlist` (the run's copy).
-MetricPlan prepare_metrics(Netlist& netlist, const Registry& registry, const std::vector<Metric>& metrics);
+// Adds the outputs the metrics read to `netlist` (the study's copy).
+MetricPlan prepare_metrics(Netlist& netlist, const std::vector<Metric>& metrics);
+// The audits' plans of one run, their outputs added to its circuit
+// (elaborated from the prepared netlist, not yet assembled); none unless
+// the plan reads audits.
+std::vector<AuditPlan> prepare_audits(const MetricPlan& plan, const Netlist& netlist, Circuit& circuit);
 // Values of the metrics for a finished run of the prepared netlist.
 std::vector<double> compute_metrics(const std::vector<Metric>& metrics, const MetricPlan& plan,
-                                    const Netlist& netlist, const RunResult& run);
+                                    const std::vector<AuditPlan>& audits, const Netlist& netlist,
+                                    const RunResult& run);
 
 void register_metric(Metric m);
 

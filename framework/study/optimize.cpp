@@ -181,6 +181,7 @@ class Evaluator {
     for (const auto& m : metrics_) identity += " " + m.name;
     identity += " samples " + std::to_string(n) + " seed " + std::to_string(p.seed);
     journal_ = std::make_unique<RunJournal>(o.journal, identity);
+    runner_ = std::make_unique<SweepRunner>(netlist_, registry_, parameters_, metrics_);
   }
 
   const std::vector<Metric>& metrics() const { return metrics_; }
@@ -197,8 +198,7 @@ class Evaluator {
     std::vector<RunRecord> rec(n);
     std::atomic<int> next{0};
     auto worker = [&] {
-      Netlist nl = netlist_;
-      for (int j; (j = next++) < n;) rec[j] = run_or_recall(nl, x, j);
+      for (int j; (j = next++) < n;) rec[j] = run_or_recall(x, j);
     };
     std::vector<std::thread> pool;
     for (int t = 1; t < std::min(options_.threads, n); ++t) pool.emplace_back(worker);
@@ -210,7 +210,7 @@ class Evaluator {
   }
 
  private:
-  RunRecord run_or_recall(Netlist& nl, const std::vector<double>& x, int j) {
+  RunRecord run_or_recall(const std::vector<double>& x, int j) {
     const std::string key = run_key(x, j);
     if (const std::string line = journal_->find(key); !line.empty()) {
       ++resumed_;
@@ -218,7 +218,7 @@ class Evaluator {
     }
     Sample s = x;
     s.insert(s.end(), samples_[j].begin(), samples_[j].end());
-    RunRecord r = run_one(nl, registry_, parameters_, s, metrics_);
+    RunRecord r = runner_->run(s);
     ++runs_;
     std::string line = key + (r.ok ? ",ok" : ",failed");
     for (double v : r.metrics) line += "," + full_digits(v);
@@ -278,11 +278,12 @@ class Evaluator {
   const OptimizeProblem& problem_;
   const OptimizeOptions& options_;
   const Registry& registry_;
-  Netlist netlist_;  // the model with its --set; each run edits a copy
+  Netlist netlist_;  // the model with its --set
   std::vector<Metric> metrics_;
   std::vector<StudyParameter> parameters_;
   std::vector<Sample> samples_;
   std::unique_ptr<RunJournal> journal_;
+  std::unique_ptr<SweepRunner> runner_;  // each run edits a copy of the netlist
   std::vector<PointResult> history_;
   std::atomic<long> runs_{0}, resumed_{0};
   long failed_ = 0;

@@ -14,7 +14,7 @@
 //
 // The optimiser is NLopt's: DIRECT-L (global, bounds and inequality
 // constraints) for a first look, then COBYLA (local, derivative-free) from the
-// best point found. Runs go through the sweep engine's run_one on threads;
+// best point found. Runs go through the sweep engine's SweepRunner on threads;
 // every finished run is appended to a journal (OUTPUT.journal), so a resumed
 // optimisation reads what was done instead of running it again.
 #pragma once

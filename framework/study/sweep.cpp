@@ -265,25 +265,31 @@ void write_results(const std::string& output, const Design& d, const std::vector
 
 bool is_sweep_results_header(const std::string& first_line) { return first_line.rfind(kResultsHeader, 0) == 0; }
 
-RunRecord run_one(const Netlist& netlist, const Registry& registry, const std::vector<StudyParameter>& parameters,
-                  const Sample& sample, const std::vector<Metric>& metrics,
-                  const AssemblyOptions& assembly) {
+SweepRunner::SweepRunner(const Netlist& netlist, const Registry& registry, std::vector<StudyParameter> parameters,
+                         std::vector<Metric> metrics, const AssemblyOptions& assembly)
+    : netlist_(netlist), registry_(registry), parameters_(std::move(parameters)), metrics_(std::move(metrics)),
+      assembly_(assembly) {
+  // Integral metrics and energy audits read extra (solver-integrated) outputs.
+  plan_ = prepare_metrics(netlist_, metrics_);
+}
+
+RunRecord SweepRunner::run(const Sample& sample) const {
   RunRecord rec;
   try {
-    Netlist run_nl = netlist;
-    for (std::size_t j = 0; j < parameters.size(); ++j) assign(run_nl, parameters[j], sample[j]);
-    // Integral metrics and energy audits read extra (solver-integrated) outputs.
-    const MetricPlan plan = prepare_metrics(run_nl, registry, metrics);
-    AssemblyOptions run_assembly = assembly;
+    Netlist run_nl = netlist_;
+    for (std::size_t j = 0; j < parameters_.size(); ++j) assign(run_nl, parameters_[j], sample[j]);
+    Circuit circuit = elaborate(run_nl, registry_);
+    const std::vector<AuditPlan> audits = prepare_audits(plan_, run_nl, circuit);
+    AssemblyOptions run_assembly = assembly_;
     run_assembly.rest_heat = run_nl.simulation.steady_start;  // its settling's rows
-    System system(elaborate(run_nl, registry), run_assembly);
+    System system(std::move(circuit), run_assembly);
     const RunResult run = run_system(system, solver_options(run_nl.simulation));
     rec.steps = run.solver.stats.steps;
     if (!run.solver.ok) {
       rec.reason = run.solver.message;
       return rec;
     }
-    rec.metrics = compute_metrics(metrics, plan, run_nl, run);
+    rec.metrics = compute_metrics(metrics_, plan_, audits, run_nl, run);
     rec.ok = true;
   } catch (const InputError& e) {
     rec.reason = e.what();
@@ -291,6 +297,12 @@ RunRecord run_one(const Netlist& netlist, const Registry& registry, const std::v
     rec.reason = e.what();
   }
   return rec;
+}
+
+RunRecord run_one(const Netlist& netlist, const Registry& registry, const std::vector<StudyParameter>& parameters,
+                  const Sample& sample, const std::vector<Metric>& metrics,
+                  const AssemblyOptions& assembly) {
+  return SweepRunner(netlist, registry, parameters, metrics, assembly).run(sample);
 }
 
 namespace {
@@ -337,9 +349,9 @@ std::vector<RunRecord> run_pending(const Model& model, const Design& design,
   long finished = 0, failed = 0;
   Progress progress(static_cast<long>(mine.size()), show_progress);
   const long todo = opt.stop_after >= 0 ? std::min<long>(opt.stop_after, mine.size()) : static_cast<long>(mine.size());
+  const SweepRunner runner(model.netlist, model.registry, design.parameters, metrics, opt.assembly);
   parallel_for(todo, opt.threads, [&](int, long k) {
-    RunRecord rec = run_one(model.netlist, model.registry, design.parameters, design.samples[mine[k]], metrics,
-                            opt.assembly);
+    RunRecord rec = runner.run(design.samples[mine[k]]);
     rec.index = mine[k];
     journal.write(journal_line(rec, metrics.size()));
     std::lock_guard<std::mutex> lock(mutex);

@@ -60,6 +60,27 @@ struct SweepSummary {
 SweepSummary run_sweep(const Model& model, const Design& design, const std::string& output,
                        const SweepOptions& options, Communicator& comm);
 
+// The runs of one study of `netlist`: what every run shares (the metrics'
+// plan and the hidden outputs they read) prepared once; run() is safe to
+// call from several threads at once.
+class SweepRunner {
+ public:
+  SweepRunner(const Netlist& netlist, const Registry& registry, std::vector<StudyParameter> parameters,
+              std::vector<Metric> metrics, const AssemblyOptions& assembly = {});
+  // One run with the sample's values set (on a copy of the netlist): never
+  // throws for a failing run (bad parameter combination, solver failure):
+  // the record says why.
+  RunRecord run(const Sample& sample) const;
+
+ private:
+  Netlist netlist_;  // with the metrics' outputs
+  const Registry& registry_;
+  std::vector<StudyParameter> parameters_;
+  std::vector<Metric> metrics_;
+  AssemblyOptions assembly_;
+  MetricPlan plan_;
+};
+
 // One run of `netlist` with the given parameter values set (as values, on a
 // copy): never throws for a failing run (bad parameter combination, solver
 // failure): the record says why.
