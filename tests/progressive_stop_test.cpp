@@ -86,9 +86,10 @@ TEST(ProgressiveStop, AHardImpactStopsThePistonBeforeTheCushionVolumeIsEmpty) {
 }
 
 TEST(ProgressiveStop, TheAuditOfAHardImpactBalances) {
-  Netlist nl = hard_impact_rig();
-  const auto plans = prepare_energy_audit(nl, builtin_registry());
-  const RunResult r = run_simulation(nl, builtin_registry());
+  const Netlist nl = hard_impact_rig();
+  Circuit circuit = elaborate(nl, builtin_registry());
+  const auto plans = prepare_energy_audit(nl, circuit);
+  const RunResult r = run_circuit(std::move(circuit), solver_options(nl.simulation));
   ASSERT_TRUE(r.solver.ok) << r.solver.message;
   const auto audits = energy_audit(plans, r);
   ASSERT_EQ(audits.size(), 1u);
