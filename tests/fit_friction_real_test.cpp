@@ -140,6 +140,11 @@ TEST(FitFrictionReal, TheCommandReportsTheRmsOnEachValidationFile) {
   EXPECT_NE(out.find(expected), std::string::npos) << out;
   const auto [rc2, out2] = run_cli("fit friction '" + fit_csv + "' --model eq8 --validate '" + dir.path().string() + "/none.csv'");
   EXPECT_EQ(rc2, 2) << out2;
+  // A validation file without points is refused, not reported as an RMS of nan.
+  const auto empty_csv = dir.write("empty.csv", "v [m/s], F [N], p_A [bar_rel], p_B [bar_rel]\n");
+  const auto [rc3, out3] = run_cli("fit friction '" + fit_csv + "' --model eq8 --validate '" + empty_csv + "'");
+  EXPECT_EQ(rc3, 2) << out3;
+  EXPECT_NE(out3.find("no friction points"), std::string::npos) << out3;
 }
 
 TEST(FitFrictionReal, AnOffsetFitRefusesForcesSignedAgainstTheMotion) {

@@ -137,6 +137,9 @@ class FitCommand {
     for (const auto& file : validate_) {
       check_output(output_, file);
       held_out.push_back(friction_points(read_data_table(file), pressure));
+      if (held_out.back().empty())
+        throw data_error(file, "--validate: the file holds no friction points (rows with v != 0): nothing to check "
+                               "the fitted law on");
     }
     const std::string cmd = "pneumo fit friction " + one_line(data_) + " --model " + model_ +
                             (pressure == components::FrictionPressure::none ? "" : " --pressure " +
