@@ -40,6 +40,7 @@ Command add_sensitivity_command(CLI::App& app);
 Command add_components_command(CLI::App& app);
 Command add_fit_command(CLI::App& app);
 Command add_diagnose_command(CLI::App& app);
+Command add_calibrate_command(CLI::App& app);
 Command add_optimize_command(CLI::App& app);
 Command add_draw_command(CLI::App& app);
 

@@ -908,6 +908,24 @@ Catalogue declared_faults(const Netlist& model, const Registry& registry, const 
   return cat;
 }
 
+Effect recalibration(const std::string& key, const std::string& lower, const std::string& upper, const Netlist& model,
+                     const Registry& registry, const std::string& origin) {
+  YAML::Node body(YAML::NodeType::Map);
+  if (!lower.empty()) body["lower"] = lower;
+  if (!upper.empty()) body["upper"] = upper;
+  auto is_number = [](const std::string& t) {
+    std::size_t used = 0;
+    try {
+      (void)std::stod(t, &used);
+    } catch (const std::exception&) {
+      return false;
+    }
+    return used == t.size();
+  };
+  if (is_number(lower) && std::stod(lower) <= 0) body["scale"] = "linear";
+  return recalibration(origin, YAML::Node(key), body, model, registry);
+}
+
 Catalogue merge_catalogues(Catalogue base, const Catalogue& extra) {
   for (const auto& e : extra.effects) {
     const auto same = std::find_if(base.effects.begin(), base.effects.end(), [&](const Effect& b) { return b.name == e.name; });

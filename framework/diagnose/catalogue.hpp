@@ -161,6 +161,14 @@ struct MeasuredSignal {
 Catalogue declared_faults(const Netlist& model, const Registry& registry, const std::vector<MeasuredSignal>& signals,
                           const std::vector<std::string>& per_run);
 
+// One netlist parameter as a fitted parameter, as a `recalibrate:` entry
+// would make it (`pneumo calibrate --free`): KEY is NAME or
+// COMPONENT.PARAMETER; `lower` and `upper` are SI numbers or factors of the
+// netlist's value ("0.5x"), empty for 0.25x and 4x; the scale is log unless
+// the range reaches zero or below. Errors name `origin` (the option).
+Effect recalibration(const std::string& key, const std::string& lower, const std::string& upper, const Netlist& model,
+                     const Registry& registry, const std::string& origin);
+
 // `extra`'s effects added to `base`'s, one of the same name replacing it;
 // `extra`'s phases when it has any.
 Catalogue merge_catalogues(Catalogue base, const Catalogue& extra);

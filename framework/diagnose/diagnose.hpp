@@ -54,7 +54,12 @@ struct MeasuredRun {
 // `data:` must name a regular file inside DIR. A run's samples must lie in
 // the model's [t_start, t_end] and span at least a tenth of it. Throws
 // InputError naming the file, line and column or parameter.
-std::vector<MeasuredRun> load_runs(const std::string& dir, const Netlist& model, const std::vector<Probe>& probes);
+// `roles`: whether a run file must name its role and the folder hold runs
+// of both (the diagnosis), or a run without one is a calibration run and
+// validation runs are optional (a calibration).
+enum class RunRoles { both_required, validation_optional };
+std::vector<MeasuredRun> load_runs(const std::string& dir, const Netlist& model, const std::vector<Probe>& probes,
+                                   RunRoles roles = RunRoles::both_required);
 
 // Robust white-noise level of a sampled signal: median absolute deviation of
 // third differences / sqrt(20), floored by the quantisation step / sqrt(12).

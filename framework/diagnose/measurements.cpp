@@ -288,7 +288,8 @@ std::string data_file(const fs::path& runs_dir, const std::string& run_file, con
 
 }  // namespace
 
-std::vector<MeasuredRun> load_runs(const std::string& dir, const Netlist& model, const std::vector<Probe>& probes) {
+std::vector<MeasuredRun> load_runs(const std::string& dir, const Netlist& model, const std::vector<Probe>& probes,
+                                   RunRoles roles) {
   if (!fs::is_directory(dir)) throw InputError(SourceLocation{dir, 0, 0}, "", "", "runs directory does not exist");
   std::vector<fs::path> files;
   for (const auto& e : fs::directory_iterator(dir))
@@ -309,8 +310,9 @@ std::vector<MeasuredRun> load_runs(const std::string& dir, const Netlist& model,
     MeasuredRun run;
     run.name = f.stem().string();
     if (!y["data"]) throw InputError(SourceLocation{path, 1, 1}, "", "data", "missing 'data: NAME.csv'");
-    if (!y["role"]) throw InputError(SourceLocation{path, 1, 1}, "", "role", "missing 'role: calibration|validation'");
-    const auto role = plain_text(path, y["role"], "", "role", "'role'");
+    if (!y["role"] && roles == RunRoles::both_required)
+      throw InputError(SourceLocation{path, 1, 1}, "", "role", "missing 'role: calibration|validation'");
+    const auto role = y["role"] ? plain_text(path, y["role"], "", "role", "'role'") : std::string("calibration");
     if (role == "calibration") run.role = Role::calibration;
     else if (role == "validation") run.role = Role::validation;
     else throw InputError(at(y["role"]), "", "role", "role must be 'calibration' or 'validation', not '" + quoted_cell(role) + "'");
@@ -349,7 +351,7 @@ std::vector<MeasuredRun> load_runs(const std::string& dir, const Netlist& model,
   }
   int ncal = 0, nval = 0;
   for (const auto& r : runs) (r.role == Role::calibration ? ncal : nval)++;
-  if (ncal == 0 || nval == 0)
+  if (ncal == 0 || (nval == 0 && roles == RunRoles::both_required))
     throw InputError(SourceLocation{dir, 0, 0}, "", "",
                      "need at least one calibration and one validation run (found " + std::to_string(ncal) +
                          " calibration, " + std::to_string(nval) + " validation)");

@@ -11,29 +11,15 @@
 #include "framework/core/units.hpp"
 #include "framework/io/results.hpp"
 #include "framework/diagnose/diagnose.hpp"
+#include "framework/diagnose/json_text.hpp"
 #include "framework/diagnose/unexplained.hpp"
 
 namespace pneumo::diagnose {
 
 namespace {
 
-std::string num(double v) {
-  if (!std::isfinite(v)) return "null";
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.6g", v);
-  return buf;
-}
-
-std::string str(const std::string& s) {
-  std::string o = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\') o += '\\', o += c;
-    else if (c == '\n') o += "\\n";
-    else if (static_cast<unsigned char>(c) < 0x20) o += ' ';
-    else o += c;
-  }
-  return o + "\"";
-}
+using json::num;
+using json::str;
 
 std::string html(const std::string& s) {
   std::string o;
