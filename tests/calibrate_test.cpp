@@ -13,6 +13,7 @@
 // - Bad --free and --out are refused with status 2, naming the option.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <random>
@@ -151,6 +152,49 @@ TEST(CalibrateReal, TheLeakDownConductanceFromTwiceOffReturnsToTheHandFit) {
   ASSERT_TRUE(std::regex_search(json, m, rms)) << json;
   EXPECT_GT(std::stod(m[1]) / 1e5, 0.1);   // bar, the start twice off
   EXPECT_LT(std::stod(m[2]) / 1e5, 0.04);  // bar, as the hand fit
+}
+
+// RMS before and after of run RUN's signal in report.json (SI).
+std::pair<double, double> run_rms(const std::string& json, const std::string& run) {
+  const std::regex re("\"run\": \"" + run + "\", \"signal\": \"[^\"]+\", \"role\": \"[a-z]+\", \"unit\": \"[^\"]*\", "
+                      "\"sigma\": [-0-9.eE+]+, \"rms_before\": ([-0-9.eE+]+), \"rms_after\": ([-0-9.eE+]+)");
+  std::smatch m;
+  if (!std::regex_search(json, m, re)) return {NAN, NAN};
+  return {std::stod(m[1]), std::stod(m[2])};
+}
+
+// The O-ring seal (tests/data/tudelft/O-ring_*bar.yaml: 1, 3 and 5 bar to
+// calibrate, 7 bar to validate; the drive replays each file's position, the
+// source its pressure). Coulomb + viscous friction and the load cell's
+// offset: the friction must oppose the replayed motion with a force of a
+// few newtons (fit friction finds 5-6 N on these files; a law acting the
+// wrong way is fitted to zero), and the 7 bar force, never fitted, must be
+// predicted within 1.5 times the worst calibration error - the bound
+// FitFrictionReal holds the static eq. 8 fit to.
+TEST(CalibrateReal, ORingFrictionFromOneThreeAndFiveBarPredictsTheSevenBarForce) {
+  TempDir dir;
+  const std::string data = kSrc + "/tests/data/tudelft";
+  const std::string model_input = data + "/O-ring_3bar_head1000.csv";
+  const auto out = (dir.path() / "report").string();
+  const auto [rc, text] = run_cli("calibrate '" + kSrc + "/netlists/real/tudelft_friction.yaml' --runs '" + data +
+                                  "' --set 'position.file=" + model_input + "' --set 'pressure.file=" + model_input +
+                                  "' --free 'F_C=0 N:40 N' --free d_visc=0:2000 --free F.offset --out '" + out + "' -q");
+  ASSERT_EQ(rc, 0) << text;
+  std::printf("%s", text.c_str());
+  const std::string json = test_support::read_file(std::filesystem::path(out) / "report.json");
+  const double F_C = parameter_field(json, "F_C", "value");
+  EXPECT_GT(F_C, 3.0) << text;
+  EXPECT_LT(F_C, 8.0) << text;
+  double worst_calibration = 0;
+  for (const char* run : {"O-ring_1bar", "O-ring_3bar", "O-ring_5bar"}) {
+    const auto [before, after] = run_rms(json, run);
+    EXPECT_LT(after, before) << run;
+    worst_calibration = std::max(worst_calibration, after);
+  }
+  const auto [before7, after7] = run_rms(json, "O-ring_7bar");
+  std::printf("7 bar: RMS %.3f -> %.3f N (worst calibration run %.3f N)\n", before7, after7, worst_calibration);
+  EXPECT_LT(after7, 1.5 * worst_calibration);
+  EXPECT_LT(after7, before7);
 }
 
 TEST(Calibrate, BadFreeParametersAndReportFoldersAreRefusedNamingTheOption) {

@@ -86,7 +86,7 @@ struct Runs {
   }
   std::vector<diagnose::MeasuredRun> load() const {
     const Model m = tank();
-    return diagnose::load_runs(runs().string(), m.netlist, m.probes);
+    return diagnose::load_runs(runs().string(), m.netlist, m.probes, builtin_registry());
   }
   // The message of the InputError loading throws ("" if none).
   std::string error() const {
@@ -228,7 +228,7 @@ TEST(DiagnoseInputs, DataThatIsAFifoIsRefusedWithoutHanging) {
   std::thread([done, runs] {
     try {
       const Model m = tank();
-      (void)diagnose::load_runs(runs, m.netlist, m.probes);
+      (void)diagnose::load_runs(runs, m.netlist, m.probes, builtin_registry());
       done->set_value("");
     } catch (const std::exception& e) {
       done->set_value(e.what());

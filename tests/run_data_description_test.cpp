@@ -64,7 +64,7 @@ struct Folder {
   }
   std::vector<diagnose::MeasuredRun> load() const {
     const Netlist nl = parse_netlist(kTank, "tank.yaml");
-    return diagnose::load_runs(runs().string(), nl, elaborate(nl, builtin_registry()).probes);
+    return diagnose::load_runs(runs().string(), nl, elaborate(nl, builtin_registry()).probes, builtin_registry());
   }
 };
 

@@ -74,22 +74,64 @@ std::string bound_text(const std::string& spec, const std::string& text, const s
   return si_text(q.si_value);
 }
 
+// A measured output's reading error, OUTPUT.offset | OUTPUT.gain |
+// OUTPUT.lag (engine.hpp's measurement model), when KEY names one and no
+// component has OUTPUT's name; it starts at its null.
+std::optional<Effect> measurement_parameter(const std::string& key, const Engine& eng) {
+  const auto dot = key.find('.');
+  if (dot == std::string::npos) return std::nullopt;
+  const std::string output = key.substr(0, dot);
+  for (const auto& c : eng.base().components)
+    if (c.name == output) return std::nullopt;
+  MeasuredSignal signal{output, 0, ""};
+  double lo = INFINITY, hi = -INFINITY;
+  for (const auto& run : eng.runs)
+    for (std::size_t s = 0; s < run.signals.size(); ++s)
+      if (run.signals[s] == output)
+        for (double y : run.y[s]) lo = std::min(lo, y), hi = std::max(hi, y);
+  if (!(hi >= lo)) return std::nullopt;  // not measured
+  signal.span = hi - lo;
+  for (const Probe& p : eng.base_probes())
+    if (p.name == output) signal.unit = p.unit;
+  const Netlist& nl = eng.base();
+  for (Effect& e : measurement_faults(signal, kFreeOption, nl.simulation.t_end - nl.simulation.t_start))
+    if (e.name == key) {
+      e.parameters[0].initial = *e.parameters[0].null_value;
+      return e;
+    }
+  return std::nullopt;
+}
+
 // --free NAME[=LOW:HIGH] -> the effect that sets the parameter.
-Effect free_parameter(const std::string& spec, const Netlist& nl, const Registry& reg) {
+Effect free_parameter(const std::string& spec, const Engine& eng) {
+  const Netlist& nl = eng.base();
   const auto eq = spec.find('=');
   const std::string key = trim(spec.substr(0, eq));
   if (key.empty()) throw InputError(kFreeOption, "", "", "--free '" + spec + "': expected NAME or NAME=LOW:HIGH");
+  std::optional<Effect> reading = measurement_parameter(key, eng);
   std::string lower, upper;
   if (eq != std::string::npos) {
     const std::string range = spec.substr(eq + 1);
     const auto colon = range.find(':');
     if (colon == std::string::npos || range.find(':', colon + 1) != std::string::npos)
       throw InputError(kFreeOption, "", key, "--free " + spec + ": expected NAME=LOW:HIGH, e.g. F_C=1N:20N or C=0.5x:2x");
-    const auto dim = dimension_of_key(key, nl, reg);
+    const auto dim = reading ? std::optional(units::dimension_of(reading->parameters[0].unit))
+                             : dimension_of_key(key, nl, eng.registry());
     lower = bound_text(spec, range.substr(0, colon), dim, nl.gas.p_ambient);
     upper = bound_text(spec, range.substr(colon + 1), dim, nl.gas.p_ambient);
   }
-  return recalibration(key, lower, upper, nl, reg, "--free " + spec);
+  if (!reading) return recalibration(key, lower, upper, nl, eng.registry(), "--free " + spec);
+  EffectParameter& p = reading->parameters[0];
+  if (!lower.empty()) {
+    if (lower.back() == 'x' || upper.back() == 'x')
+      throw InputError(kFreeOption, "", key, "--free " + spec + ": give a reading's " + p.name + " range as values, not factors");
+    p.lower = std::stod(lower), p.upper = std::stod(upper);
+  }
+  if (!(p.lower < p.upper)) throw InputError(kFreeOption, "", key, "--free " + spec + ": LOW must be below HIGH");
+  if (p.log_scale && p.lower <= 0) throw InputError(kFreeOption, "", key, "--free " + spec + ": a gain's range must stay above 0");
+  p.initial = std::clamp(p.initial, p.lower, p.upper);
+  reading->description = "reading error " + key;
+  return *reading;
 }
 
 std::vector<Effect> free_parameters(const CalibrateOptions& opt, const Engine& eng) {
@@ -98,9 +140,8 @@ std::vector<Effect> free_parameters(const CalibrateOptions& opt, const Engine& e
   std::vector<Effect> out;
   std::set<std::string> seen;
   for (const auto& spec : opt.free) {
-    Effect e = free_parameter(spec, eng.base(), eng.registry());
-    if (!seen.insert(e.recalibrates).second)
-      throw InputError(kFreeOption, "", e.recalibrates, "--free: '" + e.recalibrates + "' is given twice");
+    Effect e = free_parameter(spec, eng);
+    if (!seen.insert(e.name).second) throw InputError(kFreeOption, "", e.name, "--free: '" + e.name + "' is given twice");
     for (const auto& run : eng.runs)
       for (const auto& op : run.operating_point)
         if (op.first == e.recalibrates)
@@ -260,7 +301,10 @@ void describe(const Engine& eng, const Layout& L, const std::vector<double>& bef
 void show_in_habitual_unit(CalibratedParameter& c, const Netlist& nl) {
   const units::Dimension dim = units::dimension_of(c.unit);
   std::string unit = nl.display_unit_for(dim);
-  if (unit.empty()) unit = engineering_unit(dim);
+  // Only where the parameter is in the quantity's own SI unit: a friction
+  // slope in N/Pa is not an area to show in mm2.
+  static const std::set<std::string> plain = {"m", "Pa", "K", "m2", "m3", "m3/(s*Pa)"};
+  if (unit.empty() && plain.count(c.unit)) unit = engineering_unit(dim);
   if (unit.empty()) {
     c.shown_unit = c.unit;
     return;
@@ -322,7 +366,7 @@ CalibrationReport calibrate(const std::string& model_file, const std::string& ru
   dopt.sets = opt.sets;
   dopt.progress = opt.progress;
   Engine eng(model_file, base, dopt);
-  eng.runs = load_runs(runs_dir, eng.base(), eng.base_probes(), RunRoles::validation_optional);
+  eng.runs = load_runs(runs_dir, eng.base(), eng.base_probes(), eng.registry(), RunRoles::validation_optional);
   const std::vector<Effect> effects = free_parameters(opt, eng);
   // One phase, the whole run: calibration reports per run and signal.
   eng.phase_names = {"run"};
@@ -372,7 +416,8 @@ CalibrationReport calibrate(const std::string& model_file, const std::string& ru
   for (std::size_t i = 0; i < effects.size(); ++i) {
     const EffectParameter& p = effects[i].parameters[0];
     CalibratedParameter c;
-    c.name = effects[i].recalibrates;
+    c.name = effects[i].name;
+    c.reading = effects[i].recalibrates.empty();
     c.unit = p.unit;
     c.start = p.initial;
     c.value = value[i];
@@ -449,11 +494,14 @@ std::string calibration_summary(const CalibrationReport& rep) {
 }
 
 std::string calibration_snippet(const CalibrationReport& rep) {
-  std::ostringstream top, comps;
+  std::ostringstream top, comps, reading;
   std::map<std::string, std::vector<const CalibratedParameter*>> by_component;
   for (const auto& c : rep.parameters) {
     const auto dot = c.name.find('.');
-    if (dot == std::string::npos)
+    if (c.reading)
+      reading << "#   " << c.name << " = " << shown_text(c, c.value) << " +- " << spread_text(c, c.standard_error)
+              << (c.at_bound ? ", at its bound" : "") << "\n";
+    else if (dot == std::string::npos)
       top << "  " << c.name << ": " << shown_text(c, c.value) << "   # +- " << spread_text(c, c.standard_error)
           << (c.at_bound ? ", at its bound" : "") << "\n";
     else
@@ -473,6 +521,7 @@ std::string calibration_snippet(const CalibrationReport& rep) {
   std::string out = "# pneumo calibrate: " + rep.model_file + " fitted to " + rep.runs_dir + " (+- one standard error)\n";
   if (!top.str().empty()) out += "parameters:\n" + top.str();
   if (!comps.str().empty()) out += "components:\n" + comps.str();
+  if (!reading.str().empty()) out += "# the readings' errors (not netlist values; the measured data carry them):\n" + reading.str();
   return out;
 }
 

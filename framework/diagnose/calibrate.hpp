@@ -20,7 +20,8 @@ namespace pneumo::diagnose {
 struct CalibrateOptions {
   // NAME or COMPONENT.PARAMETER, optionally =LOW:HIGH (SI numbers,
   // quantities of the parameter's unit, or factors of the netlist's value,
-  // "0.5x"; default 0.25x:4x).
+  // "0.5x"; default 0.25x:4x); or a measured output's reading error,
+  // OUTPUT.offset, OUTPUT.gain, OUTPUT.lag (starting at none).
   std::vector<std::string> free;
   std::vector<std::string> sets;  // --set on the model, before any run's operating point
   int threads = 2;
@@ -29,7 +30,8 @@ struct CalibrateOptions {
 };
 
 struct CalibratedParameter {
-  std::string name;              // as given: NAME or COMPONENT.PARAMETER
+  std::string name;              // as given: NAME, COMPONENT.PARAMETER or OUTPUT.offset|gain|lag
+  bool reading = false;          // a measured output's reading error, not a netlist value
   std::string unit;              // SI unit of the values
   double start = 0, value = 0;   // the netlist's value and the fitted one
   double lower = 0, upper = 0;   // the range searched

@@ -840,6 +840,9 @@ Effect component_fault(const Netlist& nl, const ComponentDecl& decl, const Compo
 }
 
 // OUTPUT.offset, OUTPUT.gain, OUTPUT.lag of a measured signal.
+
+}  // namespace
+
 std::vector<Effect> measurement_faults(const MeasuredSignal& s, const SourceLocation& where, double t_span) {
   struct Kind {
     const char* name;
@@ -876,7 +879,6 @@ std::vector<Effect> measurement_faults(const MeasuredSignal& s, const SourceLoca
   return out;
 }
 
-}  // namespace
 
 Catalogue declared_faults(const Netlist& model, const Registry& registry, const std::vector<MeasuredSignal>& signals,
                           const std::vector<std::string>& per_run) {

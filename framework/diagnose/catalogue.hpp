@@ -149,6 +149,11 @@ struct MeasuredSignal {
   std::string unit;  // SI unit of the model output
 };
 
+// The measurement faults of one measured signal, named OUTPUT.offset
+// (signal unit), OUTPUT.gain and OUTPUT.lag (s), each vanishing at its null
+// (0, 1, 0) and bounded by the signal's span and the runs' duration `t_span`.
+std::vector<Effect> measurement_faults(const MeasuredSignal& s, const SourceLocation& where, double t_span);
+
 // The faults the circuit's components declare (ComponentInfo::faults) as
 // effects named COMPONENT.FAULT, each setting the component's own
 // parameters (a factor fault: a factor on the netlist's value, within the

@@ -152,7 +152,7 @@ class Diagnosis {
   Diagnosis(const std::string& model_file, const std::string& runs_dir, const std::string& catalogue_file,
             const Registry& base, const DiagnoseOptions& opt)
       : opt_(opt), eng_(model_file, base, opt) {
-    eng_.runs = load_runs(runs_dir, eng_.base(), eng_.base_probes());
+    eng_.runs = load_runs(runs_dir, eng_.base(), eng_.base_probes(), eng_.registry());
     cat_ = candidates(catalogue_file, eng_.registry());
     refuse_recalibrating_operating_points();
     axes_ = experiment_axes();
@@ -269,11 +269,12 @@ class Diagnosis {
     std::vector<NextRunSetting> axes;
     auto value_in = [&](const MeasuredRun& run, const std::string& name) {
       for (const auto& [n, v] : run.operating_point)
-        if (n == name) return std::stod(v);  // SI numbers (load_runs)
+        if (n == name) return units::parse_quantity(v, nl.gas.p_ambient).si_value;  // checked by load_runs
       return nl.parameter(name)->si_value;
     };
     for (const auto& run : eng_.runs)
       for (const auto& op : run.operating_point) {
+        if (!nl.parameter(op.first)) continue;  // a component's setting (a replayed file): not an axis
         if (std::any_of(axes.begin(), axes.end(), [&](const auto& a) { return a.name == op.first; })) continue;
         NextRunSetting a;
         a.name = op.first;
@@ -838,7 +839,7 @@ class Diagnosis {
       for (const auto& a : axes_) {
         double v = eng_.base().parameter(a.name)->si_value;
         for (const auto& [n, text] : run.operating_point)
-          if (n == a.name) v = std::stod(text);
+          if (n == a.name) v = units::parse_quantity(text, eng_.base().gas.p_ambient).si_value;
         x.push_back(v);
       }
       s.measured_points.push_back(std::move(x));

@@ -48,7 +48,9 @@ struct MeasuredRun {
 
 // Reads DIR/*.yaml (each with data, role, operating_point) and their CSVs,
 // checked against the model's outputs (`probes`: their SI units) and
-// top-level parameters. A CSV header cell may give its column's unit,
+// parameters: an operating point sets top-level NAMEs and
+// COMPONENT.PARAMETERs (values as --set takes them; a file parameter, such
+// as a data_signal's replayed file, names a file inside DIR). A CSV header cell may give its column's unit,
 // "p [bar]", "p [barg]" (gauge: the model's ambient pressure added),
 // "t [ms]"; without one the column is SI. Every value is converted to SI.
 // `data:` must name a regular file inside DIR. A run's samples must lie in
@@ -59,7 +61,7 @@ struct MeasuredRun {
 // validation runs are optional (a calibration).
 enum class RunRoles { both_required, validation_optional };
 std::vector<MeasuredRun> load_runs(const std::string& dir, const Netlist& model, const std::vector<Probe>& probes,
-                                   RunRoles roles = RunRoles::both_required);
+                                   const Registry& registry, RunRoles roles = RunRoles::both_required);
 
 // Robust white-noise level of a sampled signal: median absolute deviation of
 // third differences / sqrt(20), floored by the quantisation step / sqrt(12).

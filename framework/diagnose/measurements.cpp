@@ -286,10 +286,33 @@ std::string data_file(const fs::path& runs_dir, const std::string& run_file, con
   return target.string();
 }
 
+// An operating point's COMPONENT.PARAMETER value, checked as --set checks
+// it (pointing at the run file); a file parameter (a replayed input) names
+// a file inside the runs folder, as `data:` does, and is given resolved.
+std::string component_value(const fs::path& runs_dir, const std::string& run_file, const Netlist& model,
+                            const Registry& registry, const std::string& name, const YAML::Node& node) {
+  const SourceLocation at = location_of(run_file, node);
+  if (!node.IsScalar()) throw InputError(at, "", name, "operating_point: the value must be a number, a quantity or a text");
+  std::string value = node.Scalar();
+  const auto dot = name.find('.');
+  for (const auto& c : model.components)
+    if (c.name == name.substr(0, dot))
+      if (const auto* entry = registry.find(c.type))
+        if (const ParameterSpec* spec = entry->info->parameter(name.substr(dot + 1)); spec && spec->is_path)
+          value = data_file(runs_dir, run_file, node);
+  Netlist probe = model;
+  try {
+    apply_override(probe, name + "=" + value);
+  } catch (const InputError& ex) {
+    throw InputError(at, "", name, "operating_point: " + ex.message());
+  }
+  return value;
+}
+
 }  // namespace
 
 std::vector<MeasuredRun> load_runs(const std::string& dir, const Netlist& model, const std::vector<Probe>& probes,
-                                   RunRoles roles) {
+                                   const Registry& registry, RunRoles roles) {
   if (!fs::is_directory(dir)) throw InputError(SourceLocation{dir, 0, 0}, "", "", "runs directory does not exist");
   std::vector<fs::path> files;
   for (const auto& e : fs::directory_iterator(dir))
@@ -321,6 +344,10 @@ std::vector<MeasuredRun> load_runs(const std::string& dir, const Netlist& model,
       if (!op.IsMap()) throw InputError(at(op), "", "operating_point", "operating_point maps parameter names to SI values");
       for (auto it = op.begin(); it != op.end(); ++it) {
         const auto name = plain_text(path, it->first, "", "", "a parameter's name");
+        if (name.find('.') != std::string::npos) {  // COMPONENT.PARAMETER
+          run.operating_point.emplace_back(name, component_value(fs::path(dir), path, model, registry, name, it->second));
+          continue;
+        }
         if (!model.parameter(name)) {
           std::string valid;
           for (const auto& p : model.parameters) valid += (valid.empty() ? "" : ", ") + p.name;
