@@ -546,8 +546,8 @@ struct Piston {
   // Faults (diagnosis), all 0 in a sound cylinder: leak conductances across
   // the piston seal and past the rod seal, heat exchange of each chamber's
   // gas with the surroundings, and a breakaway force apart from the rest of
-  // the friction.
-  double leak_piston_C, leak_rod_C, wall_kA, breakaway_F;
+  // the friction and a friction growing with the pressure across the seal.
+  double leak_piston_C, leak_rod_C, wall_kA, breakaway_F, friction_per_pressure;
 
   explicit Piston(const ParameterValues& p)
       : A(circle_area(p["bore"])),
@@ -565,7 +565,8 @@ struct Piston {
         leak_piston_C(p["fault_piston_leak_C"]),
         leak_rod_C(p["fault_rod_leak_C"]),
         wall_kA(p["fault_wall_kA"]),
-        breakaway_F(p["fault_breakaway_F"]) {
+        breakaway_F(p["fault_breakaway_F"]),
+        friction_per_pressure(p["fault_friction_per_pressure"]) {
     if (p["rod"] >= p["bore"]) throw ParameterError("rod", "rod diameter must be smaller than the bore");
     stops.hold_before_empty(cap.travel_to_empty(), rod.travel_to_empty());
   }
@@ -612,6 +613,11 @@ struct Piston {
         P::scalar("fault_breakaway_F", "N",
                   "fault (diagnosis): breakaway force beyond the friction law, fading above 5 mm/s; 0 = none", 0.0)
             .non_negative(),
+        P::scalar("fault_friction_per_pressure", "N/Pa",
+                  "fault (diagnosis): running friction beyond the law per pascal across the piston seal "
+                  "(e.g. 1e-5 N/Pa = 1 N/bar); 0 = none",
+                  0.0)
+            .non_negative(),
     };
     out.insert(out.end(), faults.begin(), faults.end());
     return out;
@@ -629,6 +635,10 @@ struct Piston {
          {{"k", "friction_scale", "1", true, 1.0, 0.25, 4.0, 1.3, true}}},
         {"friction_breakaway", "breakaway (stiction) force beyond the running friction (dry seals, long standstill)",
          {{"F", "fault_breakaway_F", "N", false, 0.0, 0.0, 200.0, 10.0, false}}},
+        {"friction_pressure",
+         "seal friction growing with the pressure across the seal beyond the law (seal squeeze, swelling: the "
+         "pressure term of the end-cushioning paper's eq. 8)",
+         {{"k", "fault_friction_per_pressure", "N/Pa", false, 0.0, 0.0, 1e-4, 5e-6, false}}},
         {"wall_heat", "heat exchange of the chamber gas with the walls and surroundings (unmodelled)",
          {{"kA", "fault_wall_kA", "W/K", false, 0.0, 0.0, 2.0, 0.1, false}}},
     };
@@ -677,6 +687,13 @@ struct Piston {
   template <class T>
   T breakaway(const T& v) const {
     return T(-breakaway_F * exp(-(v / 5e-3) * (v / 5e-3)) * tanh(v / friction.v_reg));
+  }
+
+  // The friction beyond the law that grows with the pressure difference
+  // across the piston seal (+x), opposing v; |dp| smoothed over 1 Pa.
+  template <class T>
+  T pressure_friction(const T& v, const T& dp) const {
+    return T(-friction_per_pressure * sqrt(dp * dp + 1.0) * tanh(v / friction.v_reg));
   }
 
   // Roots 0 and 1: the stops at x = 0 and x = stroke.

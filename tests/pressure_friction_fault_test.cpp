@@ -1,0 +1,56 @@
+// The cylinders' declared fault friction_pressure (fault_friction_per_pressure,
+// N/Pa): a running friction k |dp| against the motion, dp the pressure across
+// the piston seal. A single-acting cylinder held at 5 bar gauge (a large
+// supply port) and driven at a constant 20 mm/s: with k = 1e-5 N/Pa the drive
+// needs k * 5e5 Pa = 5 N more against the motion, in either direction, and
+// nothing at all with k = 0 beyond the law (here none).
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "tests/test_support.hpp"
+
+namespace pneumo {
+namespace {
+
+std::string rig(double v, double k) {
+  return R"(parameters: {k: )" + test_support::num(k) + R"(, v: )" + test_support::num(v) + R"(}
+components:
+  supply: {type: pressure_source, p: 5 barg}
+  port: {type: iso6358_throttle, C: 5 dm3/(s*bar), b: 0.3}
+  cyl: {type: single_acting_cylinder, bore: 25 mm, rod: 8 mm, stroke: 50 mm, spring_rate: 0 N/m,
+        x0: 20 mm, p0_cap: 5 barg, fault_friction_per_pressure: k}
+  drive: {type: velocity_source, v: v, s0: 20 mm}
+connections:
+  - [supply.port, port.a]
+  - [port.b, cyl.cap]
+  - [drive.flange, cyl.flange]
+outputs:
+  F: drive.F
+  p: cyl.p_cap
+simulation: {t_end: 0.5 s, output_interval: 10 ms}
+)";
+}
+
+double force_at_end(double v, double k) {
+  const RunResult r = test_support::run_text(rig(v, k), "pressure_friction.yaml");
+  EXPECT_TRUE(r.solver.ok) << r.solver.message;
+  return test_support::at(r.table, "F", 0.5);
+}
+
+double dp_at_end(double v) {
+  const RunResult r = test_support::run_text(rig(v, 0), "pressure_friction.yaml");
+  return test_support::at(r.table, "p", 0.5) - 101325.0;
+}
+
+TEST(PressureFrictionFault, AddsKTimesThePressureAcrossTheSealAgainstTheMotion) {
+  for (double v : {0.02, -0.02}) {
+    const double extra = force_at_end(v, 1e-5) - force_at_end(v, 0.0);
+    const double expected = 1e-5 * dp_at_end(v) * (v > 0 ? 1.0 : -1.0);  // the drive pushes through the friction
+    EXPECT_NEAR(extra, expected, 0.01 * std::abs(expected)) << "v = " << v;
+    EXPECT_NEAR(std::abs(expected), 5.0, 0.2);  // 5 bar across the seal, 1 N/bar
+  }
+}
+
+}  // namespace
+}  // namespace pneumo
