@@ -237,6 +237,30 @@ TEST(Draw, TheCylinderHeadsItsColumnWithItsValveBeneathAndTheSupplyAtTheBottom) 
   EXPECT_LT(s["cyl_A"].x + s["cyl_A"].w, s["cyl_B"].x);  // one column each
 }
 
+// However many elements one path holds between the cylinder and its valve
+// (cushion_rig_full: meter-out, line volume and hose on one side, a hose on
+// the other; the meter-out cylinder: flow controls and lines), the valve is
+// beneath all of them, and what hangs on its exhaust (a silencer) beneath it.
+TEST(Draw, TheValveIsBeneathEveryElementBetweenItAndItsCylinder) {
+  TempDir dir;
+  const fs::path nets = fs::path(PNEUMO_SOURCE_DIR) / "netlists";
+  auto by_name = [](const Svg& d) {
+    std::map<std::string, Rect> s;
+    for (const auto& r : d.symbols) s[r.name] = r;
+    return s;
+  };
+  auto full = by_name(draw(dir, nets / "cushion_rig_full.yaml"));
+  for (const char* between : {"meter_out", "line_B", "hose_A", "hose_B"}) {
+    EXPECT_LT(full["cylinder"].y, full[between].y) << between;
+    EXPECT_LT(full[between].y + full[between].h, full["valve"].y) << between;
+  }
+  EXPECT_LT(full["valve"].y, full["supply"].y);
+  auto meter_out = by_name(draw(dir, nets / "meter_out_cylinder.yaml"));
+  for (const char* between : {"flow_cap", "flow_rod", "line_A", "line_B"})
+    EXPECT_LT(meter_out[between].y + meter_out[between].h, meter_out["valve"].y) << between;
+  EXPECT_LT(meter_out["valve"].y, meter_out["silencer"].y);
+}
+
 TEST(Draw, APluginTypeWithoutASymbolIsABoxWithItsPortsNamed) {
   TempDir dir;
   const std::string net = dir.write("seal.yaml", "plugins:\n  - " + std::string(PNEUMO_TEST_PLUGIN_DIR) +

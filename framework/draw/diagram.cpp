@@ -173,6 +173,7 @@ struct Node {
   Symbol::Tier tier;
   int column = -1;
   int level = 0;
+  int parent = -1;  // the node the spread along air lines reached it from
   bool placed = false;
 };
 
@@ -229,9 +230,16 @@ class Placer {
       const int i = q.front();
       q.pop();
       for (int j : neighbours(i, Domain::pneumatic)) {
+        // Reached as near through a valve and through something else: it
+        // lies between the actuator and the valve, not beyond the valve.
+        Node& nj = nodes_[j];
+        if (nj.column == nodes_[i].column && nj.level == nodes_[i].level + 1 && nj.parent >= 0 &&
+            nodes_[nj.parent].tier == Tier::valve && nodes_[i].tier != Tier::valve)
+          nj.parent = i;
         if (nodes_[j].column >= 0 || !is_air_line(j)) continue;
         nodes_[j].column = nodes_[i].column;
         nodes_[j].level = nodes_[i].level + 1;
+        nodes_[j].parent = i;
         q.push(j);
       }
     }
@@ -251,6 +259,32 @@ class Placer {
     return dist[target];
   }
 
+  // ISO 1219-2: energy flows bottom to top, so an actuator's directional
+  // valve sits at the foot of its column, beneath the flow controls, lines
+  // and hoses between them - however many of those one path holds.
+  // What lies beyond the valve (a silencer on its exhaust) stays beneath it.
+  void valves_at_the_bottom() {
+    auto valve_above = [&](int i) {
+      for (int a = nodes_[i].parent; a >= 0; a = nodes_[a].parent)
+        if (nodes_[a].tier == Tier::valve) return a;
+      return -1;
+    };
+    std::map<int, int> deepest;
+    for (std::size_t i = 0; i < nodes_.size(); ++i)
+      if (nodes_[i].column >= 0 && valve_above(static_cast<int>(i)) < 0)
+        deepest[nodes_[i].column] = std::max(deepest[nodes_[i].column], nodes_[i].level);
+    std::vector<int> level(nodes_.size());
+    for (std::size_t i = 0; i < nodes_.size(); ++i) {
+      const Node& n = nodes_[i];
+      const int v = valve_above(static_cast<int>(i));
+      const bool valve = n.tier == Tier::valve && v < 0 && n.level > 0;
+      level[i] = valve ? deepest[n.column] + 1
+                 : v >= 0 && nodes_[v].level > 0 ? deepest[n.column] + 1 + (n.level - nodes_[v].level)
+                                                 : n.level;
+    }
+    for (std::size_t i = 0; i < nodes_.size(); ++i) nodes_[i].level = level[i];
+  }
+
   void assign_columns() {
     std::vector<int> heads;
     for (std::size_t i = 0; i < nodes_.size(); ++i)
@@ -259,6 +293,7 @@ class Placer {
         heads.push_back(static_cast<int>(i));
       }
     spread(heads);
+    valves_at_the_bottom();
     // Circuits (or parts) without an actuator: the component farthest from
     // the supply heads a column (a tank being filled).
     for (;;) {
