@@ -305,6 +305,8 @@ void show_in_habitual_unit(CalibratedParameter& c, const Netlist& nl) {
   // slope in N/Pa is not an area to show in mm2.
   static const std::set<std::string> plain = {"m", "Pa", "K", "m2", "m3", "m3/(s*Pa)"};
   if (unit.empty() && plain.count(c.unit)) unit = engineering_unit(dim);
+  // A reading's offset is a difference: bar, not bar g.
+  if (c.reading) unit = units::difference_unit(unit);
   if (unit.empty()) {
     c.shown_unit = c.unit;
     return;
