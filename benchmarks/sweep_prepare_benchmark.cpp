@@ -65,7 +65,8 @@ Phases run_phases(const Model& model, const Design& d, const Sample& s, const st
     c = now;
   };
   Netlist nl = model.netlist;
-  for (std::size_t j = 0; j < d.parameters.size(); ++j) assign(nl, d.parameters[j], s[j]);
+  for (std::size_t j = 0; j < d.parameters.size(); ++j)
+    set_si_value(nl, {d.parameters[j].component, d.parameters[j].parameter}, s[j]);
   lap(p.edit);
   const MetricPlan plan = prepare_metrics(nl, metrics);
   Circuit circuit = elaborate(nl, model.registry);

@@ -99,13 +99,6 @@ std::vector<double> lag_filter(const std::vector<double>& ts, const std::vector<
   return y;
 }
 
-std::string si_text(double v) {
-  std::ostringstream o;
-  o.precision(17);
-  o << v;
-  return o.str();
-}
-
 }  // namespace
 
 Engine::Engine(const std::string& model_file, const Registry& base, const DiagnoseOptions& options)
@@ -122,8 +115,9 @@ Model Engine::model(const std::vector<EffectInstance>& effects) const {
 Netlist Engine::netlist_of(const Model& m, int k, const Setting& at) const {
   const MeasuredRun& run = runs[k];
   Netlist nl = m.netlist;
-  for (const auto& [name, value] : run.operating_point) apply_override(nl, name + "=" + value);
-  for (const auto& [name, value] : at) apply_override(nl, name + "=" + si_text(value));
+  for (const auto& [name, value] : run.operating_point)
+    set_value(nl, ParameterPath::parse(name), value, "run " + run.name + ": operating_point");
+  for (const auto& [name, value] : at) set_si_value(nl, ParameterPath::parse(name), value);
   nl.simulation.t_end = run.t.back() + 1e-9;
   const double dt = (run.t.back() - run.t.front()) / std::max<std::size_t>(1, run.t.size() - 1);
   nl.simulation.output_interval = std::min(nl.simulation.output_interval, dt);

@@ -302,7 +302,7 @@ std::string component_value(const fs::path& runs_dir, const std::string& run_fil
           value = data_file(runs_dir, run_file, node);
   Netlist probe = model;
   try {
-    apply_override(probe, name + "=" + value);
+    set_value(probe, ParameterPath::parse(name), value, name + ": " + value);
   } catch (const InputError& ex) {
     throw InputError(at, "", name, "operating_point: " + ex.message());
   }
@@ -360,7 +360,7 @@ std::vector<MeasuredRun> load_runs(const std::string& dir, const Netlist& model,
         run.operating_point.emplace_back(name, it->second.Scalar());
         Netlist probe = model;  // checks the value now, pointing at the run file
         try {
-          apply_override(probe, name + "=" + it->second.Scalar());
+          set_value(probe, ParameterPath::parse(name), it->second.Scalar(), name + ": " + it->second.Scalar());
         } catch (const InputError& ex) {
           throw InputError(at(it->second), "", name, "operating_point: " + ex.message());
         }

@@ -610,20 +610,22 @@ void override_component_parameter(Netlist& nl, const std::string& name, const st
 
 }  // namespace
 
-void apply_override(Netlist& nl, const std::string& assignment) {
-  // The mistake is on the command line, but the place to compare it with is
-  // the netlist: errors point at the declaration (or at 'parameters:').
-  const std::string option = "--set " + assignment;
+ParameterPath ParameterPath::parse(const std::string& name) {
+  const auto dot = name.find('.');
+  if (dot == std::string::npos) return {"", name};
+  return {name.substr(0, dot), name.substr(dot + 1)};
+}
+
+void set_value(Netlist& nl, const ParameterPath& path, const std::string& text, const std::string& origin) {
+  // The mistake is in the option or the run file, but the place to compare
+  // it with is the netlist: errors point at the declaration (or at 'parameters:').
   const SourceLocation netlist_where =
       nl.parameters_where.known() ? nl.parameters_where : SourceLocation{nl.file, 1, 1};
-  const auto eq = assignment.find('=');
-  if (eq == std::string::npos || eq == 0)
-    throw InputError(netlist_where, "", "",
-                     option + ": expected NAME=VALUE, e.g. --set p_supply=7e5 or --set p_supply='7 bar'");
-  const std::string name = assignment.substr(0, eq);
-  const std::string text = assignment.substr(eq + 1);
-  if (apply_simulation_override(nl.simulation, assignment, netlist_where)) return;
-  if (name.find('.') != std::string::npos) return override_component_parameter(nl, name, text, option, netlist_where);
+  const std::string name = path.text();
+  if (path.component == "simulation" &&
+      apply_simulation_override(nl.simulation, name + "=" + text, netlist_where))
+    return;
+  if (!path.component.empty()) return override_component_parameter(nl, name, text, origin, netlist_where);
   TopParameter* p = nullptr;
   for (auto& tp : nl.parameters)
     if (tp.name == name) p = &tp;
@@ -631,23 +633,23 @@ void apply_override(Netlist& nl, const std::string& assignment) {
     std::vector<std::string> names;
     for (const auto& tp : nl.parameters) names.push_back(tp.name);
     throw InputError(netlist_where, "", name,
-                     option + ": no top-level parameter '" + name + "' under 'parameters:' in " + nl.file +
+                     origin + ": no top-level parameter '" + name + "' under 'parameters:' in " + nl.file +
                          "; only those can be set; " + choices_hint(name, names));
   }
   units::Quantity q{};
   try {
     q = units::parse_quantity(text, nl.gas.p_ambient);
   } catch (const units::ParseError& e) {
-    throw InputError(p->where, "", name, option + ": cannot read '" + text + "': " + e.what());
+    throw InputError(p->where, "", name, origin + ": cannot read '" + text + "': " + e.what());
   }
   if (q.had_unit && p->had_unit && !(q.dim == p->dim))
     throw InputError(p->where, "", name,
-                     option + ": '" + text + "' has dimension " + q.dim.to_string() + " but '" + name +
+                     origin + ": '" + text + "' has dimension " + q.dim.to_string() + " but '" + name +
                          "' is declared here with dimension " + p->dim.to_string());
   if (!q.had_unit && p->had_unit)
     if (const std::string unit = units::habitual_unit_if_implausible(q.si_value, p->dim); !unit.empty())
       throw InputError(p->where, "", name,
-                       option + ": '" + text + "' has no unit, so it would be " + units::format_si(q.si_value, p->dim) +
+                       origin + ": '" + text + "' has no unit, so it would be " + units::format_si(q.si_value, p->dim) +
                            "; write the unit, e.g. --set '" + name + "=" + text + " " + unit + "'");
   p->si_value = q.si_value;
   if (q.had_unit) {
@@ -655,6 +657,42 @@ void apply_override(Netlist& nl, const std::string& assignment) {
     p->had_unit = true;
     p->gauge = q.gauge;
   }
+}
+
+void set_si_value(Netlist& nl, const ParameterPath& path, double si_value) {
+  const SourceLocation netlist_where =
+      nl.parameters_where.known() ? nl.parameters_where : SourceLocation{nl.file, 1, 1};
+  if (path.component.empty()) {
+    for (auto& tp : nl.parameters)
+      if (tp.name == path.parameter) {
+        tp.si_value = si_value;
+        return;
+      }
+    throw InputError(netlist_where, "", path.parameter, "no top-level parameter '" + path.parameter + "'");
+  }
+  for (auto& c : nl.components) {
+    if (c.name != path.component) continue;
+    for (auto& [key, v] : c.parameters)
+      if (key == path.parameter) {
+        v = ValueDecl::number(si_value, v.where);
+        return;
+      }
+    c.parameters.emplace_back(path.parameter, ValueDecl::number(si_value, c.where));
+    if (!c.parameter_where.empty()) c.parameter_where.push_back(c.where);
+    return;
+  }
+  throw InputError(netlist_where, path.component, "", "no component '" + path.component + "'");
+}
+
+void apply_override(Netlist& nl, const std::string& assignment) {
+  const auto eq = assignment.find('=');
+  if (eq == std::string::npos || eq == 0) {
+    const SourceLocation netlist_where =
+        nl.parameters_where.known() ? nl.parameters_where : SourceLocation{nl.file, 1, 1};
+    throw InputError(netlist_where, "", "",
+                     "--set " + assignment + ": expected NAME=VALUE, e.g. --set p_supply=7e5 or --set p_supply='7 bar'");
+  }
+  set_value(nl, ParameterPath::parse(assignment.substr(0, eq)), assignment.substr(eq + 1), "--set " + assignment);
 }
 
 }  // namespace pneumo

@@ -172,6 +172,26 @@ struct Netlist {
 Netlist load_netlist(const std::string& path);
 Netlist parse_netlist(const std::string& text, const std::string& file_name);
 
+// The name of a value of a netlist: a top-level parameter (component empty),
+// a component's parameter, or a `simulation:` key (component "simulation").
+struct ParameterPath {
+  std::string component, parameter;
+  static ParameterPath parse(const std::string& name);  // NAME, COMPONENT.PARAMETER or simulation.KEY
+  std::string text() const { return component.empty() ? parameter : component + "." + parameter; }
+};
+
+// The one way to change a value of a netlist, for every face (--set, a run
+// file's operating point, studies, the diagnosis, Python): `text` an SI
+// number or a quantity for a top-level parameter or a simulation key, or a
+// component's value as it would be written in the netlist (read and checked
+// at elaboration). Errors start with `origin` ("--set p=7 bar", "run cal1:
+// operating point") and point at the netlist's declaration.
+void set_value(Netlist& netlist, const ParameterPath& path, const std::string& text, const std::string& origin);
+// An SI number from a study or a fit, never printed and read again: a
+// top-level parameter's value, or a component's (added if the netlist left
+// it at its default). Throws InputError for a name the netlist lacks.
+void set_si_value(Netlist& netlist, const ParameterPath& path, double si_value);
+
 // Apply `--set NAME=VALUE`, the same for every command and Python: NAME a
 // top-level parameter (VALUE an SI number or a quantity with unit, "7 bar",
 // of the declared dimension), COMPONENT.PARAMETER (VALUE as it would be

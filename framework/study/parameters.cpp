@@ -99,29 +99,6 @@ void refuse_repeated(const Netlist& nl, const std::vector<StudyParameter>& ps, c
                              "; give each parameter once");
 }
 
-void assign(Netlist& nl, const StudyParameter& p, double value) {
-  if (p.component.empty()) {
-    for (auto& tp : nl.parameters)
-      if (tp.name == p.parameter) {
-        tp.si_value = value;
-        return;
-      }
-    throw InputError(netlist_where(nl), "", p.parameter, "no top-level parameter '" + p.parameter + "'");
-  }
-  for (auto& c : nl.components) {
-    if (c.name != p.component) continue;
-    for (auto& [key, v] : c.parameters)
-      if (key == p.parameter) {
-        v = ValueDecl::number(value, v.where);
-        return;
-      }
-    c.parameters.emplace_back(p.parameter, ValueDecl::number(value, c.where));
-    if (!c.parameter_where.empty()) c.parameter_where.push_back(c.where);
-    return;
-  }
-  throw InputError(netlist_where(nl), p.component, "", "no component '" + p.component + "'");
-}
-
 // Results show `p` in `unit_text` when it names a unit of the parameter's
 // dimension (what the user wrote); otherwise in the unit engineers read.
 void set_display_unit(StudyParameter& p, const std::string& unit_text, double ambient) {

@@ -38,10 +38,6 @@ StudyParameter resolve_parameter(const Netlist& netlist, const Registry& registr
 double parse_value(const Netlist& netlist, const Registry& registry, const StudyParameter& p,
                    const std::string& text, const std::string& option);
 
-// Put `value` (SI) into the netlist: the top-level parameter's value, or the
-// component's parameter (added if the netlist left it at its default).
-void assign(Netlist& netlist, const StudyParameter& p, double value);
-
 // One run's parameter values, in the order of the study's parameters.
 using Sample = std::vector<double>;
 

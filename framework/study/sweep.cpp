@@ -277,7 +277,7 @@ RunRecord SweepRunner::run(const Sample& sample) const {
   RunRecord rec;
   try {
     Netlist run_nl = netlist_;
-    for (std::size_t j = 0; j < parameters_.size(); ++j) assign(run_nl, parameters_[j], sample[j]);
+    for (std::size_t j = 0; j < parameters_.size(); ++j) set_si_value(run_nl, {parameters_[j].component, parameters_[j].parameter}, sample[j]);
     Circuit circuit = elaborate(run_nl, registry_);
     const std::vector<AuditPlan> audits = prepare_audits(plan_, run_nl, circuit);
     AssemblyOptions run_assembly = assembly_;
