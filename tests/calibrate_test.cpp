@@ -123,21 +123,22 @@ TEST(Calibrate, AConductanceAndCriticalRatioComeBackWithinThreeStandardErrorsOfT
   EXPECT_TRUE(std::filesystem::exists(std::filesystem::path(out) / "six.csv"));
 }
 
+// DIR/runs holding a copy of the TU Delft leak-down FILE (tests/data/tudelft)
+// and its run file: rows from `skip_rows` on, the time shifted by
+// `t_offset_ms`, the pressure column in bar gauge.
+void write_leak_down_run(const TempDir& dir, const std::string& file, int skip_rows, int t_offset_ms) {
+  std::filesystem::create_directories(dir.path() / "runs");
+  std::filesystem::copy_file(kSrc + "/tests/data/tudelft/" + file, dir.path() / "runs" / file);
+  std::ofstream(dir.path() / "runs" / "run.yaml")
+      << "data:\n  file: " << file << "\n  separator: semicolon\n  header: no\n  skip_rows: " << skip_rows
+      << "\n  thousands: \".\"\n  columns:\n    t: {column: 1, unit: ms, offset: " << t_offset_ms
+      << "}\n    p: {column: 3, unit: bar g}\n";
+}
+
 TEST(CalibrateReal, TheLeakDownConductanceFromTwiceOffReturnsToTheHandFit) {
   TempDir dir;
-  std::filesystem::create_directories(dir.path() / "runs");
-  std::filesystem::copy_file(kSrc + "/tests/data/tudelft/Ultimaker_015.csv", dir.path() / "runs" / "Ultimaker_015.csv");
   // The valve closed at 7.15 s of the file: rows from 7.348 s, time shifted to that instant.
-  std::ofstream(dir.path() / "runs" / "leak.yaml") << R"(data:
-  file: Ultimaker_015.csv
-  separator: semicolon
-  header: no
-  skip_rows: 67
-  thousands: "."
-  columns:
-    t: {column: 1, unit: ms, offset: -7150}
-    p: {column: 3, unit: bar g}
-)";
+  write_leak_down_run(dir, "Ultimaker_015.csv", 67, -7150);
   const auto out = (dir.path() / "report").string();
   const auto [rc, text] =
       run_cli("calibrate '" + kSrc + "/netlists/real/tudelft_leak_down.yaml' --runs '" + (dir.path() / "runs").string() +
@@ -161,17 +162,7 @@ TEST(CalibrateReal, TheLeakDownConductanceFromTwiceOffReturnsToTheHandFit) {
 // the fit reaches the sensor's few mbar.
 TEST(CalibrateReal, TheAluminiumChamberLeaksUnderAThousandthOfThePrintedOne) {
   TempDir dir;
-  std::filesystem::create_directories(dir.path() / "runs");
-  std::filesystem::copy_file(kSrc + "/tests/data/tudelft/Aluminium.csv", dir.path() / "runs" / "Aluminium.csv");
-  std::ofstream(dir.path() / "runs" / "alu.yaml") << R"(data:
-  file: Aluminium.csv
-  separator: semicolon
-  header: no
-  thousands: "."
-  columns:
-    t: {column: 1, unit: ms}
-    p: {column: 3, unit: bar g}
-)";
+  write_leak_down_run(dir, "Aluminium.csv", 0, 0);
   const auto out = (dir.path() / "report").string();
   const auto [rc, text] = run_cli("calibrate '" + kSrc + "/netlists/real/tudelft_leak_down.yaml' --runs '" +
                                   (dir.path() / "runs").string() +
