@@ -125,7 +125,6 @@ std::string what_is_missed(const std::string& unit, bool positive, const std::st
   if (unit == "J" || unit == "K") return std::string("energy (heat or enthalpy flow) ") + (positive ? "into " : "out of ") + name;
   if (unit == "m/s") return std::string("a force in the ") + (positive ? "positive" : "negative") + " direction on " + name;
   if (unit == "rad/s") return std::string("a torque in the ") + (positive ? "positive" : "negative") + " direction on " + name;
-  if (unit == "m" || unit == "rad") return std::string("a drift ") + (positive ? "forward" : "backward") + " of " + name;
   if (unit == "Pa") return std::string("a pressure ") + (positive ? "rise" : "fall") + " of " + name;
   return std::string("a ") + (positive ? "rise" : "fall") + " of " + name + " that its equations do not have";
 }
@@ -206,12 +205,15 @@ class Search {
     const std::size_t nr = used.size();
     std::vector<Candidate> cands;
     for (const auto& st : model_states(*in_.model, *in_.registry)) {
+      // ds/dt = v defines the velocity: nothing physical is missing from it,
+      // and a drift there only pushes the piston through its stops. A drift
+      // of a position reading is the sensors' offset and gain below.
+      if (st.unit == "m" || st.unit == "rad") continue;
       Candidate c;
       c.variable = c.finding.balance = st.name;
       c.finding.unit = st.unit.empty() ? "1/s" : st.unit.ends_with("/s") ? st.unit + "2" : st.unit + "/s";
       c.finding.kind = st.unit == "kg" ? "mass" : st.unit == "J" || st.unit == "K" ? "energy"
-                     : st.unit == "m/s" || st.unit == "rad/s" ? "force" : st.unit == "m" || st.unit == "rad" ? "motion"
-                     : "state";
+                     : st.unit == "m/s" || st.unit == "rad/s" ? "force" : "state";
       c.P = roughness(B, 0);
       for (std::size_t q = 0; q < nr; ++q) {
         c.scale.push_back(0.01 * st.nominal / (knots[q][1] - knots[q][0]));
