@@ -242,5 +242,21 @@ TEST(Calibrate, BadFreeParametersAndReportFoldersAreRefusedNamingTheOption) {
   refused("--free C --out '" + runs + "'", "runs folder");
 }
 
+// A run file's operating point may set a component's value; one that the
+// component refuses (a force for a conductance) is refused when the runs are
+// read, at the run file's line, not at every run.
+TEST(Calibrate, ARunFilesComponentValueIsCheckedAtItsLine) {
+  TempDir dir;
+  write_noisy_run(dir, "six", "6 bar", "calibration", 11);
+  std::ofstream(dir.path() / "runs" / "six.yaml")
+      << "data: six.csv\nrole: calibration\noperating_point:\n  p0: 6 bar\n  valve.C: 5 N\n";
+  const auto model = dir.write("model.yaml", kTank);
+  const auto [rc, text] = run_cli("calibrate '" + model + "' --runs '" + (dir.path() / "runs").string() +
+                                  "' --free C --out '" + (dir.path() / "report").string() + "' -q");
+  EXPECT_EQ(rc, 2) << text;
+  EXPECT_NE(text.find("six.yaml:5"), std::string::npos) << text;
+  EXPECT_NE(text.find("valve.C"), std::string::npos) << text;
+}
+
 }  // namespace
 }  // namespace pneumo

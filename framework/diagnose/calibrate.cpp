@@ -144,9 +144,9 @@ std::vector<Effect> free_parameters(const CalibrateOptions& opt, const Engine& e
     if (!seen.insert(e.name).second) throw InputError(kFreeOption, "", e.name, "--free: '" + e.name + "' is given twice");
     for (const auto& run : eng.runs)
       for (const auto& op : run.operating_point)
-        if (op.first == e.recalibrates)
-          throw InputError(kFreeOption, "", op.first,
-                           "--free: '" + op.first + "' is set by the operating point of run '" + run.name +
+        if (op.name() == e.recalibrates)
+          throw InputError(kFreeOption, "", op.name(),
+                           "--free: '" + op.name() + "' is set by the operating point of run '" + run.name +
                                "', so no single value can be fitted; fix it there or leave it out of --free");
     out.push_back(std::move(e));
   }

@@ -238,7 +238,7 @@ class Diagnosis {
             it->second.first = std::min(it->second.first, y);
             it->second.second = std::max(it->second.second, y);
           }
-        for (const auto& op : run.operating_point) per_run.push_back(op.first);
+        for (const auto& op : run.operating_point) per_run.push_back(op.name());
       }
       std::vector<MeasuredSignal> signals;
       for (const Probe& p : eng_.base_probes())
@@ -255,9 +255,9 @@ class Diagnosis {
     for (const auto& e : cat_.effects)
       for (const auto& run : eng_.runs)
         for (const auto& op : run.operating_point)
-          if (op.first == e.recalibrates)
-            throw InputError(e.where, "", op.first,
-                             "recalibrate: '" + op.first + "' is set by the operating point of run '" + run.name +
+          if (op.name() == e.recalibrates)
+            throw InputError(e.where, "", op.name(),
+                             "recalibrate: '" + op.name() + "' is set by the operating point of run '" + run.name +
                                  "', so it cannot be re-calibrated");
   }
 
@@ -268,19 +268,19 @@ class Diagnosis {
     const Netlist& nl = eng_.base();
     std::vector<NextRunSetting> axes;
     auto value_in = [&](const MeasuredRun& run, const std::string& name) {
-      for (const auto& [n, v] : run.operating_point)
-        if (n == name) return units::parse_quantity(v, nl.gas.p_ambient).si_value;  // checked by load_runs
+      for (const auto& op : run.operating_point)
+        if (op.name() == name && op.si) return *op.si;
       return nl.parameter(name)->si_value;
     };
     for (const auto& run : eng_.runs)
       for (const auto& op : run.operating_point) {
-        if (!nl.parameter(op.first)) continue;  // a component's setting (a replayed file): not an axis
-        if (std::any_of(axes.begin(), axes.end(), [&](const auto& a) { return a.name == op.first; })) continue;
+        if (!op.si) continue;  // a component's setting (a replayed file): not an axis
+        if (std::any_of(axes.begin(), axes.end(), [&](const auto& a) { return a.name == op.name(); })) continue;
         NextRunSetting a;
-        a.name = op.first;
+        a.name = op.name();
         a.lower = INFINITY;
         a.upper = -INFINITY;
-        a.unit = units::si_unit_name(nl.parameter(op.first)->dim);
+        a.unit = units::si_unit_name(nl.parameter(op.name())->dim);
         for (const auto& r : eng_.runs) a.lower = std::min(a.lower, value_in(r, a.name)), a.upper = std::max(a.upper, value_in(r, a.name));
         if (a.upper > a.lower) axes.push_back(a);
       }
@@ -838,8 +838,8 @@ class Diagnosis {
       std::vector<double> x;
       for (const auto& a : axes_) {
         double v = eng_.base().parameter(a.name)->si_value;
-        for (const auto& [n, text] : run.operating_point)
-          if (n == a.name) v = units::parse_quantity(text, eng_.base().gas.p_ambient).si_value;
+        for (const auto& op : run.operating_point)
+          if (op.name() == a.name && op.si) v = *op.si;
         x.push_back(v);
       }
       s.measured_points.push_back(std::move(x));

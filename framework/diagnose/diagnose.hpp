@@ -35,11 +35,23 @@ namespace pneumo::diagnose {
 
 enum class Role { calibration, validation };
 
+// A value a run file's operating point sets, read once when the run is
+// loaded: a top-level parameter's SI value, or a component's value as
+// written (a replayed file resolved inside the runs folder), checked then.
+struct OperatingValue {
+  ParameterPath path;
+  std::string text;          // as written
+  std::optional<double> si;  // a top-level parameter's value
+  SourceLocation where;      // in the run file
+  std::string name() const { return path.text(); }
+  void apply(Netlist& netlist) const;  // set_si_value, else set_value naming `where`
+};
+
 struct MeasuredRun {
   std::string name;
   std::string csv_file;
   Role role = Role::calibration;
-  std::vector<std::pair<std::string, std::string>> operating_point;  // name, value text (SI or quantity)
+  std::vector<OperatingValue> operating_point;
   std::vector<double> t;
   std::vector<std::string> signals;        // model output names, file order
   std::vector<std::vector<double>> y;      // per signal, at t

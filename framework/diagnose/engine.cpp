@@ -115,8 +115,7 @@ Model Engine::model(const std::vector<EffectInstance>& effects) const {
 Netlist Engine::netlist_of(const Model& m, int k, const Setting& at) const {
   const MeasuredRun& run = runs[k];
   Netlist nl = m.netlist;
-  for (const auto& [name, value] : run.operating_point)
-    set_value(nl, ParameterPath::parse(name), value, "run " + run.name + ": operating_point");
+  for (const auto& op : run.operating_point) op.apply(nl);
   for (const auto& [name, value] : at) set_si_value(nl, ParameterPath::parse(name), value);
   nl.simulation.t_end = run.t.back() + 1e-9;
   const double dt = (run.t.back() - run.t.front()) / std::max<std::size_t>(1, run.t.size() - 1);

@@ -303,6 +303,7 @@ std::string component_value(const fs::path& runs_dir, const std::string& run_fil
   Netlist probe = model;
   try {
     set_value(probe, ParameterPath::parse(name), value, name + ": " + value);
+    (void)elaborate(probe, registry);  // a component's value is read and checked here, not at the first run
   } catch (const InputError& ex) {
     throw InputError(at, "", name, "operating_point: " + ex.message());
   }
@@ -310,6 +311,11 @@ std::string component_value(const fs::path& runs_dir, const std::string& run_fil
 }
 
 }  // namespace
+
+void OperatingValue::apply(Netlist& netlist) const {
+  if (si) set_si_value(netlist, path, *si);
+  else set_value(netlist, path, text, where.to_string());
+}
 
 std::vector<MeasuredRun> load_runs(const std::string& dir, const Netlist& model, const std::vector<Probe>& probes,
                                    const Registry& registry, RunRoles roles) {
@@ -345,7 +351,9 @@ std::vector<MeasuredRun> load_runs(const std::string& dir, const Netlist& model,
       for (auto it = op.begin(); it != op.end(); ++it) {
         const auto name = plain_text(path, it->first, "", "", "a parameter's name");
         if (name.find('.') != std::string::npos) {  // COMPONENT.PARAMETER
-          run.operating_point.emplace_back(name, component_value(fs::path(dir), path, model, registry, name, it->second));
+          run.operating_point.push_back({ParameterPath::parse(name),
+                                         component_value(fs::path(dir), path, model, registry, name, it->second),
+                                         std::nullopt, at(it->second)});
           continue;
         }
         if (!model.parameter(name)) {
@@ -357,13 +365,14 @@ std::vector<MeasuredRun> load_runs(const std::string& dir, const Netlist& model,
         }
         if (!it->second.IsScalar())
           throw InputError(at(it->second), "", name, "operating_point: the value must be a number (SI)");
-        run.operating_point.emplace_back(name, it->second.Scalar());
         Netlist probe = model;  // checks the value now, pointing at the run file
         try {
           set_value(probe, ParameterPath::parse(name), it->second.Scalar(), name + ": " + it->second.Scalar());
         } catch (const InputError& ex) {
           throw InputError(at(it->second), "", name, "operating_point: " + ex.message());
         }
+        run.operating_point.push_back(
+            {ParameterPath::parse(name), it->second.Scalar(), probe.parameter(name)->si_value, at(it->second)});
       }
     }
     if (y["data"].IsMap()) {
