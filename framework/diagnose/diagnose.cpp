@@ -88,7 +88,10 @@ Unexplained leftover(Engine& eng, const Model& verdict, const DiagnosisReport& r
   significant_windows(eng.runs, val, r_val, u.windows);
   const Netlist model = eng.netlist_of(verdict, 0);
   UnexplainedInput in{&eng.runs, &eng.phase_names, &eng.phases, &model, &eng.registry(),
-                      [&](int k, const std::vector<Disturbance>& d) { return eng.simulate(verdict, k, d); }, log};
+                      [&](int k, const std::vector<Disturbance>& d, std::string* why) {
+                        return eng.simulate(verdict, k, d, {}, why);
+                      },
+                      log};
   explain_by_balances(in, eng.options(), u);
   return u;
 }

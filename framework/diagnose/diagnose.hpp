@@ -183,6 +183,7 @@ struct BalanceFinding {  // one candidate balance or sensor
   double gap_after = 0;     // all runs, normalised RMS, with this disturbance fitted
   double explained = 0;     // share of the remaining excess gap (gap - 1) it removes
   bool confirmed = false;   // gap_after simulated with the fitted disturbance, not linearly predicted
+  std::string failure;      // why its confirming simulation failed (empty: it ran, or none was tried)
 };
 
 struct Unexplained {

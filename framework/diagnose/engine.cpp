@@ -124,7 +124,7 @@ Netlist Engine::netlist_of(const Model& m, int k, const Setting& at) const {
 }
 
 std::vector<std::vector<double>> Engine::simulate(const Model& m, int k, const std::vector<Disturbance>& disturbances,
-                                                  const Setting& at) {
+                                                  const Setting& at, std::string* why) {
   ++simulations;
   const MeasuredRun& run = runs[k];
   RunResult res;
@@ -138,10 +138,13 @@ std::vector<std::vector<double>> Engine::simulate(const Model& m, int k, const s
     res = run_circuit(elaborate(nl, loaded_.registry), so);
   } catch (const std::exception& ex) {
     note_failure(run.name, ex.what());
+    if (why) *why = ex.what();
     return {};
   }
   if (!res.solver.ok || res.table.rows.size() < 2) {
-    note_failure(run.name, res.solver.ok ? "fewer than two output rows" : res.solver.message);
+    const std::string reason = res.solver.ok ? "fewer than two output rows" : res.solver.message;
+    note_failure(run.name, reason);
+    if (why) *why = reason;
     return {};
   }
   std::vector<double> ts;

@@ -65,9 +65,9 @@ class Engine {
   Netlist netlist_of(const Model& m, int k, const Setting& at = {}) const;
 
   // Simulated signals of run `k` at its measurement times; empty if the run
-  // failed (the reason kept, failures_since()).
+  // failed (the reason kept, failures_since(), and given in `why`).
   std::vector<std::vector<double>> simulate(const Model& m, int k, const std::vector<Disturbance>& disturbances = {},
-                                           const Setting& at = {});
+                                           const Setting& at = {}, std::string* why = nullptr);
 
   Layout layout(Role role) const;
 

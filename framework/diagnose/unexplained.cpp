@@ -168,7 +168,7 @@ class Search {
   Search(const UnexplainedInput& in, const DiagnoseOptions& opt) : in_(in), opt_(opt), runs_(*in.runs) {
     std::vector<std::vector<std::vector<double>>> sim(runs_.size());
     parallel_for(static_cast<long>(runs_.size()), opt.threads, [&](int, long k) {
-      sim[k] = in.simulate(static_cast<int>(k), {});
+      sim[k] = in.simulate(static_cast<int>(k), {}, nullptr);
       ++simulations;
     });
     for (int k = 0; k < static_cast<int>(runs_.size()); ++k) {
@@ -229,7 +229,7 @@ class Search {
       Candidate& c = cands[i];
       std::vector<double> rate(B, 0.0);
       rate[j] = c.scale[q];
-      const auto sim = in_.simulate(used[q], {Disturbance{c.variable, knots[q], rate}});
+      const auto sim = in_.simulate(used[q], {Disturbance{c.variable, knots[q], rate}}, nullptr);
       ++simulations;
       if (!sim.empty()) c.J[q].col(j) = residual(used[q], sim) - r0[q];  // a failed run leaves the hat unused
     });
@@ -276,9 +276,10 @@ class Search {
     for (int i = 0; i < static_cast<int>(cands.size()) && static_cast<int>(chosen.size()) < kConfirm; ++i)
       if (!cands[i].variable.empty()) chosen.push_back(i);
     std::vector<double> ssr(chosen.size() * nr, -1);
+    std::vector<std::string> why(ssr.size());
     parallel_for(static_cast<long>(ssr.size()), opt_.threads, [&](int, long job) {
       const std::size_t q = job % nr;
-      const auto sim = in_.simulate(used[q], {disturbance_of(cands[chosen[job / nr]], q)});
+      const auto sim = in_.simulate(used[q], {disturbance_of(cands[chosen[job / nr]], q)}, &why[job]);
       ++simulations;
       if (!sim.empty()) ssr[job] = residual(used[q], sim).squaredNorm();
     });
@@ -287,9 +288,12 @@ class Search {
       const bool ok = std::all_of(first, last, [](double v) { return v >= 0; });
       const double total = std::accumulate(first, last, 0.0);
       Candidate& c = cands[chosen[a]];
+      if (!ok)
+        for (std::size_t q = 0; q < nr && c.finding.failure.empty(); ++q)
+          if (ssr[a * nr + q] < 0) c.finding.failure = "run " + runs_[used[q]].name + ": " + why[a * nr + q];
       if (in_.log)
         in_.log("  " + c.finding.balance + ": predicted gap " + rounded(c.finding.gap_after, 2) + ", simulated " +
-                (ok ? rounded(std::sqrt(total / n), 2) : std::string("failed")));
+                (ok ? rounded(std::sqrt(total / n), 2) : "failed (" + c.finding.failure + ")"));
       if (ok) c.ssr = total, c.finding.gap_after = std::sqrt(total / n), c.finding.confirmed = true;
     }
   }
@@ -389,7 +393,8 @@ std::string unexplained_json(const std::optional<Unexplained>& u, const std::fun
     const auto& b = u->balances[i];
     o << (i ? ",\n    " : "\n    ") << "{\"balance\": " << str(b.balance) << ", \"kind\": " << str(b.kind)
       << ", \"unit\": " << str(b.unit) << ", \"gap_after\": " << num(b.gap_after)
-      << ", \"explained\": " << num(b.explained) << ", \"confirmed\": " << (b.confirmed ? "true" : "false") << "}";
+      << ", \"explained\": " << num(b.explained) << ", \"confirmed\": " << (b.confirmed ? "true" : "false")
+      << ", \"failure\": " << (b.failure.empty() ? std::string("null") : str(b.failure)) << "}";
   }
   o << "],\n  \"shape\": [";
   for (std::size_t i = 0; i < u->shape.size(); ++i) {
@@ -462,7 +467,9 @@ std::string unexplained_html(const std::optional<Unexplained>& u,
   for (std::size_t i = 0; i < u->balances.size() && i < 8; ++i) {
     const auto& b = u->balances[i];
     o << "<tr><td class=\"l\">" << html(b.balance) << "</td><td class=\"l\">" << html(b.kind) << "</td><td>"
-      << rounded(b.gap_after, 2) << (b.confirmed ? "" : " (predicted)") << "</td><td>"
+      << rounded(b.gap_after, 2)
+      << (b.confirmed ? "" : b.failure.empty() ? " (predicted)" : " (predicted; its simulation failed: " + html(b.failure) + ")")
+      << "</td><td>"
       << std::lround(100 * b.explained) << " %</td></tr>\n";
   }
   o << "</table>\n";

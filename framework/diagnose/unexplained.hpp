@@ -23,9 +23,9 @@
 namespace pneumo::diagnose {
 
 // Signals of run `run` at its measurement times, with the given
-// disturbances; empty if the solver failed.
-using DisturbedSimulation =
-    std::function<std::vector<std::vector<double>>(int run, const std::vector<Disturbance>& disturbances)>;
+// disturbances; empty if the solver failed, the reason then in `why`.
+using DisturbedSimulation = std::function<std::vector<std::vector<double>>(
+    int run, const std::vector<Disturbance>& disturbances, std::string* why)>;
 
 struct UnexplainedInput {
   const std::vector<MeasuredRun>* runs = nullptr;
