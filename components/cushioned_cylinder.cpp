@@ -116,6 +116,7 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
       for (auto& s : list()) i.parameters.push_back(std::move(s));
     for (auto& f : FrictionLaw::parameters(true)) i.parameters.push_back(std::move(f));
     for (auto& s : initial_parameters()) i.parameters.push_back(std::move(s));
+    for (auto& f : FrictionFaults::parameters()) i.parameters.push_back(std::move(f));
     add_parts(i, true, true, true);
     i.faults = {
         {"friction_running", "friction off (seal wear, lubrication, side load), as a factor on the friction",
@@ -139,6 +140,7 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
                 {"rod_cushion_exit", "leaves the rod-end cushioning zone (rod cushioning)"},
                 {"rod_bore_closing", "the rod-end bore opening starts to close (rod cushioning)"},
                 {"rod_bore_open", "the rod-end bore opening is fully open (rod cushioning)"}};
+    for (auto& f : FrictionFaults::faults()) i.faults.push_back(std::move(f));
     for (const char* v : {"dead_volume_rod_side", "dead_volume_cushion", "dead_volume_channel"})
       i.faults.push_back({std::string(v) + "_off", std::string("volume ") + v + " off (fittings, machining)",
                           {{"k", v, "1", true, 1.0, 0.3, 3.0, 1.5, true}}});
@@ -161,6 +163,7 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
         stops_{c.params["stop_stiffness"], c.params["stop_damping"]},
         wall_alpha_(c.params["wall_alpha"]),
         friction_(FrictionLaw::from(c.params)),
+        friction_faults_(c.params),
         x0_(c.params["x0"]),
         p0_A_(c.params["p0_A"]),
         p0_cap_(c.params["p0_cap"]),
@@ -256,6 +259,8 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
     s.rod = rod_side_.gas(e, s.x);
     s.z = friction_.has_state() ? e.var(z_var_) : T(0.0 * s.x);
     s.F_fric = friction(s, gas.p_ambient);
+    if (friction_faults_.any())
+      s.F_fric += friction_faults_.force(s.v, T(s.cap.p_piston - s.rod.p_piston), friction_.v_reg);
     s.F_stop = stops_.force(s.x, s.v, stroke_);
     s.F_pressure = rod_side_.force(s.rod) + gas.p_ambient * A_R_ - cap_.annulus_force(s.cap) - cap_.port_force(s.cap);
     return s;
@@ -684,6 +689,7 @@ class CushionedCylinder final : public ComponentT<CushionedCylinder> {
   EndStops stops_;
   double wall_alpha_;
   FrictionLaw friction_;
+  FrictionFaults friction_faults_;
   double x0_, p0_A_, p0_cap_, T0_;
   bool taps_;
   int z_var_ = 6, force_row_ = 0, lugre_row_ = -1;

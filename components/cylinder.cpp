@@ -176,8 +176,7 @@ class Cylinder final : public ComponentT<Cylinder> {
                p_.rod.gas(e, T(p_.stroke - fl.s)), T(0.0), T(0.0), T(0.0)};
     s.F_pressure = p_.cap.force(s.cap) - p_.rod.force(s.rod) - p_amb * p_.A_rod;
     s.F_fric = piston_friction(p_.friction, s.v, s.z, s.rod.p_piston, s.cap.p_piston, s.cap.p_piston, p_amb);
-    if (p_.breakaway_F > 0) s.F_fric += p_.breakaway(s.v);
-    if (p_.friction_per_pressure > 0) s.F_fric += p_.pressure_friction(s.v, T(s.cap.p - s.rod.p));
+    if (p_.friction_faults.any()) s.F_fric += p_.friction_faults.force(s.v, T(s.cap.p - s.rod.p), p_.friction.v_reg);
     s.F_stop = p_.stops.force(s.x, s.v, p_.stroke);
     return s;
   }

@@ -536,6 +536,52 @@ class CylinderSide {
 // piston's areas and stroke, its two sides (cushioning read from the
 // <end>_cushion_* parameters where the component offers them), end stops,
 // wall heat, friction and initial state, with their parameters.
+// The friction faults every piston declares (diagnosis), 0 in a sound
+// cylinder: a breakaway force apart from the running friction, fading above
+// 5 mm/s, and a friction growing with the pressure difference across the
+// piston seal (the pressure term of the end-cushioning paper's eq. 8).
+struct FrictionFaults {
+  double breakaway_F = 0, per_pressure = 0;
+
+  explicit FrictionFaults(const ParameterValues& p)
+      : breakaway_F(p["fault_breakaway_F"]), per_pressure(p["fault_friction_per_pressure"]) {}
+
+  static std::vector<ParameterSpec> parameters() {
+    using P = ParameterSpec;
+    return {
+        P::scalar("fault_breakaway_F", "N",
+                  "fault (diagnosis): breakaway force beyond the friction law, fading above 5 mm/s; 0 = none", 0.0)
+            .non_negative(),
+        P::scalar("fault_friction_per_pressure", "N/Pa",
+                  "fault (diagnosis): running friction beyond the law per pascal across the piston seal "
+                  "(e.g. 1e-5 N/Pa = 1 N/bar); 0 = none",
+                  0.0)
+            .non_negative(),
+    };
+  }
+  static std::vector<FaultSpec> faults() {
+    return {
+        {"friction_breakaway", "breakaway (stiction) force beyond the running friction (dry seals, long standstill)",
+         {{"F", "fault_breakaway_F", "N", false, 0.0, 0.0, 200.0, 10.0, false}}},
+        {"friction_pressure",
+         "seal friction growing with the pressure across the seal beyond the law (seal squeeze, swelling: the "
+         "pressure term of the end-cushioning paper's eq. 8)",
+         {{"k", "fault_friction_per_pressure", "N/Pa", false, 0.0, 0.0, 1e-4, 5e-6, false}}},
+    };
+  }
+
+  bool any() const { return breakaway_F > 0 || per_pressure > 0; }
+  // On the piston (+x), opposing v; `dp` the pressure across the seal
+  // (|dp| smoothed over 1 Pa). A fault at 0 adds no term.
+  template <class T>
+  T force(const T& v, const T& dp, double v_reg) const {
+    T F = 0.0 * v;
+    if (breakaway_F > 0) F -= breakaway_F * exp(-(v / 5e-3) * (v / 5e-3)) * tanh(v / v_reg);
+    if (per_pressure > 0) F -= per_pressure * sqrt(dp * dp + 1.0) * tanh(v / v_reg);
+    return F;
+  }
+};
+
 struct Piston {
   double A, A_rod, stroke;
   CylinderSide cap, rod;
@@ -545,9 +591,9 @@ struct Piston {
   double x0, p0_cap, p0_rod, T0;
   // Faults (diagnosis), all 0 in a sound cylinder: leak conductances across
   // the piston seal and past the rod seal, heat exchange of each chamber's
-  // gas with the surroundings, and a breakaway force apart from the rest of
-  // the friction and a friction growing with the pressure across the seal.
-  double leak_piston_C, leak_rod_C, wall_kA, breakaway_F, friction_per_pressure;
+  // gas with the surroundings, and the friction faults.
+  double leak_piston_C, leak_rod_C, wall_kA;
+  FrictionFaults friction_faults;
 
   explicit Piston(const ParameterValues& p)
       : A(circle_area(p["bore"])),
@@ -565,8 +611,7 @@ struct Piston {
         leak_piston_C(p["fault_piston_leak_C"]),
         leak_rod_C(p["fault_rod_leak_C"]),
         wall_kA(p["fault_wall_kA"]),
-        breakaway_F(p["fault_breakaway_F"]),
-        friction_per_pressure(p["fault_friction_per_pressure"]) {
+        friction_faults(p) {
     if (p["rod"] >= p["bore"]) throw ParameterError("rod", "rod diameter must be smaller than the bore");
     stops.hold_before_empty(cap.travel_to_empty(), rod.travel_to_empty());
   }
@@ -610,16 +655,9 @@ struct Piston {
                   "0 = none",
                   0.0)
             .non_negative(),
-        P::scalar("fault_breakaway_F", "N",
-                  "fault (diagnosis): breakaway force beyond the friction law, fading above 5 mm/s; 0 = none", 0.0)
-            .non_negative(),
-        P::scalar("fault_friction_per_pressure", "N/Pa",
-                  "fault (diagnosis): running friction beyond the law per pascal across the piston seal "
-                  "(e.g. 1e-5 N/Pa = 1 N/bar); 0 = none",
-                  0.0)
-            .non_negative(),
     };
     out.insert(out.end(), faults.begin(), faults.end());
+    for (auto& f : FrictionFaults::parameters()) out.push_back(std::move(f));
     return out;
   }
 
@@ -633,15 +671,10 @@ struct Piston {
          {{"C", "fault_rod_leak_C", "m3/(s*Pa)", false, 0.0, 0.0, 2e-9, 1e-10, false}}},
         {"friction_running", "running friction off (seal wear, lubrication, side load), as a factor on the friction",
          {{"k", "friction_scale", "1", true, 1.0, 0.25, 4.0, 1.3, true}}},
-        {"friction_breakaway", "breakaway (stiction) force beyond the running friction (dry seals, long standstill)",
-         {{"F", "fault_breakaway_F", "N", false, 0.0, 0.0, 200.0, 10.0, false}}},
-        {"friction_pressure",
-         "seal friction growing with the pressure across the seal beyond the law (seal squeeze, swelling: the "
-         "pressure term of the end-cushioning paper's eq. 8)",
-         {{"k", "fault_friction_per_pressure", "N/Pa", false, 0.0, 0.0, 1e-4, 5e-6, false}}},
         {"wall_heat", "heat exchange of the chamber gas with the walls and surroundings (unmodelled)",
          {{"kA", "fault_wall_kA", "W/K", false, 0.0, 0.0, 2.0, 0.1, false}}},
     };
+    for (auto& f : FrictionFaults::faults()) out.push_back(std::move(f));
     for (const auto& v : volumes)
       out.push_back({v + "_off", "dead volume " + v + " off (other fittings, tubing inside the end cap)",
                      {{"k", v, "1", true, 1.0, 0.2, 10.0, 2.0, true}}});
@@ -683,19 +716,6 @@ struct Piston {
     }
     return f;
   }
-  // The breakaway force on the piston (+x), opposing v, fading over 5 mm/s.
-  template <class T>
-  T breakaway(const T& v) const {
-    return T(-breakaway_F * exp(-(v / 5e-3) * (v / 5e-3)) * tanh(v / friction.v_reg));
-  }
-
-  // The friction beyond the law that grows with the pressure difference
-  // across the piston seal (+x), opposing v; |dp| smoothed over 1 Pa.
-  template <class T>
-  T pressure_friction(const T& v, const T& dp) const {
-    return T(-friction_per_pressure * sqrt(dp * dp + 1.0) * tanh(v / friction.v_reg));
-  }
-
   // Roots 0 and 1: the stops at x = 0 and x = stroke.
   void stop_roots(double x, double* g) const {
     g[0] = x;

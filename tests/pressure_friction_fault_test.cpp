@@ -3,9 +3,11 @@
 // the piston seal. A single-acting cylinder held at 5 bar gauge (a large
 // supply port) and driven at a constant 20 mm/s: with k = 1e-5 N/Pa the drive
 // needs k * 5e5 Pa = 5 N more against the motion, in either direction, and
-// nothing at all with k = 0 beyond the law (here none).
+// nothing at all with k = 0 beyond the law (here none). The cushioned
+// cylinder's faults are the same part (components/cylinder_parts.hpp).
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <string>
 
 #include "tests/test_support.hpp"
@@ -50,6 +52,30 @@ TEST(PressureFrictionFault, AddsKTimesThePressureAcrossTheSealAgainstTheMotion) 
     EXPECT_NEAR(extra, expected, 0.01 * std::abs(expected)) << "v = " << v;
     EXPECT_NEAR(std::abs(expected), 5.0, 0.2);  // 5 bar across the seal, 1 N/bar
   }
+}
+
+// The cushioned cylinder declares the same friction faults. On the cushion
+// rig, 1 N/bar of pressure friction slows the stroke, dissipates more in the
+// cushioning phase's friction, and the energy audit - which counts friction
+// through the component's own force - still closes (to 1e-4 of its input).
+double metric(const std::string& out, const std::string& name) {
+  const auto at = out.find("metric " + name + " = ");
+  EXPECT_NE(at, std::string::npos) << name << "\n" << out;
+  return at == std::string::npos ? NAN : std::stod(out.substr(at + name.size() + 10));
+}
+
+TEST(PressureFrictionFault, OnTheCushionedCylinderItDissipatesAndTheAuditCloses) {
+  test_support::TempDir dir;
+  const std::string rig = std::string(PNEUMO_SOURCE_DIR) + "/netlists/cushion_rig.yaml";
+  const auto csv = (dir.path() / "rig.csv").string();
+  const auto [rc0, sound] = test_support::run_cli("simulate '" + rig + "' -o '" + csv + "'");
+  const auto [rc1, faulty] =
+      test_support::run_cli("simulate '" + rig + "' -o '" + csv + "' --set cylinder.fault_friction_per_pressure=1e-5");
+  ASSERT_EQ(rc0, 0) << sound;
+  ASSERT_EQ(rc1, 0) << faulty;
+  EXPECT_GT(metric(faulty, "t_move"), metric(sound, "t_move"));
+  EXPECT_GT(metric(faulty, "E_friction_cushion"), metric(sound, "E_friction_cushion") + 0.005);  // J
+  EXPECT_LT(std::abs(metric(faulty, "audit_residual")), 1e-4);
 }
 
 }  // namespace
