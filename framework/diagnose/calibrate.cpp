@@ -166,17 +166,6 @@ double inward_step(const EffectParameter& p, double v) {
   return v + h > p.upper ? -h : h;
 }
 
-// x_t - sum_i a_i x_{t-i} for t >= p: one series whitened by an AR(p) model.
-std::vector<double> whiten(const double* x, std::size_t n, const std::vector<double>& a) {
-  std::vector<double> e;
-  for (std::size_t t = a.size(); t < n; ++t) {
-    double v = x[t];
-    for (std::size_t i = 0; i < a.size(); ++i) v -= a[i] * x[t - 1 - i];
-    e.push_back(v);
-  }
-  return e;
-}
-
 struct Uncertainty {
   std::vector<double> se;
   std::vector<std::vector<double>> correlation;
@@ -200,9 +189,9 @@ Uncertainty uncertainty(const std::vector<double>& r, std::vector<std::vector<do
   long n = 0;
   for (const auto& seg : L.segments) {
     const auto a = fit_ar(&r[seg.offset], seg.n, kMaxArOrder);
-    const auto rw = whiten(&r[seg.offset], seg.n, a);
+    const auto rw = whitened(&r[seg.offset], seg.n, a);
     std::vector<std::vector<double>> jw;
-    for (const auto& col : J) jw.push_back(whiten(&col[seg.offset], seg.n, a));
+    for (const auto& col : J) jw.push_back(whitened(&col[seg.offset], seg.n, a));
     for (std::size_t t = 0; t < rw.size(); ++t) {
       ssr += rw[t] * rw[t];
       for (int i = 0; i < p; ++i)

@@ -80,13 +80,19 @@ std::vector<double> fit_ar(const double* r, std::size_t n, int max_order) {
   return best;
 }
 
+std::vector<double> whitened(const double* r, std::size_t n, const std::vector<double>& a) {
+  std::vector<double> e;
+  for (std::size_t t = a.size(); t < n; ++t) {
+    double v = r[t];
+    for (std::size_t i = 0; i < a.size(); ++i) v -= a[i] * r[t - 1 - i];
+    e.push_back(v);
+  }
+  return e;
+}
+
 double whitened_ssr(const double* r, std::size_t n, const std::vector<double>& a) {
   double s = 0;
-  for (std::size_t t = a.size(); t < n; ++t) {
-    double e = r[t];
-    for (std::size_t i = 0; i < a.size(); ++i) e -= a[i] * r[t - 1 - i];
-    s += e * e;
-  }
+  for (double e : whitened(r, n, a)) s += e * e;
   return s;
 }
 

@@ -20,7 +20,9 @@ double ssr_of(const double* r, std::size_t n);
 // t >= max_order, so that the orders compete on the same data) and p chosen
 // by BIC. Empty: white (p = 0).
 std::vector<double> fit_ar(const double* r, std::size_t n, int max_order);
-// Sum of squares of the whitened series e_t = r_t - sum_i a_i r_{t-i}, t >= p.
+// The whitened series e_t = r_t - sum_i a_i r_{t-i}, t >= p.
+std::vector<double> whitened(const double* r, std::size_t n, const std::vector<double>& a);
+// Its sum of squares.
 double whitened_ssr(const double* r, std::size_t n, const std::vector<double>& a);
 // Log-likelihood ratio of residual series r1 over r0 (both n long) after
 // whitening both with r1's AR(p), p <= 5: (n - p) ln(SSR0_w / SSR1_w);
