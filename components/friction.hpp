@@ -16,7 +16,7 @@
 //
 // Besides the presets, `friction: custom` (and `friction_cushion: custom`)
 // takes the eq. 8 coefficients from the parameters, in the form `pneumo fit
-// friction -o` writes them (framework/fit/friction_fit.cpp):
+// friction -o` writes them (components/fit/friction_fit.cpp):
 //   friction_pressure  none | pAB- | pAB+ | pEC (default none)
 //   friction_b0, friction_FS0, friction_FC, friction_kv0   N (kv0: force at 1 m/s)
 //   friction_b1, friction_FS1, friction_kv1   N/Pa (netlists write N/bar)

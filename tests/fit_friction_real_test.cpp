@@ -16,7 +16,7 @@
 #include <string>
 
 #include "components/friction.hpp"
-#include "framework/fit/friction_fit.hpp"
+#include "components/fit/friction_fit.hpp"
 #include "framework/io/data_file.hpp"
 #include "tests/test_support.hpp"
 

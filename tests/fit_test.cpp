@@ -24,7 +24,7 @@
 #include "components/friction.hpp"
 #include "components/iso6358_flow.hpp"
 #include "framework/core/units.hpp"
-#include "framework/fit/friction_fit.hpp"
+#include "components/fit/friction_fit.hpp"
 #include "framework/fit/throttle_fit.hpp"
 #include "friction_experiment.hpp"
 #include "tests/test_support.hpp"

@@ -31,7 +31,7 @@
 #include "components/builtin.hpp"
 #include "components/friction.hpp"
 #include "framework/core/error.hpp"
-#include "framework/fit/friction_fit.hpp"
+#include "components/fit/friction_fit.hpp"
 #include "framework/netlist/netlist.hpp"
 #include "framework/run/run.hpp"
 #include "tests/test_support.hpp"

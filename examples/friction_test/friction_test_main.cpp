@@ -11,7 +11,7 @@
 #include <iostream>
 #include <map>
 
-#include "framework/fit/friction_fit.hpp"
+#include "components/fit/friction_fit.hpp"
 #include "friction_experiment.hpp"
 
 using namespace pneumo;

@@ -12,7 +12,7 @@
 #include "framework/cli/command.hpp"
 #include "framework/core/text.hpp"
 #include "framework/io/files.hpp"
-#include "framework/fit/friction_fit.hpp"
+#include "components/fit/friction_fit.hpp"
 #include "framework/fit/throttle_fit.hpp"
 
 namespace pneumo::cli {

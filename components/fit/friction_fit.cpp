@@ -1,4 +1,4 @@
-#include "framework/fit/friction_fit.hpp"
+#include "components/fit/friction_fit.hpp"
 
 #include <algorithm>
 #include <cmath>
