@@ -46,11 +46,10 @@ std::optional<units::Dimension> dimension_of_key(const std::string& key, const N
     const TopParameter* tp = nl.parameter(key);
     return tp ? std::optional(tp->dim) : std::nullopt;
   }
-  for (const auto& c : nl.components)
-    if (c.name == key.substr(0, dot))
-      if (const auto* entry = reg.find(c.type))
-        if (const ParameterSpec* spec = entry->info->parameter(key.substr(dot + 1)))
-          return units::dimension_of(spec->unit);
+  if (const ComponentDecl* c = nl.component(key.substr(0, dot)))
+    if (const auto* entry = reg.find(c->type))
+      if (const ParameterSpec* spec = entry->info->parameter(key.substr(dot + 1)))
+        return units::dimension_of(spec->unit);
   return std::nullopt;
 }
 
@@ -81,8 +80,7 @@ std::optional<Effect> measurement_parameter(const std::string& key, const Engine
   const auto dot = key.find('.');
   if (dot == std::string::npos) return std::nullopt;
   const std::string output = key.substr(0, dot);
-  for (const auto& c : eng.base().components)
-    if (c.name == output) return std::nullopt;
+  if (eng.base().component(output)) return std::nullopt;
   MeasuredSignal signal{output, 0, ""};
   double lo = INFINITY, hi = -INFINITY;
   for (const auto& run : eng.runs)

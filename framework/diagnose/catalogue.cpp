@@ -214,31 +214,6 @@ void set_top_parameter(TopParameter& p, const ValueDecl& v, double p_ambient, co
   }
 }
 
-// A component parameter set by an effect: replaced where the netlist writes
-// it, or added; either way it now points at the catalogue's line.
-void set_component_parameter(ComponentDecl& c, const std::string& param, const SourceLocation& key, ValueDecl v) {
-  if (param == "type") {
-    c.type = v.text;
-    c.type_where = v.where;
-    return;
-  }
-  const bool keyed = c.parameter_where.size() == c.parameters.size();
-  for (std::size_t i = 0; i < c.parameters.size(); ++i)
-    if (c.parameters[i].first == param) {
-      c.parameters[i].second = std::move(v);
-      if (keyed) c.parameter_where[i] = key;
-      return;
-    }
-  c.parameters.emplace_back(param, std::move(v));
-  if (keyed) c.parameter_where.push_back(key);
-}
-
-ComponentDecl* component_named(Netlist& nl, const std::string& name) {
-  for (auto& c : nl.components)
-    if (c.name == name) return &c;
-  return nullptr;
-}
-
 void apply_set(Netlist& out, const SetPatch& s, const Effect& e, const std::vector<double>& values) {
   const auto dot = s.target.find('.');
   if (dot == std::string::npos)
@@ -252,9 +227,12 @@ void apply_set(Netlist& out, const SetPatch& s, const Effect& e, const std::vect
     set_top_parameter(*it, substitute(s.value, e, values), out.gas.p_ambient, e.name);
     return;
   }
-  ComponentDecl* c = component_named(out, comp);
+  ComponentDecl* c = out.component(comp);
   if (!c) fail(s.where, e.name, param, "set: the model has no component '" + comp + "'");
-  set_component_parameter(*c, param, s.where, substitute(s.value, e, values));
+  ValueDecl v = substitute(s.value, e, values);  // pointing at the catalogue's line
+  if (param != "type") return set_value(out, {comp, param}, std::move(v));
+  c->type = v.text;
+  c->type_where = v.where;
 }
 
 void apply_effect(Netlist& out, const EffectInstance& inst, MeasurementModel* measurement) {
@@ -268,12 +246,12 @@ void apply_effect(Netlist& out, const EffectInstance& inst, MeasurementModel* me
     out.connections.erase(it);
   }
   for (const auto& c : e.add_components) {
-    if (component_named(out, c.name))
+    if (out.component(c.name))
       fail(c.where, e.name, "", "add_components: the model already has a component '" + c.name + "'");
     out.components.push_back(substitute(c, e, inst.values));
   }
   for (const auto& c : e.replace_components) {
-    ComponentDecl* old = component_named(out, c.name);
+    ComponentDecl* old = out.component(c.name);
     if (!old) fail(c.where, e.name, "", "replace_components: the model has no component '" + c.name + "'");
     *old = substitute(c, e, inst.values);
   }
@@ -320,8 +298,7 @@ namespace {
 // or the phase would silently never start. Empty if it does.
 std::string event_problem(const std::string& from, const Netlist& model, const Registry& registry) {
   const auto dot = from.find('.');
-  const auto decl = std::find_if(model.components.begin(), model.components.end(),
-                                 [&](const ComponentDecl& c) { return c.name == from.substr(0, dot); });
+  const ComponentDecl* decl = model.component(from.substr(0, dot));
   const auto* entry = registry.find(decl->type);
   if (!entry || entry->info->raises(from.substr(dot + 1))) return "";
   return "component '" + decl->name + "' (" + decl->type + ") raises no event '" + from.substr(dot + 1) +
@@ -341,9 +318,7 @@ std::vector<PhaseDecl> read_phases(const std::string& path, const YAML::Node& li
     const auto dot = ph.from.find('.');
     const bool is_metric = std::any_of(model.metrics.begin(), model.metrics.end(),
                                        [&](const MetricDecl& m) { return m.name == ph.from; });
-    const bool is_event = dot != std::string::npos &&
-                          std::any_of(model.components.begin(), model.components.end(),
-                                      [&](const ComponentDecl& c) { return c.name == ph.from.substr(0, dot); });
+    const bool is_event = dot != std::string::npos && model.component(ph.from.substr(0, dot));
     if (ph.from != "start" && !is_metric && !is_event)
       fail(path, item["from"], "", "phases." + ph.name,
            "phase '" + ph.name + "' starts at '" + ph.from +
@@ -382,24 +357,21 @@ NetlistValue netlist_value(const std::string& path, const YAML::Node& key_node, 
     return v;
   }
   const std::string comp = key.substr(0, dot), name = key.substr(dot + 1);
-  const auto decl = std::find_if(nl.components.begin(), nl.components.end(),
-                                 [&](const ComponentDecl& c) { return c.name == comp; });
-  if (decl == nl.components.end()) fail(path, key_node, key, name, "recalibrate: the model has no component '" + comp + "'");
+  const ComponentDecl* decl = nl.component(comp);
+  if (!decl) fail(path, key_node, key, name, "recalibrate: the model has no component '" + comp + "'");
   const auto* entry = registry.find(decl->type);
   const ParameterSpec* spec = entry ? entry->info->parameter(name) : nullptr;
   if (!spec)
     fail(path, key_node, key, name, "recalibrate: component '" + comp + "' (" + decl->type + ") has no parameter '" + name + "'");
   if (spec->kind != ParameterKind::scalar)
     fail(path, key_node, key, name, "recalibrate: '" + key + "' is not a scalar parameter (a table or a text)");
-  const auto written = std::find_if(decl->parameters.begin(), decl->parameters.end(),
-                                    [&](const auto& p) { return p.first == name; });
-  if (written != decl->parameters.end()) {
-    const ValueDecl& given = written->second;
+  if (const ValueDecl* written = decl->written(name)) {
+    const ValueDecl& given = *written;
     if (given.shape == ValueDecl::Shape::scalar && !given.si && nl.parameter(given.text))
       fail(path, key_node, key, name,
            "recalibrate: the netlist gives '" + key + "' as the top-level parameter '" + given.text +
                "': re-calibrate that parameter");
-    v.value = parameter_value(nl, *decl, *spec, written->second);
+    v.value = parameter_value(nl, *decl, *spec, given);
   } else if (spec->default_value) {
     v.value = *spec->default_at(nl.gas.p_ambient, nl.gas.T_ambient);
   } else {
@@ -764,11 +736,9 @@ namespace {
 // operating point sets (the run would override the factor).
 std::optional<double> factor_base(const Netlist& nl, const ComponentDecl& decl, const ParameterSpec& spec,
                                   const std::vector<std::string>& per_run, std::string& why) {
-  const auto written = std::find_if(decl.parameters.begin(), decl.parameters.end(),
-                                    [&](const auto& p) { return p.first == spec.name; });
   double v = 0;
-  if (written != decl.parameters.end()) {
-    const ValueDecl& given = written->second;
+  if (const ValueDecl* written = decl.written(spec.name)) {
+    const ValueDecl& given = *written;
     if (given.shape == ValueDecl::Shape::scalar && !given.si &&
         std::find(per_run.begin(), per_run.end(), given.text) != per_run.end()) {
       why = spec.name + " is the top-level parameter '" + given.text + "', which the runs' operating points set";

@@ -295,11 +295,10 @@ std::string component_value(const fs::path& runs_dir, const std::string& run_fil
   if (!node.IsScalar()) throw InputError(at, "", name, "operating_point: the value must be a number, a quantity or a text");
   std::string value = node.Scalar();
   const auto dot = name.find('.');
-  for (const auto& c : model.components)
-    if (c.name == name.substr(0, dot))
-      if (const auto* entry = registry.find(c.type))
-        if (const ParameterSpec* spec = entry->info->parameter(name.substr(dot + 1)); spec && spec->is_path)
-          value = data_file(runs_dir, run_file, node);
+  if (const ComponentDecl* c = model.component(name.substr(0, dot)))
+    if (const auto* entry = registry.find(c->type))
+      if (const ParameterSpec* spec = entry->info->parameter(name.substr(dot + 1)); spec && spec->is_path)
+        value = data_file(runs_dir, run_file, node);
   Netlist probe = model;
   try {
     set_value(probe, ParameterPath::parse(name), value, name + ": " + value);

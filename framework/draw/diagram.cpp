@@ -718,9 +718,7 @@ Diagram layout(const Netlist& netlist, const Circuit& circuit) {
     p.name = comp->name();
     p.type = comp->info().type;
     p.symbol = complete_symbol(comp->info());
-    const ComponentDecl* decl = nullptr;
-    for (const auto& c : netlist.components)
-      if (c.name == p.name) decl = &c;
+    const ComponentDecl* decl = netlist.component(p.name);
     p.label = label_of(netlist, decl, p.name, p.symbol);
     d.symbols.push_back(std::move(p));
   }

@@ -38,10 +38,8 @@ double parameter_si(const Netlist& nl, const Circuit& circuit, int i, const std:
   const auto& info = circuit.components[i]->info();
   const ParameterSpec* spec = info.parameter(name);
   if (!spec) return 1.0;
-  for (const auto& c : nl.components)
-    if (c.name == circuit.components[i]->name())
-      for (const auto& [key, v] : c.parameters)
-        if (key == name) return parameter_value(nl, c, *spec, v);
+  if (const ComponentDecl* c = nl.component(circuit.components[i]->name()))
+    if (const ValueDecl* v = c->written(name)) return parameter_value(nl, *c, *spec, *v);
   return spec->default_value.value_or(1.0);
 }
 

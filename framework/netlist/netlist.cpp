@@ -18,6 +18,7 @@
 #include <numeric>
 #include <set>
 #include <sstream>
+#include <utility>
 
 #include <yaml-cpp/eventhandler.h>
 
@@ -128,6 +129,34 @@ const TopParameter* Netlist::parameter(const std::string& name) const {
   for (const auto& p : parameters)
     if (p.name == name) return &p;
   return nullptr;
+}
+
+const ComponentDecl* Netlist::component(const std::string& name) const {
+  for (const auto& c : components)
+    if (c.name == name) return &c;
+  return nullptr;
+}
+
+ComponentDecl* Netlist::component(const std::string& name) {
+  return const_cast<ComponentDecl*>(std::as_const(*this).component(name));
+}
+
+const ValueDecl* ComponentDecl::written(const std::string& parameter) const {
+  for (const auto& [key, v] : parameters)
+    if (key == parameter) return &v;
+  return nullptr;
+}
+
+void ComponentDecl::write(const std::string& parameter, ValueDecl value, const SourceLocation& key) {
+  const bool keyed = parameter_where.size() == parameters.size();
+  for (std::size_t i = 0; i < parameters.size(); ++i)
+    if (parameters[i].first == parameter) {
+      parameters[i].second = std::move(value);
+      if (keyed) parameter_where[i] = key;
+      return;
+    }
+  parameters.emplace_back(parameter, std::move(value));
+  if (keyed) parameter_where.push_back(key);
 }
 
 std::string Netlist::display_unit_for(units::Dimension dim) const {
@@ -583,9 +612,8 @@ void override_component_parameter(Netlist& nl, const std::string& name, const st
                                   const std::string& option, const SourceLocation& netlist_where) {
   const auto dot = name.find('.');
   const std::string component = name.substr(0, dot), parameter = name.substr(dot + 1);
-  const auto c = std::find_if(nl.components.begin(), nl.components.end(),
-                              [&](const ComponentDecl& d) { return d.name == component; });
-  if (c == nl.components.end()) {
+  ComponentDecl* c = nl.component(component);
+  if (!c) {
     std::vector<std::string> names;
     for (const auto& d : nl.components) names.push_back(d.name);
     throw InputError(netlist_where, component, "",
@@ -597,15 +625,9 @@ void override_component_parameter(Netlist& nl, const std::string& name, const st
   ValueDecl v;
   v.text = trim(text);
   v.given_by = option;
-  for (auto& [key, written] : c->parameters)
-    if (key == parameter) {
-      v.where = written.where;
-      written = std::move(v);
-      return;
-    }
-  v.where = c->where;
-  c->parameters.emplace_back(parameter, std::move(v));
-  if (!c->parameter_where.empty()) c->parameter_where.push_back(c->where);
+  const ValueDecl* before = c->written(parameter);
+  v.where = before ? before->where : c->where;
+  c->write(parameter, std::move(v), c->where_of(parameter));
 }
 
 }  // namespace
@@ -670,18 +692,22 @@ void set_si_value(Netlist& nl, const ParameterPath& path, double si_value) {
       }
     throw InputError(netlist_where, "", path.parameter, "no top-level parameter '" + path.parameter + "'");
   }
-  for (auto& c : nl.components) {
-    if (c.name != path.component) continue;
-    for (auto& [key, v] : c.parameters)
-      if (key == path.parameter) {
-        v = ValueDecl::number(si_value, v.where);
-        return;
-      }
-    c.parameters.emplace_back(path.parameter, ValueDecl::number(si_value, c.where));
-    if (!c.parameter_where.empty()) c.parameter_where.push_back(c.where);
-    return;
-  }
-  throw InputError(netlist_where, path.component, "", "no component '" + path.component + "'");
+  ComponentDecl* c = nl.component(path.component);
+  if (!c) throw InputError(netlist_where, path.component, "", "no component '" + path.component + "'");
+  const ValueDecl* before = c->written(path.parameter);
+  c->write(path.parameter, ValueDecl::number(si_value, before ? before->where : c->where), c->where_of(path.parameter));
+}
+
+void set_value(Netlist& nl, const ParameterPath& path, ValueDecl v) {
+  ComponentDecl* c = nl.component(path.component);
+  if (!c) throw InputError(v.where, path.component, path.parameter, "the model has no component '" + path.component + "'");
+  const SourceLocation key = v.where;
+  c->write(path.parameter, std::move(v), key);
+}
+
+const ValueDecl* value_of(const Netlist& nl, const ParameterPath& path) {
+  const ComponentDecl* c = nl.component(path.component);
+  return c ? c->written(path.parameter) : nullptr;
 }
 
 void apply_override(Netlist& nl, const std::string& assignment) {

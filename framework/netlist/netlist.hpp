@@ -70,6 +70,10 @@ struct ComponentDecl {
 
   // Where parameter `name` is written (its key), or the component if absent.
   SourceLocation where_of(const std::string& parameter) const;
+  // The value written for `parameter`; nullptr when it is left at its default.
+  const ValueDecl* written(const std::string& parameter) const;
+  // Replaces the written value, or adds it (keyed at `key`).
+  void write(const std::string& parameter, ValueDecl value, const SourceLocation& key);
 };
 
 struct PortRefDecl {
@@ -163,6 +167,8 @@ struct Netlist {
   std::vector<DisplayDefault> display;
 
   const TopParameter* parameter(const std::string& name) const;
+  const ComponentDecl* component(const std::string& name) const;
+  ComponentDecl* component(const std::string& name);
   // The unit `display:` gives values of dimension `dim`, or "" (SI).
   std::string display_unit_for(units::Dimension dim) const;
 };
@@ -187,6 +193,14 @@ struct ParameterPath {
 // at elaboration). Errors start with `origin` ("--set p=7 bar", "run cal1:
 // operating point") and point at the netlist's declaration.
 void set_value(Netlist& netlist, const ParameterPath& path, const std::string& text, const std::string& origin);
+// A component's value as it is written somewhere else - a catalogue's
+// patch - keeping that place (v.where) for its errors: it replaces the
+// netlist's value or is added. Throws InputError for a component the
+// netlist lacks.
+void set_value(Netlist& netlist, const ParameterPath& path, ValueDecl v);
+// A component parameter's value as the netlist writes it; nullptr when it
+// is left at its default or the netlist has no such component.
+const ValueDecl* value_of(const Netlist& netlist, const ParameterPath& path);
 // An SI number from a study or a fit, never printed and read again: a
 // top-level parameter's value, or a component's (added if the netlist left
 // it at its default). Throws InputError for a name the netlist lacks.

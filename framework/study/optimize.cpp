@@ -625,9 +625,7 @@ std::vector<Range> parse_design(const Netlist& nl, const Registry& registry, con
   auto ranges = parse_ranges(nl, registry, specs, "--design");
   for (const auto& r : ranges) {
     if (r.parameter.component.empty()) continue;
-    const ComponentDecl* decl = nullptr;
-    for (const auto& c : nl.components)
-      if (c.name == r.parameter.component) decl = &c;
+    const ComponentDecl* decl = nl.component(r.parameter.component);
     const ParameterSpec* spec = registry.find(decl->type)->info->parameter(r.parameter.parameter);
     if (!spec->in_range(r.lo) || !spec->in_range(r.hi))
       throw InputError(args_where(nl), r.parameter.component, r.parameter.parameter,

@@ -28,12 +28,6 @@ std::string count_text(double n) {
   return buf;
 }
 
-const ComponentDecl* find_component(const Netlist& nl, const std::string& name) {
-  for (const auto& c : nl.components)
-    if (c.name == name) return &c;
-  return nullptr;
-}
-
 }  // namespace
 
 void set_display_unit(StudyParameter& p, const std::string& unit_text, double ambient);
@@ -59,7 +53,7 @@ StudyParameter resolve_parameter(const Netlist& nl, const Registry& registry, co
   }
   p.component = name.substr(0, dot);
   p.parameter = name.substr(dot + 1);
-  const ComponentDecl* decl = find_component(nl, p.component);
+  const ComponentDecl* decl = nl.component(p.component);
   if (!decl) throw InputError(netlist_where(nl), p.component, "", "no component '" + p.component + "' in " + nl.file);
   const auto* entry = registry.find(decl->type);
   const ParameterSpec* spec = entry ? entry->info->parameter(p.parameter) : nullptr;
