@@ -563,10 +563,14 @@ struct FrictionFaults {
     return {
         {"friction_breakaway", "breakaway (stiction) force beyond the running friction (dry seals, long standstill)",
          {{"F", "fault_breakaway_F", "N", false, 0.0, 0.0, 200.0, 10.0, false}}},
+        // Eq. 8 turns eq. 7's constant b into b0 + b1 p: a slope found in
+        // the data moves the part at zero pressure too, so the law's scale
+        // is fitted with it (a slope alone could only add friction).
         {"friction_pressure",
          "seal friction growing with the pressure across the seal beyond the law (seal squeeze, swelling: the "
-         "pressure term of the end-cushioning paper's eq. 8)",
-         {{"k", "fault_friction_per_pressure", "N/Pa", false, 0.0, 0.0, 1e-4, 5e-6, false}}},
+         "pressure term of the end-cushioning paper's eq. 8), with the law's own share rescaled",
+         {{"k", "fault_friction_per_pressure", "N/Pa", false, 0.0, 0.0, 1e-4, 5e-6, false},
+          {"scale", "friction_scale", "1", true, 1.0, 0.25, 4.0, 1.0, true}}},
     };
   }
 
