@@ -19,6 +19,7 @@ const std::map<std::string, int> kFloor{
     {"framework/core", 0},     {"framework/io", 1},       {"framework/model", 1},     {"framework/netlist", 2},
     {"framework/assembly", 2}, {"components", 2},         {"framework/solver", 3},    {"framework/plugin", 3},
     {"framework/fit", 3},      {"framework/draw", 3},     {"framework/run", 4},      {"framework/analysis", 5},  {"framework/testkit", 5},
+    {"framework/fmi", 5},
     {"framework/diagnose", 6}, {"framework/study", 6},    {"framework/cli", 7},
 };
 
