@@ -44,11 +44,11 @@ std::string library_of(const void* function) {
   return info.dli_fname;
 }
 
-// libpneumo_fmu.so beside the pneumo executable, else where it was built.
-std::string fmu_runtime() {
-  std::error_code ec;
-  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
-  if (!ec && fs::is_regular_file(exe.parent_path() / "libpneumo_fmu.so")) return exe.parent_path() / "libpneumo_fmu.so";
+// libpneumo_fmu.so beside the pneumo libraries (installed or built), else
+// where it was built.
+std::string fmu_runtime(const std::string& framework_library) {
+  const fs::path beside = fs::path(framework_library).parent_path() / "libpneumo_fmu.so";
+  if (fs::is_regular_file(beside)) return beside.string();
   if (fs::is_regular_file(PNEUMO_FMU_RUNTIME)) return PNEUMO_FMU_RUNTIME;
   throw std::runtime_error("the FMU runtime libpneumo_fmu.so is not installed beside pneumo (build the target "
                            "pneumo_fmu)");
@@ -84,9 +84,9 @@ int export_command(const ExportArgs& a) {
   write_text_atomic(root + "/resources/netlist.yaml", model.text);
   write_text_atomic(root + "/resources/interface.txt", fmi::selection_text(selection));
   const std::string bin = root + "/binaries/linux64/";
-  copy_binary(fmu_runtime(), bin + id + ".so");
-  for (const std::string& lib : {library_of(reinterpret_cast<const void*>(&pneumo::load_model)),
-                                 library_of(reinterpret_cast<const void*>(&pneumo::builtin_registry))})
+  const std::string framework = library_of(reinterpret_cast<const void*>(&pneumo::load_model));
+  copy_binary(fmu_runtime(framework), bin + id + ".so");
+  for (const std::string& lib : {framework, library_of(reinterpret_cast<const void*>(&pneumo::builtin_registry))})
     copy_binary(lib, bin + fs::path(lib).filename().string());
   const std::string archive = folder.path("archive.zip");
   run_program({"zip", "-q", "-r", "-X", archive, "modelDescription.xml", "binaries", "resources"}, folder.path("zip.log"),
