@@ -211,6 +211,31 @@ TEST(FmiExport, ModelDescriptionIsWellFormedAndConsistent) {
             256);
 }
 
+// --input and --output choose the interface; a name the netlist lacks, a
+// name that is no C identifier and an -o that is the netlist are refused
+// with status 2, the named file left as it was.
+TEST(FmiExport, TheCommandLineChoosesTheInterfaceAndRefusesBadNames) {
+  TempDir dir;
+  const std::string netlist = (kSource / "examples/fmi/sequence_ab.yaml").string();
+  const std::string fmu = (dir.path() / "chosen.fmu").string();
+  const auto [status, out] = run_cli("export-fmu '" + netlist + "' -o '" + fmu + "' --input start --output x_A x_B");
+  ASSERT_EQ(status, 0) << out;
+  ASSERT_EQ(shell("unzip -q -o '" + fmu + "' -d '" + (dir.path() / "chosen").string() + "'"), 0);
+  const auto vars = variables_of(read_file(dir.path() / "chosen" / "modelDescription.xml"));
+  std::vector<std::string> names;
+  for (const auto& [name, v] : vars) names.push_back(name + ":" + v.causality);
+  EXPECT_EQ(names, (std::vector<std::string>{"x_A:output", "x_B:output", "start:input", "p_supply:parameter"}));
+  const auto [s1, o1] = run_cli("export-fmu '" + netlist + "' -o '" + fmu + "' --input nosuch");
+  EXPECT_EQ(s1, 2);
+  EXPECT_NE(o1.find("no input 'nosuch'"), std::string::npos) << o1;
+  EXPECT_NE(o1.find("start"), std::string::npos) << o1;  // the choices
+  const auto [s2, o2] = run_cli("export-fmu '" + netlist + "' -o '" + (dir.path() / "1st.fmu").string() + "'");
+  EXPECT_EQ(s2, 2) << o2;
+  const auto [s3, o3] = run_cli("export-fmu '" + netlist + "' -o '" + netlist + "'");
+  EXPECT_EQ(s3, 2) << o3;
+  EXPECT_TRUE(fs::is_regular_file(fmu));
+}
+
 TEST(FmiExport, MeterOutCylinderFollowsSimulateAt1msAnd10ms) {
   TempDir dir;
   const Fmu fmu(dir, kSource / "examples/fmi/meter_out_cylinder.yaml", "meter_out");

@@ -33,7 +33,7 @@ std::string si_unit(const std::string& unit) { return unit == "1" ? "" : unit; }
 
 // The names chosen, or all; an unknown name is an error listing the choices.
 std::vector<int> choose(const std::vector<std::string>& names, const std::vector<std::string>& wanted,
-                        const char* what) {
+                        const char* what, const std::string& file) {
   std::vector<int> out;
   if (wanted.empty()) {
     for (std::size_t i = 0; i < names.size(); ++i) out.push_back(static_cast<int>(i));
@@ -44,7 +44,7 @@ std::vector<int> choose(const std::vector<std::string>& names, const std::vector
     if (it == names.end()) {
       std::string list;
       for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
-      throw InputError({}, "", "", std::string("no ") + what + " '" + w + "' in the netlist; " + what + "s: " +
+      throw InputError({file, 0, 0}, "", "", std::string("no ") + what + " '" + w + "' in the netlist; " + what + "s: " +
                                        (list.empty() ? "none" : list));
     }
     out.push_back(static_cast<int>(it - names.begin()));
@@ -57,7 +57,7 @@ std::string stem(const std::string& path) {
   return s.substr(0, s.find('.'));
 }
 
-void add_outputs(const Circuit& circuit, const Selection& sel, Description& d) {
+void add_outputs(const Circuit& circuit, const Selection& sel, const std::string& file, Description& d) {
   std::vector<std::string> names;
   std::vector<int> probe;
   // Integrals are IDAS quadratures of a whole run, not a state an FMU holds.
@@ -66,7 +66,7 @@ void add_outputs(const Circuit& circuit, const Selection& sel, Description& d) {
       names.push_back(circuit.probes[i].name);
       probe.push_back(static_cast<int>(i));
     }
-  for (int k : choose(names, sel.outputs, "output")) {
+  for (int k : choose(names, sel.outputs, "output", file)) {
     const Probe& p = circuit.probes[probe[k]];
     Variable v{p.name, Variable::Causality::output, si_unit(p.unit), p.display, 0.0, "netlist output " + p.name,
                probe[k]};
@@ -74,11 +74,11 @@ void add_outputs(const Circuit& circuit, const Selection& sel, Description& d) {
   }
 }
 
-void add_inputs(const System& system, const Selection& sel, Description& d) {
+void add_inputs(const System& system, const Selection& sel, const std::string& file, Description& d) {
   const std::vector<ExternalInput> inputs = system.external_inputs();
   std::vector<std::string> names;
   for (const auto& in : inputs) names.push_back(in.name);
-  for (int k : choose(names, sel.inputs, "input")) {
+  for (int k : choose(names, sel.inputs, "input", file)) {
     const auto& in = inputs[k];
     d.variables.push_back(
         {in.name, Variable::Causality::input, si_unit(in.spec.unit), {}, in.spec.start, in.spec.description, k});
@@ -102,9 +102,9 @@ Description describe(const Model& model, const Selection& selection) {
   const auto& sim = model.netlist.simulation;
   d.t_start = sim.t_start, d.t_end = sim.t_end, d.rtol = sim.rtol, d.step = sim.output_interval;
   Circuit circuit = elaborate(model.netlist, model.registry);
-  add_outputs(circuit, selection, d);
+  add_outputs(circuit, selection, model.path, d);
   const System system(std::move(circuit));
-  add_inputs(system, selection, d);
+  add_inputs(system, selection, model.path, d);
   add_parameters(model.netlist, d);
   return d;
 }
