@@ -24,6 +24,8 @@ install(TARGETS pneumo_framework pneumo_components pneumo_testkit pneumo
   RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR}
   LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
   ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR})
+# The FMU runtime, beside the libraries: pneumo export-fmu looks for it there.
+install(TARGETS pneumo_fmu LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})
 install(DIRECTORY framework components
   DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/pneumo
   FILES_MATCHING PATTERN "*.hpp" PATTERN "cli" EXCLUDE)

@@ -21,6 +21,7 @@ void register_builtin_components(Registry& r) {
   register_fixed_position(r);
   register_force_source(r);
   register_signal_source(r);
+  register_external_input(r);
   register_cushioned_cylinder(r);
   register_friction_element(r);
   register_spring_damper(r);

@@ -17,6 +17,7 @@ void register_translational_mass(Registry& r);
 void register_fixed_position(Registry& r);
 void register_force_source(Registry& r);
 void register_signal_source(Registry& r);
+void register_external_input(Registry& r);
 void register_cushioned_cylinder(Registry& r);
 void register_friction_element(Registry& r);
 void register_spring_damper(Registry& r);

@@ -18,6 +18,8 @@ PACKAGES=(
   libopenmpi-dev openmpi-bin   # pneumo sweep under mpirun (optional at build time)
   chromium               # headless check of the pneumo diagnose HTML report and the draw results view (tests)
   librsvg2-bin           # pneumo draw -o circuit.png (rsvg-convert)
+  zip unzip              # pneumo export-fmu packs the FMU (zip); its test unpacks it (unzip)
+  libxml2-utils          # xmllint: the FMU's modelDescription.xml checked in the tests
   pybind11-dev python3-dev python3-numpy   # the Python module (python/)
   python3-pytest         # its tests
   clang libclang-rt-14-dev     # libFuzzer targets (fuzz/, scripts/fuzz.sh)

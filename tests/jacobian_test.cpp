@@ -78,7 +78,8 @@ connections:
       {"signals",
        // Every kind of signal source, each driving an input: a ramp opening a
        // throttle, a table setting a supply pressure, a step and a constant
-       // forces (the step switches a discrete mode before the second point).
+       // forces (the step switches a discrete mode before the second point);
+       // an external input (an FMU's) at its start value as the drag.
        R"(
 components:
   supply_p: {type: signal_source, kind: table, table: [[0, 4e5], [0.02, 5e5], [1, 6e5]]}
@@ -89,7 +90,7 @@ components:
   push_cmd: {type: signal_source, kind: step, value: 5, height: 20, t_start: 0.01}
   push:     {type: force_source}
   body:     {type: translational_mass, m: 1.5 kg, s0: 0.01 m, v0: 0.2 m/s}
-  drag_cmd: {type: signal_source, kind: constant, value: -3}
+  drag_cmd: {type: external_input, start: -3, unit: N}
   drag:     {type: force_source}
 connections:
   - [supply_p.y, supply.p_in]
@@ -101,7 +102,7 @@ connections:
   - [drag_cmd.y, drag.F_in]
 )",
        0.03,
-       {"signal_source", "force_source", "translational_mass"}},
+       {"signal_source", "external_input", "force_source", "translational_mass"}},
       {"frame",
        // The frame carrying a load force (nothing else can connect to it
        // without a spring).

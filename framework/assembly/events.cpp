@@ -3,6 +3,7 @@
 // explicit unknowns are checked again (verify_explicit).
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include "framework/assembly/blocks.hpp"
 #include "framework/assembly/system.hpp"
@@ -76,6 +77,22 @@ std::vector<std::string> System::end_notes(double t, const double* y, const doub
       notes.push_back(b.component->name() + ": " + note);
   }
   return notes;
+}
+
+std::vector<ExternalInput> System::external_inputs() const {
+  std::vector<ExternalInput> out;
+  for (const auto& b : blocks_)
+    if (b->component)
+      for (const auto& spec : b->component->external_inputs())
+        out.push_back({b->component->name(), spec, b->mode0 + spec.mode});
+  return out;
+}
+
+void System::set_external_input(std::size_t k, double value) {
+  const std::vector<ExternalInput> inputs = external_inputs();
+  if (k >= inputs.size()) throw std::out_of_range("no external input " + std::to_string(k));
+  modes_[inputs[k].mode] = value;
+  work_.cache_valid = false;
 }
 
 bool System::handle_time_event(double t, const double* y, const double* yp, std::vector<EventLogEntry>& log) {

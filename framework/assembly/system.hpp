@@ -99,6 +99,13 @@ struct AliasClasses;
 struct ExplicitRows;
 struct ExplicitOrder;
 
+// A component's ExternalInputSpec, found in the circuit.
+struct ExternalInput {
+  std::string name;  // the component's
+  ExternalInputSpec spec;
+  int mode = 0;  // index into System::modes()
+};
+
 class System {
  public:
   // Takes ownership of the circuit. Throws InputError (dangling or
@@ -174,6 +181,13 @@ class System {
   // names of the components that changed go to `changed` if given.
   bool handle_input_changes(double t, const double* y, const double* yp, std::vector<EventLogEntry>& log,
                             std::vector<std::string>* changed = nullptr);
+
+  // The values programs may set while the circuit runs (Component::
+  // external_inputs), in component order.
+  std::vector<ExternalInput> external_inputs() const;
+  // Input k's new value: its mode written, the explicit unknowns derived
+  // again. The integration must then restart (Integration::inputs_changed).
+  void set_external_input(std::size_t k, double value);
 
   // Each component's at_end() at the run's last point, as "NAME: sentence".
   std::vector<std::string> end_notes(double t, const double* y, const double* yp);

@@ -43,5 +43,6 @@ Command add_diagnose_command(CLI::App& app);
 Command add_calibrate_command(CLI::App& app);
 Command add_optimize_command(CLI::App& app);
 Command add_draw_command(CLI::App& app);
+Command add_export_fmu_command(CLI::App& app);
 
 }  // namespace pneumo::cli

@@ -54,7 +54,8 @@ int main(int argc, char** argv) {
                                       add_sweep_command(app),       add_sensitivity_command(app),
                                       add_components_command(app),  add_fit_command(app),
                                       add_diagnose_command(app),    add_optimize_command(app),
-                                      add_draw_command(app),        add_calibrate_command(app)};
+                                      add_draw_command(app),        add_calibrate_command(app),
+                                      add_export_fmu_command(app)};
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

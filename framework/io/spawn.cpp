@@ -45,7 +45,8 @@ std::string first_lines(const std::string& path, int n) {
 
 }  // namespace
 
-void run_program(const std::vector<std::string>& argv, const std::string& log_path, const std::string& package) {
+void run_program(const std::vector<std::string>& argv, const std::string& log_path, const std::string& package,
+                 const std::string& folder) {
   std::vector<char*> args;
   for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
   args.push_back(nullptr);
@@ -54,6 +55,7 @@ void run_program(const std::vector<std::string>& argv, const std::string& log_pa
   posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
   posix_spawn_file_actions_addopen(&actions, 1, log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
   posix_spawn_file_actions_adddup2(&actions, 1, 2);
+  if (!folder.empty()) posix_spawn_file_actions_addchdir_np(&actions, folder.c_str());
   pid_t pid = 0;
   const int rc = ::posix_spawnp(&pid, args[0], &actions, nullptr, args.data(), environ);
   posix_spawn_file_actions_destroy(&actions);

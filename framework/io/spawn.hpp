@@ -26,7 +26,10 @@ class PrivateFolder {
 // Runs argv[0] (looked up on PATH) with `argv`, its standard output and error
 // to `log_path`, and waits. Throws std::runtime_error when it cannot be
 // started (naming `package`, the Debian package that installs it) or exits
-// non-zero (quoting the first lines it printed).
-void run_program(const std::vector<std::string>& argv, const std::string& log_path, const std::string& package);
+// non-zero (quoting the first lines it printed). With `folder`, the program
+// runs in that folder (zip stores paths relative to it); log_path is opened
+// before it changes there.
+void run_program(const std::vector<std::string>& argv, const std::string& log_path, const std::string& package,
+                 const std::string& folder = "");
 
 }  // namespace pneumo

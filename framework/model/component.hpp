@@ -412,6 +412,17 @@ struct EnergyAuditSpec {
   std::vector<EnergyTerm> terms;
 };
 
+// A value a program outside the circuit sets while it runs (an FMU's
+// input, fmi2SetReal between steps). The component holds it in one of its
+// discrete modes, which the framework writes; a change is a discontinuity,
+// handled as an event's.
+struct ExternalInputSpec {
+  int mode = 0;      // the component's mode that holds the value
+  double start = 0;  // its value until set (SI)
+  std::string unit;  // SI unit of the value
+  std::string description;
+};
+
 struct Construction {
   std::string name;
   std::shared_ptr<const ComponentInfo> info;
@@ -475,6 +486,10 @@ class Component {
     (void)port;
     return false;
   }
+
+  // The values a program outside the circuit may set while it runs, named
+  // after the component (none by default).
+  virtual std::vector<ExternalInputSpec> external_inputs() const { return {}; }
 
   // What a run that ended here leaves unfinished and a user should hear -
   // a step chain still waiting for a switch that never closed - as one

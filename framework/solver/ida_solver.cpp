@@ -1,5 +1,7 @@
 #include "framework/solver/ida_solver.hpp"
 
+#include "framework/solver/integration.hpp"
+
 // IDAS (not IDA): the same integrator plus quadratures, which integrate
 // requested outputs (energy accounts) to the solver's accuracy.
 #include <idas/idas.h>
@@ -67,17 +69,26 @@ struct AlgebraicNewtonTest {
   }
 };
 
-// One run of IDA over [t_start, t_end]: IDA takes one step per call
-// (IDA_ONE_STEP); after each step the state events in it are located and
-// handled, the output times it passed are read off its interpolating
-// polynomial, and a time event or t_end it stopped at is handled.
-class Integration {
+}  // namespace
+
+// One run of IDA over [t_start, t_end], in pieces (advance_to): IDA takes
+// one step per call (IDA_ONE_STEP); after each step the state events in it
+// are located and handled, the output times it passed are read off its
+// interpolating polynomial, and a time event, the target or t_end it
+// stopped at is handled.
+class IdaRun {
  public:
-  Integration(System& system, const SolverOptions& opt, const OutputFn& output, const Quadratures* quad);
-  SolverResult run();
+  IdaRun(System& system, const SolverOptions& opt, OutputFn output, const Quadratures* quad);
+  bool start();
+  bool advance_to(double target);
+  bool inputs_changed();
+  SolverResult finish_run();
+  double time() const { return t_; }
+  const double* y() { return user_.physical_y(y_.get()); }
+  const double* yp() { return user_.physical_yp(yp_.get()); }
+  const SolverResult& result() const { return result_; }
 
  private:
-  void integrate();
   void create_vectors();
   void create_ida();
   void use_algebraic_newton_test();
@@ -114,8 +125,8 @@ class Integration {
   void finish();
 
   System& system_;
-  const SolverOptions& opt_;
-  const OutputFn& output_;
+  const SolverOptions opt_;  // copies: a resumable run outlives its caller's
+  const OutputFn output_;
   const Quadratures* quad_;
   SolverResult result_;
   const int n_;
@@ -133,6 +144,7 @@ class Integration {
   void* ida_ = nullptr;
   ProbeSet integrands_;
   double t_;
+  double target_;  // where advance_to stops (<= t_end)
   const double eps_t_;
   std::vector<double> events_;  // time events up to t_end
   std::size_t next_event_ = 0;
@@ -145,19 +157,21 @@ class Integration {
   long restarts_at_budget_ = 0;
   double t_at_budget_ = 0.0;
   int recoveries_at_budget_ = 0, recoveries_ = 0;
+  std::chrono::steady_clock::time_point start_clock_;
   // In a steady start's settling (rest_start): t_ is the settling time, the
   // model sees t_start, nothing is output.
   bool settling_ = false;
 };
 
-Integration::Integration(System& system, const SolverOptions& opt, const OutputFn& output, const Quadratures* quad)
+IdaRun::IdaRun(System& system, const SolverOptions& opt, OutputFn output, const Quadratures* quad)
     : system_(system),
       opt_(opt),
-      output_(output),
+      output_(std::move(output)),
       quad_(quad),
       n_(system.size()),
       n_quad_(quad ? static_cast<int>(quad->integrands.size()) : 0),
       t_(opt.t_start),
+      target_(opt.t_start),
       eps_t_(1e-12 * std::max(1.0, std::abs(opt.t_end))),
       grid_(opt.t_start, opt.t_end, opt.output_interval),
       roots_(system.n_roots()) {
@@ -170,7 +184,7 @@ Integration::Integration(System& system, const SolverOptions& opt, const OutputF
   find_disturbed();
 }
 
-void Integration::find_disturbed() {
+void IdaRun::find_disturbed() {
   const auto& names = system_.variable_names();
   for (const auto& d : opt_.disturbances) {
     const auto it = std::find(names.begin(), names.end(), d.variable);
@@ -186,7 +200,7 @@ void Integration::find_disturbed() {
 }
 
 // y and y' scaled by each unknown's nominal magnitude (see UserData).
-void Integration::create_vectors() {
+void IdaRun::create_vectors() {
   y_.reset(N_VNew_Serial(n_, context_.ctx));
   yp_.reset(N_VNew_Serial(n_, context_.ctx));
   atol_.reset(N_VNew_Serial(n_, context_.ctx));
@@ -211,7 +225,7 @@ void Integration::create_vectors() {
   }
 }
 
-void Integration::create_ida() {
+void IdaRun::create_ida() {
   A_.reset(SUNSparseMatrix(n_, n_, std::max<long>(1, system_.nnz()), CSC_MAT, context_.ctx));
   LS_.reset(SUNLinSol_KLU(y_.get(), A_.get(), context_.ctx));
   if (LS_) timed_LS_.reset(timed_klu(LS_.get(), &lu_, context_.ctx));
@@ -253,7 +267,7 @@ void Integration::create_ida() {
 // IDA's own Newton solver, its convergence test wrapped in
 // AlgebraicNewtonTest (IDASetNonlinearSolver installs IDA's test, which the
 // wrapper then calls first).
-void Integration::use_algebraic_newton_test() {
+void IdaRun::use_algebraic_newton_test() {
   nls_.reset(SUNNonlinSol_Newton(y_.get(), context_.ctx));
   if (!nls_) throw std::runtime_error("cannot create the SUNDIALS Newton solver");
   check(IDASetNonlinearSolver(ida_, nls_.get()), "IDASetNonlinearSolver");
@@ -265,7 +279,7 @@ void Integration::use_algebraic_newton_test() {
   check(SUNNonlinSolSetConvTestFn(nls_.get(), AlgebraicNewtonTest::test, &newton_test_), "SUNNonlinSolSetConvTestFn");
 }
 
-void Integration::init_quadratures() {
+void IdaRun::init_quadratures() {
   integrands_ = system_.probe_set(quad_->integrands);
   user_.integrands = &integrands_;
   q_.reset(N_VNew_Serial(n_quad_, context_.ctx));
@@ -282,14 +296,14 @@ void Integration::init_quadratures() {
   quad_->values->assign(n_quad_, 0.0);
 }
 
-void Integration::fail(const std::string& msg) {
+void IdaRun::fail(const std::string& msg) {
   if (user_.error) std::rethrow_exception(user_.error);
   result_.ok = false;
   result_.message = msg;
   result_.t_reached = t_;
 }
 
-bool Integration::consistent_ic() {
+bool IdaRun::consistent_ic() {
   // IDACalcIC corrects the states' y' with the iteration matrix
   // dF/dy + cj dF/dy', cj = 1 / (1e-3 (t_next - t)): the dF/dy part is an
   // error of that Newton which shrinks with cj. With the algebraic unknowns
@@ -327,7 +341,7 @@ bool Integration::consistent_ic() {
 // re-initialisation, where IDA cannot see a root; components that follow
 // their inputs (logic with memory, step chains, timers) re-read them until
 // none changes, each change followed by consistent values.
-bool Integration::settle() {
+bool IdaRun::settle() {
   constexpr int kMaxPasses = 100;
   for (int pass = 0;; ++pass) {
     user_.parts.valid = false;
@@ -364,7 +378,7 @@ bool Integration::settle() {
 constexpr double kMaxSettleTime = 1e6;  // s of settling time
 constexpr long kMaxSettleSteps = 100000;
 
-bool Integration::rest_start() {
+bool IdaRun::rest_start() {
   if (!system_.set_resting(true))
     throw std::invalid_argument("a steady start needs the System assembled with AssemblyOptions::rest_heat");
   settling_ = true;
@@ -401,7 +415,7 @@ bool Integration::rest_start() {
 // The settling's steps and state events, from consistent values, until at
 // rest (true) or a failure, the settling's limits included (false, the
 // message set).
-bool Integration::integrate_to_rest() {
+bool IdaRun::integrate_to_rest() {
   restart_roots(nullptr);
   std::string moving;
   for (long steps = 0; !at_rest(&moving); ++steps) {
@@ -435,7 +449,7 @@ bool Integration::integrate_to_rest() {
 // present rate; else the three fastest into `moving`, with their rates.
 // (Not rtol |y|: a position driven away for ever would pass for resting
 // once far enough.)
-bool Integration::at_rest(std::string* moving) const {
+bool IdaRun::at_rest(std::string* moving) const {
   const double span = opt_.t_end - opt_.t_start;
   const double* yp = N_VGetArrayPointer(yp_.get());
   std::vector<std::pair<double, int>> fast;
@@ -456,7 +470,7 @@ bool Integration::at_rest(std::string* moving) const {
 }
 
 // IDAReInit resets IDA's counters: add them up before every re-initialisation.
-void Integration::accumulate_stats() {
+void IdaRun::accumulate_stats() {
   long v = 0;
   auto& s = result_.stats;
   IDAGetNumSteps(ida_, &v), s.steps += v;
@@ -471,7 +485,7 @@ void Integration::accumulate_stats() {
 // Restart IDA from (t, y, yp) after an event that changed the modes: the
 // integrals so far, consistent values, the root functions' sides (`fired`:
 // the roots just handled, counted as crossed).
-bool Integration::restart(const std::vector<int>* fired) {
+bool IdaRun::restart(const std::vector<int>* fired) {
   if (n_quad_ > 0) check(IDAGetQuadDky(ida_, t_, 0, q_.get()), "IDAGetQuadDky");
   ++result_.stats.reinitialisations;
   accumulate_stats();
@@ -482,24 +496,24 @@ bool Integration::restart(const std::vector<int>* fired) {
   return true;
 }
 
-void Integration::restart_roots(const std::vector<int>* fired) {
+void IdaRun::restart_roots(const std::vector<int>* fired) {
   if (roots_.size() > 0) roots_at(t_, y_.get(), yp_.get(), roots_.low());
   roots_.start(t_, fired);
 }
 
-void Integration::roots_at(double tr, N_Vector yy, N_Vector yyp, std::vector<double>& g) {
+void IdaRun::roots_at(double tr, N_Vector yy, N_Vector yyp, std::vector<double>& g) {
   system_.roots(model_t(tr), user_.physical_y(yy), user_.physical_yp(yyp), g.data());
   ++result_.stats.root_evals;
 }
 
 // y (and y') at tr in the last step, from IDA's interpolant.
-void Integration::interpolate(double tr, N_Vector yy, N_Vector yyp, bool with_yp) {
+void IdaRun::interpolate(double tr, N_Vector yy, N_Vector yyp, bool with_yp) {
   check(IDAGetDky(ida_, tr, 0, yy), "IDAGetDky");
   if (with_yp) check(IDAGetDky(ida_, tr, 1, yyp), "IDAGetDky");
 }
 
 // An output row at t from IDA's current y, y'.
-void Integration::emit() {
+void IdaRun::emit() {
   if (settling_) return;
   if (n_quad_ > 0) {
     double tq = t_;
@@ -510,28 +524,17 @@ void Integration::emit() {
 }
 
 // An output row at t_out inside the last step, from the state yy, yyp there.
-void Integration::emit_at(double t_out, N_Vector yy, N_Vector yyp) {
+void IdaRun::emit_at(double t_out, N_Vector yy, N_Vector yyp) {
   if (settling_) return;
   if (n_quad_ > 0 && IDAGetQuadDky(ida_, t_out, 0, q_.get()) >= 0)
     std::copy_n(N_VGetArrayPointer(q_.get()), n_quad_, quad_->values->begin());
   output_(t_out, user_.physical_y(yy), user_.physical_yp(yyp));
 }
 
-SolverResult Integration::run() {
-  const auto start = std::chrono::steady_clock::now();
-  integrate();
-  // The problem's size, also after a failed start (--stats then says what
-  // was being solved).
-  auto& s = result_.stats;
-  s.variables = n_;
-  s.netlist_variables = system_.full_size();
-  s.explicit_variables = system_.explicit_size();
-  s.nonzeros = system_.nnz();
-  s.seconds_total = seconds_since(start);
-  return result_;
-}
-
-void Integration::integrate() {
+// Events at t_start, consistent values (a steady start's settling), the
+// first output row. False on failure (result().message).
+bool IdaRun::start() {
+  start_clock_ = std::chrono::steady_clock::now();
   events_ = system_.time_events();
   // A disturbance's knots are stops too: no step straddles a kink of d(t)
   // (handle_time_event finds nothing due there and the step goes on).
@@ -557,21 +560,51 @@ void Integration::integrate() {
   N_VConst(0.0, yp_out_.get());  // stays 0 when the outputs read no y'
   y_ev_.reset(N_VClone(y_.get()));
   yp_ev_.reset(N_VClone(y_.get()));
-  if (!consistent_ic() || !settle()) return;
-  if (opt_.steady_start && !rest_start()) return;
+  if (!consistent_ic() || !settle()) return false;
+  if (opt_.steady_start && !rest_start()) return false;
   emit();
   restart_roots(nullptr);
-  while (t_ < opt_.t_end - eps_t_) {
+  return true;
+}
+
+// Integrate on to min(target, t_end); false once the run failed (the
+// message set), and for every call after.
+bool IdaRun::advance_to(double target) {
+  if (!result_.message.empty()) return false;
+  target_ = std::min(target, opt_.t_end);
+  while (t_ < target_ - eps_t_) {
     throw_if_interrupted();
-    if (step() == Next::stop) break;
+    if (step() == Next::stop) return false;
   }
+  return result_.message.empty();
+}
+
+// A program changed the circuit's external inputs (System::set_external_input)
+// at the present time: a discontinuity, handled as after an event -
+// consistent values, event iteration, the roots' sides read again.
+bool IdaRun::inputs_changed() {
+  if (!result_.message.empty()) return false;
+  user_.parts.valid = false;
+  return restart(nullptr);
+}
+
+SolverResult IdaRun::finish_run() {
   finish();
+  // The problem's size, also after a failed start (--stats then says what
+  // was being solved).
+  auto& s = result_.stats;
+  s.variables = n_;
+  s.netlist_variables = system_.full_size();
+  s.explicit_variables = system_.explicit_size();
+  s.nonzeros = system_.nnz();
+  s.seconds_total = seconds_since(start_clock_);
+  return result_;
 }
 
 // One step of IDA, its state events, output times and a stop at an event.
-Integration::Next Integration::step() {
+IdaRun::Next IdaRun::step() {
   const double t_event = next_event_ < events_.size() ? events_[next_event_] : std::numeric_limits<double>::infinity();
-  const double t_stop = std::min(t_event, opt_.t_end);
+  const double t_stop = std::min(t_event, target_);
   check(IDASetStopTime(ida_, t_stop), "IDASetStopTime");
   double t_ret = t_;
   // tout matters only for the first step after a (re)initialisation (its
@@ -622,7 +655,7 @@ Integration::Next Integration::step() {
 // the Newton test (AlgebraicNewtonTest); should they still have drifted off
 // them, the states are accurate: restart from the start of the last step
 // with consistent values, at most 3 times between two output times.
-bool Integration::recover(double t_ret) {
+bool IdaRun::recover(double t_ret) {
   if (recoveries_ - recoveries_at_budget_ >= 3) return false;
   ++recoveries_;
   const std::string failure = flag_text(IDA_CONV_FAIL, user_);
@@ -647,7 +680,7 @@ bool Integration::recover(double t_ret) {
 // fresh step, and the event log grows without end. More events or restarts
 // than a run plausibly has between two output rows end the run, naming the
 // events that repeat.
-bool Integration::within_event_budget() {
+bool IdaRun::within_event_budget() {
   constexpr long kMaxRestarts = 1000;
   constexpr std::size_t kMaxEvents = 10000;
   if (grid_.k != grid_k_at_budget_) {
@@ -668,7 +701,7 @@ bool Integration::within_event_budget() {
 
 // The events since the last output time, most frequent first: the
 // chattering pair and where.
-std::string Integration::chatter_message() const {
+std::string IdaRun::chatter_message() const {
   std::vector<std::pair<std::string, long>> counts;
   for (std::size_t i = events_at_budget_; i < result_.events.size(); ++i) {
     const auto& e = result_.events[i];
@@ -695,7 +728,7 @@ std::string Integration::chatter_message() const {
 }
 
 // The state events in the step that ended at t_ret, in time order.
-Integration::Next Integration::state_events(double t_ret) {
+IdaRun::Next IdaRun::state_events(double t_ret) {
   roots_at(t_ret, y_.get(), yp_.get(), roots_.high());
   double h_last = 0.0;
   IDAGetLastStep(ida_, &h_last);
@@ -731,7 +764,7 @@ Integration::Next Integration::state_events(double t_ret) {
 }
 
 // IDA stopped at a time event or at t_end.
-Integration::Next Integration::stopped_at(double t_event) {
+IdaRun::Next IdaRun::stopped_at(double t_event) {
   bool reinit = false;
   if (next_event_ < events_.size() && std::abs(t_ - t_event) <= eps_t_) {
     user_.parts.valid = false;
@@ -745,7 +778,7 @@ Integration::Next Integration::stopped_at(double t_event) {
   return Next::step;
 }
 
-void Integration::finish() {
+void IdaRun::finish() {
   if (user_.error) std::rethrow_exception(user_.error);
   if (result_.message.empty()) {
     result_.ok = true;
@@ -764,7 +797,6 @@ void Integration::finish() {
   s.seconds_jacobian = user_.seconds_jacobian;
 }
 
-}  // namespace
 
 double Disturbance::at(double time) const {
   if (time <= t.front()) return rate.front();
@@ -774,9 +806,22 @@ double Disturbance::at(double time) const {
   return rate[k - 1] + w * (rate[k] - rate[k - 1]);
 }
 
+Integration::Integration(System& system, const SolverOptions& options, OutputFn output, const Quadratures* quad)
+    : run_(std::make_unique<IdaRun>(system, options, std::move(output), quad)) {}
+Integration::~Integration() = default;
+bool Integration::start() { return run_->start(); }
+bool Integration::advance_to(double t) { return run_->advance_to(t); }
+bool Integration::inputs_changed() { return run_->inputs_changed(); }
+double Integration::time() const { return run_->time(); }
+const double* Integration::y() { return run_->y(); }
+const double* Integration::yp() { return run_->yp(); }
+const SolverResult& Integration::result() const { return run_->result(); }
+SolverResult Integration::finish() { return run_->finish_run(); }
+
 SolverResult simulate(System& system, const SolverOptions& opt, const OutputFn& output, const Quadratures* quad) {
   Integration integration(system, opt, output, quad);
-  return integration.run();
+  if (integration.start()) integration.advance_to(opt.t_end);
+  return integration.finish();
 }
 
 }  // namespace pneumo

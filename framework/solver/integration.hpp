@@ -1,0 +1,46 @@
+// A resumable integration: simulate() in pieces. A program that steps the
+// circuit from outside (an FMU's doStep) starts it once, advances it to one
+// communication point after another, changes its external inputs between
+// them, and reads the state at the point reached. simulate() is start(),
+// advance_to(t_end), finish() - the one integration path.
+#pragma once
+
+#include <memory>
+
+#include "framework/solver/ida_solver.hpp"
+
+namespace pneumo {
+
+class IdaRun;
+
+class Integration {
+ public:
+  // The System must outlive the Integration; options and output are copied.
+  Integration(System& system, const SolverOptions& options, OutputFn output, const Quadratures* quad = nullptr);
+  ~Integration();
+  Integration(const Integration&) = delete;
+  Integration& operator=(const Integration&) = delete;
+
+  // Events at t_start, consistent values (a steady start), the first output.
+  // These return false once the run failed: result().message says why; the
+  // state stays where the failure left it.
+  bool start();
+  // Integrate to min(t, t_end): time() is then t.
+  bool advance_to(double t);
+  // The System's external inputs were changed at time(): a discontinuity,
+  // re-initialised as after an event (consistent values, event iteration).
+  bool inputs_changed();
+
+  double time() const;
+  // The physical y, y' at time() (valid until the next call).
+  const double* y();
+  const double* yp();
+  const SolverResult& result() const;
+  // The statistics, warnings and outcome; once, at the end.
+  SolverResult finish();
+
+ private:
+  std::unique_ptr<IdaRun> run_;
+};
+
+}  // namespace pneumo
