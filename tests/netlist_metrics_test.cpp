@@ -124,7 +124,9 @@ TEST(NetlistMetrics, SweepOnACircuitWithoutCylinderMovesWithSupply) {
   for (std::size_t i = 0; i < rows.size(); ++i) {
     EXPECT_DOUBLE_EQ(rows[i][0], 2.0 + i);                        // bar, shortest form
     EXPECT_NEAR(rows[i][2], 1e5 * rows[i][0], 1e2 * rows[i][0]);  // the tank levels off at the supply
-    if (i > 0) EXPECT_LT(rows[i][1], rows[i - 1][1]);        // a higher supply fills to 1.5 bar sooner
+    if (i > 0) {
+      EXPECT_LT(rows[i][1], rows[i - 1][1]);        // a higher supply fills to 1.5 bar sooner
+    }
   }
 }
 
@@ -331,7 +333,9 @@ TEST(NetlistMetrics, CushionRigSweepEqualsTheBuiltInMetricsItReplaces) {
     // 1.7e-4 (T_EC_min, 0.03 K) and the step count by 4 %.
     const double tol = name == "steps" ? 0.1 : 3e-4;
     for (std::size_t i = 0; i < before.size(); ++i)
-      if (!std::isnan(before[i])) EXPECT_NEAR(plain_now.at(name)[i], before[i], tol * std::abs(before[i])) << name << " run " << i;
+      if (!std::isnan(before[i])) {
+        EXPECT_NEAR(plain_now.at(name)[i], before[i], tol * std::abs(before[i])) << name << " run " << i;
+      }
   }
   const auto all_now = run({}, "all.csv");
   const auto all_before = sweep_columns(data + "cushion_rig_all.csv");
