@@ -91,7 +91,7 @@ Unexplained leftover(Engine& eng, const Model& verdict, const DiagnosisReport& r
                       [&](int k, const std::vector<Disturbance>& d, std::string* why) {
                         return eng.simulate(verdict, k, d, {}, why);
                       },
-                      log};
+                      log, [&](int k) { return eng.netlist_of(verdict, k); }};
   explain_by_balances(in, eng.options(), u);
   return u;
 }

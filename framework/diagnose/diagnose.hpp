@@ -186,6 +186,29 @@ struct BalanceFinding {  // one candidate balance or sensor
   std::string failure;      // why its confirming simulation failed (empty: it ran, or none was tried)
 };
 
+// The best balance's correction as a function of the model's states
+// (framework/diagnose/form.hpp): terms with coefficients in SI.
+struct FormTermFinding {
+  std::string text;         // e.g. "bump(s at load.flange; centre 45.0 mm, width 4.0 mm)"
+  double coefficient = 0;   // SI
+  std::string unit;         // of the coefficient ("" when dimensionless)
+};
+
+struct FormFinding {
+  std::string balance, unit;            // the balance and its rate's unit
+  std::vector<FormTermFinding> terms;
+  std::string formula;                  // "d(balance) [unit] = ..."
+  double gap_before = 0;                // all runs, the verdict's model
+  double gap_after = 0;                 // simulated with the form in the model
+  double gap_shape = 0;                 // the time-shaped correction's
+  bool confirmed = false;               // gap_after is simulated, not predicted
+  bool beats_shape = false;             // as good as the time-shaped correction, or down to 1.5 x noise
+  std::string failure;                  // why the form's simulation failed
+  int dictionary = 0;                   // candidate terms tried
+  long simulations = 0;
+  std::string sentence;
+};
+
 struct Unexplained {
   double gap = 0;                                  // validation gap left after the verdict (noise = 1)
   std::string signal, phase;                       // where most of it lies
@@ -193,6 +216,7 @@ struct Unexplained {
   std::vector<BalanceFinding> balances;            // best first
   std::vector<DisturbanceShape> shape;             // of the best balance, per run
   std::string sentence;                            // one plain sentence for the report
+  std::optional<FormFinding> form;                 // the missing term's form, when the runs can judge one
   double gap_all_runs = 0;                         // the gap the balances work on: all runs, verdict model
   long simulations = 0;                            // the search's cost
   double seconds = 0;

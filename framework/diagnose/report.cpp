@@ -267,13 +267,22 @@ std::string next_run_sentence(const NextRun& n) {
          " at the measured runs' points)" + (n.sensor.empty() ? "" : "; or " + n.sensor);
 }
 
+// The missing term's form (form.hpp), when one was found and simulated.
+std::string form_clause(const DiagnosisReport& r) {
+  if (!r.unexplained || !r.unexplained->form) return "";
+  const FormFinding& f = *r.unexplained->form;
+  if (!f.confirmed || f.terms.empty()) return "";
+  return std::string("; ") + (f.beats_shape ? "its form: " : "a lead on its form: ") + f.formula + " (gap then " +
+         rounded(f.gap_after, 2) + ")";
+}
+
 std::string verdict_sentence(const DiagnosisReport& r) {
   std::string named;
   for (const auto& v : r.verdict) named += (named.empty() ? "" : ", then ") + v;
   const std::string left = rounded(r.validation_after.total.rms, 2);
   if (named.empty())
     return r.unexplained ? "none: no candidate effect explains the gap of " + left +
-                               " times the noise (validation gap " + left + ", noise = 1)"
+                               " times the noise (validation gap " + left + ", noise = 1)" + form_clause(r)
                          : "none needed: the model explains the data within noise (validation gap " + left +
                                ", noise = 1)";
   std::string next;
@@ -284,7 +293,7 @@ std::string verdict_sentence(const DiagnosisReport& r) {
            rounded(n.separation, 2) + " noise sd apart in " + n.signal + ")";
   }
   return named + (r.unexplained ? "; a gap of " + left + " times the noise remains unexplained"
-                                : "; the validation gap is then " + left + " (noise = 1)") + next;
+                                : "; the validation gap is then " + left + " (noise = 1)") + form_clause(r) + next;
 }
 
 void write_report_json(const DiagnosisReport& r, const std::string& path) {

@@ -11,6 +11,7 @@
 #include "framework/assembly/system.hpp"
 #include "framework/core/parallel.hpp"
 #include "framework/core/text.hpp"
+#include "framework/diagnose/form.hpp"
 
 namespace pneumo::diagnose {
 
@@ -23,29 +24,12 @@ struct State {
   double nominal = 1;
 };
 
-// The unit of a System unknown: a component's internal variable
-// ("component.variable") from its ComponentInfo, a node's from the
-// quantity the assembly names it by.
-std::string unit_of(const System& sys, const std::string& name) {
-  static const std::pair<const char*, const char*> node[] = {
-      {"p at ", "Pa"}, {"T at ", "K"}, {"s at ", "m"}, {"v at ", "m/s"}};
-  for (const auto& [prefix, unit] : node)
-    if (name.rfind(prefix, 0) == 0) return unit;
-  const auto dot = name.rfind('.');
-  if (dot == std::string::npos) return "";
-  const int c = sys.circuit().find(name.substr(0, dot));
-  if (c < 0) return "";
-  for (const auto& v : sys.circuit().components[c]->info().variables)
-    if (v.name == name.substr(dot + 1)) return v.unit;
-  return "";
-}
-
 std::vector<State> model_states(const Netlist& model, const Registry& registry) {
   const System sys(elaborate(model, registry));
   std::vector<State> out;
   for (int i = 0; i < sys.size(); ++i)
     if (sys.differential()[i] != 0.0)
-      out.push_back({sys.variable_names()[i], unit_of(sys, sys.variable_names()[i]), sys.nominal()[i]});
+      out.push_back({sys.variable_names()[i], unknown_unit(sys, sys.variable_names()[i]), sys.nominal()[i]});
   return out;
 }
 
@@ -298,6 +282,25 @@ class Search {
     }
   }
 
+  // The missing term's form on the best state balance, and on the next
+  // best when the first's does not beat its time-shaped correction.
+  std::optional<FormFinding> form_of(const std::vector<Candidate>& cands) const {
+    FormInput f{&runs_, used, r0, in_.netlist_of, in_.registry, in_.simulate,
+                [&](int k, const std::vector<std::vector<double>>& sim) { return residual(k, sim); }, in_.log, opt_.threads};
+    std::optional<FormFinding> best;
+    int tried = 0;
+    for (const auto& c : cands) {
+      if (c.variable.empty() || tried == 2 || !in_.netlist_of) continue;
+      ++tried;
+      auto found = discover_form(f, c.variable, c.finding.unit, c.finding.gap_after);
+      if (!found) break;
+      const bool better = !best || (found->confirmed && (!best->confirmed || found->gap_after < best->gap_after));
+      if (better) best = std::move(found);
+      if (best->beats_shape) break;
+    }
+    return best;
+  }
+
   std::vector<DisturbanceShape> shape_of(const Candidate& c) const {
     std::vector<DisturbanceShape> out;
     for (std::size_t q = 0; q < used.size(); ++q) {
@@ -366,10 +369,11 @@ void explain_by_balances(const UnexplainedInput& in, const DiagnoseOptions& opt,
     c.finding.explained = excess_share(u.gap_all_runs, c.finding.gap_after);
     u.balances.push_back(c.finding);
   }
+  u.form = search.form_of(cands);
   u.shape = search.shape_of(cands.front());
   const auto [phase, mean] = largest_phase(u.shape, search.used, in);
   u.sentence = sentence_of(u, cands.front(), in.phase_names->empty() ? "" : (*in.phase_names)[phase], mean);
-  u.simulations = search.simulations;
+  u.simulations = search.simulations + (u.form ? u.form->simulations : 0);
   u.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   if (in.log)
     in.log("unexplained: " + u.sentence + " [" + std::to_string(u.simulations) + " simulations, " + rounded(u.seconds, 2) +
@@ -405,7 +409,8 @@ std::string unexplained_json(const std::optional<Unexplained>& u, const std::fun
     for (std::size_t j = 0; j < sh.value.size(); ++j) o << (j ? ", " : "") << num(sh.value[j]);
     o << "]}";
   }
-  o << "],\n  \"simulations\": " << u->simulations << ", \"seconds\": " << num(u->seconds) << "}";
+  o << "],\n  \"form\": " << (u->form ? form_json(*u->form, num, str) : std::string("null"));
+  o << ",\n  \"simulations\": " << u->simulations << ", \"seconds\": " << num(u->seconds) << "}";
   return o.str();
 }
 
@@ -473,6 +478,7 @@ std::string unexplained_html(const std::optional<Unexplained>& u,
       << std::lround(100 * b.explained) << " %</td></tr>\n";
   }
   o << "</table>\n";
+  if (u->form) o << form_html(*u->form, html);
   return o.str();
 }
 

@@ -35,6 +35,7 @@ struct UnexplainedInput {
   const Registry* registry = nullptr;
   DisturbedSimulation simulate;
   std::function<void(const std::string&)> log;
+  std::function<Netlist(int run)> netlist_of;  // the verdict model at a run's operating point (the form's variables)
 };
 
 // Fills `u`'s balances, shape and sentence (its gap, signal, phase and

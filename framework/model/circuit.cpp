@@ -39,4 +39,32 @@ std::vector<std::string> local_variable_units(const Component& c) {
   return out;
 }
 
+Probe find_probe(const Circuit& circuit, int component, const std::string& quantity) {
+  const Component& comp = *circuit.components[component];
+  Probe probe;
+  probe.component = component;
+  const auto& obs = comp.info().observables;
+  for (std::size_t i = 0; i < obs.size(); ++i)
+    if (obs[i].name == quantity) {
+      probe.kind = Probe::Kind::observable;
+      probe.index = static_cast<int>(i);
+      probe.unit = obs[i].unit;
+    }
+  if (probe.index < 0) {
+    const auto names = local_variable_names(comp);
+    const auto units = local_variable_units(comp);
+    for (std::size_t i = 0; i < names.size(); ++i)
+      if (names[i] == quantity) probe.index = static_cast<int>(i), probe.unit = units[i];
+  }
+  // A signal port by its name alone (source.y for the value of port y).
+  if (probe.index < 0) {
+    const int port = comp.info().port_index(quantity);
+    if (port >= 0 && comp.info().ports[port].domain == Domain::signal) {
+      probe.index = comp.port_offset(port);
+      probe.unit = local_variable_units(comp)[probe.index];
+    }
+  }
+  return probe;
+}
+
 }  // namespace pneumo

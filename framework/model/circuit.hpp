@@ -44,6 +44,12 @@ struct Probe {
 std::vector<std::string> local_variable_names(const Component& c);
 std::vector<std::string> local_variable_units(const Component& c);
 
+struct Circuit;
+// The probe of a component's quantity as outputs name it: an observable, a
+// local variable, or a signal port by its name alone (source.y for the
+// value of port y); index -1 when the component has none such.
+Probe find_probe(const Circuit& circuit, int component, const std::string& quantity);
+
 struct Circuit {
   GasModel gas;
   std::vector<std::unique_ptr<Component>> components;

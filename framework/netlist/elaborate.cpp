@@ -248,38 +248,11 @@ Probe make_probe(const Netlist& nl, const Circuit& circuit, const std::map<std::
                                                    "'; " + choices_hint(o.component, names));
   }
   const Component& comp = *circuit.components[it->second];
-  Probe probe;
+  Probe probe = find_probe(circuit, it->second, o.quantity);
   probe.name = o.name;
-  probe.component = it->second;
-  const auto& obs = comp.info().observables;
-  for (std::size_t i = 0; i < obs.size(); ++i)
-    if (obs[i].name == o.quantity) {
-      probe.kind = Probe::Kind::observable;
-      probe.index = static_cast<int>(i);
-      probe.unit = obs[i].unit;
-    }
-  if (probe.index < 0) {
-    const auto names = local_variable_names(comp);
-    const auto unit_names = local_variable_units(comp);
-    for (std::size_t i = 0; i < names.size(); ++i)
-      if (names[i] == o.quantity) {
-        probe.kind = Probe::Kind::local;
-        probe.index = static_cast<int>(i);
-        probe.unit = unit_names[i];
-      }
-  }
-  // A signal port by its name alone (source.y for the value of port y).
-  if (probe.index < 0) {
-    const int port = comp.info().port_index(o.quantity);
-    if (port >= 0 && comp.info().ports[port].domain == Domain::signal) {
-      probe.kind = Probe::Kind::local;
-      probe.index = comp.port_offset(port);
-      probe.unit = local_variable_units(comp)[probe.index];
-    }
-  }
   if (probe.index < 0) {
     std::vector<std::string> valid;
-    for (const auto& ob : obs) valid.push_back(ob.name);
+    for (const auto& ob : comp.info().observables) valid.push_back(ob.name);
     for (const auto& n : local_variable_names(comp)) valid.push_back(n);
     throw InputError(o.where, o.component, "", "output '" + o.name + "': type '" + comp.info().type +
                                                    "' has no variable '" + o.quantity + "'; " +

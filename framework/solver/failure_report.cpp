@@ -39,7 +39,7 @@ std::string rejected_rows(UserData& u, N_Vector y, N_Vector yp, double t) {
   const System& s = *u.system;
   std::vector<double> F(s.size(), 0.0);
   const double* py = u.physical_y(y);
-  if (s.residual(t, py, u.disturbed_yp(t, yp), F.data()) == 0) return "";
+  if (s.residual(t, py, u.disturbed_yp(t, y, yp), F.data()) == 0) return "";
   std::vector<std::string> rows;
   for (int r = 0; r < s.size() && rows.size() < 3; ++r)
     if (!std::isfinite(F[r])) rows.push_back(s.row_name(r));

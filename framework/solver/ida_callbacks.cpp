@@ -44,7 +44,7 @@ int fresh_matrix(UserData& u, double t, double cj, N_Vector y, N_Vector yp, doub
                  long convergence_failures) {
   auto& parts = u.parts;
   const double* py = u.physical_y(y);
-  const double* pyp = u.disturbed_yp(t, yp);
+  const double* pyp = u.disturbed_yp(t, y, yp);
   parts.valid = false;
   if (!parts.enabled || parts.in_calc_ic) {
     const int flag = u.system->jacobian(t, py, pyp, cj, values);
@@ -70,7 +70,7 @@ int residual_cb(realtype t_ida, N_Vector y, N_Vector yp, N_Vector rr, void* user
   const double t = u->model_t(t_ida);
   const auto start = std::chrono::steady_clock::now();
   const int flag = guarded(u, [&] {
-    return u->system->residual(t, u->physical_y(y), u->disturbed_yp(t, yp), N_VGetArrayPointer(rr));
+    return u->system->residual(t, u->physical_y(y), u->disturbed_yp(t, y, yp), N_VGetArrayPointer(rr));
   });
   u->seconds_residual += seconds_since(start);
   return flag;

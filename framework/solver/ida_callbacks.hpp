@@ -42,17 +42,50 @@ struct UserData {
     for (std::size_t i = 0; i < nominal.size(); ++i) yp_phys[i] = s[i] * nominal[i];
     return yp_phys.data();
   }
-  // SolverOptions::disturbances by IDA unknown: the equations see
-  // y' - d(t) (applied to yp_phys after physical_yp).
-  std::vector<std::pair<int, const Disturbance*>> disturbed;
+  // SolverOptions::disturbances by IDA unknown, their terms' factors by
+  // what they read (an unknown, else a component's quantity): the equations
+  // see y' - d(t, y, y') (applied to yp_phys after physical_yp).
+  struct Reader {
+    int unknown = -1;
+    Probe probe;  // when unknown < 0 (index < 0: nothing, read as 0)
+  };
+  struct Disturbed {
+    int i;
+    const Disturbance* d;
+    std::vector<std::vector<std::pair<Reader, Reader>>> factor_of;  // per term, per factor: variable, other
+  };
+  std::vector<Disturbed> disturbed;
+  std::vector<double> disturbance_rates;
   // A steady start's settling integrates in a time of its own with the
   // model's time held at t_start: the equations see frozen_t (NaN: IDA's t).
   double frozen_t = NAN;
   double model_t(double t) const { return std::isnan(frozen_t) ? t : frozen_t; }
-  const double* disturbed_yp(double t, N_Vector yp) {
+  const double* disturbed_yp(double t, N_Vector y, N_Vector yp) {
     physical_yp(yp);
-    for (const auto& [i, d] : disturbed) yp_phys[i] -= d->at(t);
+    if (disturbed.empty()) return yp_phys.data();
+    physical_y(y);
+    // Every rate first: a term may read the rate of a disturbed unknown.
+    disturbance_rates.resize(disturbed.size());
+    for (std::size_t k = 0; k < disturbed.size(); ++k) disturbance_rates[k] = disturbance_at(disturbed[k], t);
+    for (std::size_t k = 0; k < disturbed.size(); ++k) yp_phys[disturbed[k].i] -= disturbance_rates[k];
     return yp_phys.data();
+  }
+  double read(const Reader& r, double t) const {
+    if (r.unknown >= 0) return y_phys[r.unknown];
+    return r.probe.index < 0 ? 0.0 : system->probe(r.probe, t, y_phys.data(), yp_phys.data());
+  }
+  double disturbance_at(const Disturbed& r, double t) const {
+    double d = r.d->t.empty() ? 0.0 : r.d->at(t);
+    for (std::size_t j = 0; j < r.d->terms.size(); ++j) {
+      const auto& term = r.d->terms[j];
+      double v = term.coefficient;
+      for (std::size_t f = 0; f < term.factors.size(); ++f) {
+        const auto& [a, b] = r.factor_of[j][f];
+        v *= term.factors[f](read(a, t), a.unknown >= 0 ? yp_phys[a.unknown] : 0.0, read(b, t));
+      }
+      d += v;
+    }
+    return d;
   }
 };
 

@@ -94,6 +94,7 @@ class IdaRun {
   void use_algebraic_newton_test();
   void init_quadratures();
   void find_disturbed();
+  UserData::Reader reader(const Disturbance& d, const std::string& name, bool rate) const;
   void check(int flag, const char* what) const {
     if (flag < 0) throw std::runtime_error(std::string(what) + " failed: " + flag_text(flag, user_));
   }
@@ -184,6 +185,25 @@ IdaRun::IdaRun(System& system, const SolverOptions& opt, OutputFn output, const 
   find_disturbed();
 }
 
+// A factor reads a System unknown, else a component's quantity as outputs
+// name it (COMPONENT.QUANTITY); only an unknown has a rate.
+UserData::Reader IdaRun::reader(const Disturbance& d, const std::string& name, bool rate) const {
+  UserData::Reader r;
+  if (name.empty()) return r;
+  const auto& names = system_.variable_names();
+  if (const auto it = std::find(names.begin(), names.end(), name); it != names.end()) {
+    r.unknown = static_cast<int>(it - names.begin());
+    return r;
+  }
+  const auto dot = name.find('.');  // a quantity's name may hold a dot (port.p), a component's does not
+  const int c = dot == std::string::npos ? -1 : system_.circuit().find(name.substr(0, dot));
+  if (c >= 0 && !rate) r.probe = find_probe(system_.circuit(), c, name.substr(dot + 1));
+  if (r.probe.index < 0)
+    throw std::invalid_argument("disturbance on '" + d.variable + "': the system has no " +
+                                (rate ? "unknown '" : "unknown or quantity '") + name + "'");
+  return r;
+}
+
 void IdaRun::find_disturbed() {
   const auto& names = system_.variable_names();
   for (const auto& d : opt_.disturbances) {
@@ -193,9 +213,15 @@ void IdaRun::find_disturbed() {
     const int i = static_cast<int>(it - names.begin());
     if (system_.differential()[i] == 0.0)
       throw std::invalid_argument("disturbance on '" + d.variable + "': an algebraic unknown has no balance to disturb");
-    if (d.t.empty() || d.t.size() != d.rate.size() || !std::is_sorted(d.t.begin(), d.t.end()))
-      throw std::invalid_argument("disturbance on '" + d.variable + "': needs ascending times, one rate each");
-    user_.disturbed.emplace_back(i, &d);
+    if ((d.t.empty() && d.terms.empty()) || d.t.size() != d.rate.size() || !std::is_sorted(d.t.begin(), d.t.end()))
+      throw std::invalid_argument("disturbance on '" + d.variable + "': needs ascending times, one rate each, or terms");
+    UserData::Disturbed r{i, &d, {}};
+    for (const auto& term : d.terms) {
+      auto& f = r.factor_of.emplace_back();
+      for (const auto& factor : term.factors)
+        f.emplace_back(reader(d, factor.variable, factor.of == DisturbanceFactor::Of::rate), reader(d, factor.other, false));
+    }
+    user_.disturbed.push_back(std::move(r));
   }
 }
 
@@ -538,7 +564,7 @@ bool IdaRun::start() {
   events_ = system_.time_events();
   // A disturbance's knots are stops too: no step straddles a kink of d(t)
   // (handle_time_event finds nothing due there and the step goes on).
-  for (const auto& [i, d] : user_.disturbed) events_.insert(events_.end(), d->t.begin(), d->t.end());
+  for (const auto& r : user_.disturbed) events_.insert(events_.end(), r.d->t.begin(), r.d->t.end());
   if (!user_.disturbed.empty()) {
     std::sort(events_.begin(), events_.end());
     events_.erase(std::unique(events_.begin(), events_.end()), events_.end());
@@ -797,6 +823,18 @@ void IdaRun::finish() {
   s.seconds_jacobian = user_.seconds_jacobian;
 }
 
+
+double DisturbanceFactor::operator()(double y, double yp, double y_other) const {
+  switch (of) {
+    case Of::value: return y - centre;
+    case Of::rate: return yp;
+    case Of::magnitude: return std::abs(y);
+    case Of::sign: return std::tanh(y / width);
+    case Of::bump: return std::exp(-0.5 * (y - centre) * (y - centre) / (width * width));
+    case Of::difference: return y - y_other;
+  }
+  return 0.0;
+}
 
 double Disturbance::at(double time) const {
   if (time <= t.front()) return rate.front();

@@ -18,15 +18,31 @@
 namespace pneumo {
 
 // A known additive source on one state's balance: the residual is evaluated
-// as F(t, y, y' - d(t)), so the state follows y_i' = f_i(t, y) + d(t) - a
-// mass, energy, momentum, ... that the equations do not have. d is piecewise
-// linear through (t[k], rate[k]), constant outside, in the SI unit of the
-// state per second; it does not depend on y, so the Jacobian is unchanged.
-// Set by programs (the diagnosis), not by netlists.
+// as F(t, y, y' - d), so the state follows y_i' = f_i(t, y) + d - a mass,
+// energy, momentum, ... that the equations do not have. d is piecewise
+// linear in time through (t[k], rate[k]), constant outside, plus `terms`
+// that read the state (a form the diagnosis proposes: a spring, a bump of
+// friction, a mass), in the SI unit of the state per second. The terms are
+// not in the Jacobian: IDA's Newton iteration converges on them as on any
+// approximate matrix, slower when they are strong. Set by programs (the
+// diagnosis), not by netlists.
+struct DisturbanceFactor {
+  enum class Of { value, rate, magnitude, sign, bump, difference };
+  Of of = Of::value;
+  std::string variable;          // a System unknown, else COMPONENT.QUANTITY as outputs name it (rate: an unknown)
+  std::string other;             // difference: value of variable - value of other
+  double centre = 0, width = 1;  // value: y - centre; sign: tanh(y / width); bump: exp(-((y - centre) / width)^2 / 2)
+  double operator()(double y, double yp, double y_other) const;
+};
+struct DisturbanceTerm {
+  double coefficient = 0;
+  std::vector<DisturbanceFactor> factors;  // none: a constant
+};
 struct Disturbance {
   std::string variable;  // System::variable_names(), a differential variable
   std::vector<double> t, rate;
-  double at(double time) const;
+  std::vector<DisturbanceTerm> terms;
+  double at(double time) const;  // the time-shaped part
 };
 
 // The netlist's settings (simulation_options.hpp: units, defaults, ranges)

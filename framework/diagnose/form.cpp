@@ -1,0 +1,676 @@
+#include "framework/diagnose/form.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <map>
+#include <numeric>
+#include <set>
+#include <sstream>
+
+#include "framework/assembly/system.hpp"
+#include "framework/core/parallel.hpp"
+#include "framework/core/text.hpp"
+#include "framework/run/run.hpp"
+
+namespace pneumo::diagnose {
+
+std::string unknown_unit(const System& sys, const std::string& name) {
+  static const std::pair<const char*, const char*> node[] = {
+      {"p at ", "Pa"}, {"T at ", "K"}, {"s at ", "m"}, {"v at ", "m/s"}};
+  for (const auto& [prefix, unit] : node)
+    if (name.rfind(prefix, 0) == 0) return unit;
+  const auto dot = name.rfind('.');
+  if (dot == std::string::npos) return "";
+  const int c = sys.circuit().find(name.substr(0, dot));
+  if (c < 0) return "";
+  for (const auto& v : sys.circuit().components[c]->info().variables)
+    if (v.name == name.substr(dot + 1)) return v.unit;
+  return "";
+}
+
+namespace {
+
+using Of = DisturbanceFactor::Of;
+
+// The rate's unit of a quantity's (m -> m/s, m/s -> m/s2).
+std::string rate_unit_of(const std::string& unit) {
+  if (unit.ends_with("/s")) return unit + "2";
+  return unit.empty() ? "1/s" : unit + "/s";
+}
+
+// One unknown the dictionary reads, sampled at the output times of each used run.
+struct Variable {
+  std::string name, unit;
+  std::vector<std::vector<double>> y, yp;
+  double lo = INFINITY, hi = -INFINITY;
+  bool unknown = false;  // a System unknown: its rate is known too
+};
+
+bool is_velocity(const std::string& unit) { return unit == "m/s" || unit == "rad/s"; }
+bool is_position(const std::string& unit) { return unit == "m" || unit == "rad"; }
+
+// What the dictionary may read: the System's unknowns, then every
+// component's local variables and observables, by their units.
+struct Readable {
+  std::string name, unit;
+  int unknown = -1;
+  Probe probe;
+};
+
+std::vector<Readable> readables(const System& sys) {
+  static const std::set<std::string> units = {"m", "m/s", "rad", "rad/s", "Pa", "K"};
+  std::vector<Readable> out;
+  const auto& names = sys.variable_names();
+  for (int i = 0; i < sys.size(); ++i)
+    if (const std::string u = unknown_unit(sys, names[i]); units.count(u)) out.push_back({names[i], u, i, {}});
+  const Circuit& circuit = sys.circuit();
+  for (int c = 0; c < static_cast<int>(circuit.components.size()); ++c) {
+    const Component& comp = *circuit.components[c];
+    std::vector<std::string> quantities = local_variable_names(comp);
+    for (const auto& o : comp.info().observables) quantities.push_back(o.name);
+    for (const auto& q : quantities) {
+      Probe p = find_probe(circuit, c, q);
+      if (p.index >= 0 && units.count(p.unit)) out.push_back({comp.name() + "." + q, p.unit, -1, p});
+    }
+  }
+  return out;
+}
+
+// True when b's samples are an affine function of a's (a flange's position
+// and the piston's stroke, a port's pressure and its node's).
+bool affine_twin(const std::vector<double>& a, const std::vector<double>& b) {
+  if (a.size() != b.size() || a.size() < 3) return false;
+  const Eigen::Map<const Eigen::VectorXd> x(a.data(), static_cast<Eigen::Index>(a.size())),
+      y(b.data(), static_cast<Eigen::Index>(b.size()));
+  const Eigen::VectorXd dx = x.array() - x.mean(), dy = y.array() - y.mean();
+  const double sxx = dx.squaredNorm(), syy = dy.squaredNorm();
+  if (!(sxx > 0) || !(syy > 0)) return false;
+  const double r = dx.dot(dy) / std::sqrt(sxx * syy);
+  return std::abs(r) > 1 - 1e-9;
+}
+
+std::vector<double> joined(const Variable& v) {
+  std::vector<double> out;
+  for (const auto& run : v.y) out.insert(out.end(), run.begin(), run.end());
+  return out;
+}
+
+// The variables along the verdict model's runs: positions, velocities,
+// pressures, temperatures; one of each set that moves together, none that
+// stays constant. `largest`: the balance's state's largest magnitude.
+std::vector<Variable> record(const FormInput& in, const std::string& balance, double& largest) {
+  std::vector<Variable> vars;
+  const std::size_t nr = in.used.size();
+  for (std::size_t q = 0; q < nr; ++q) {
+    const Netlist nl = in.netlist_of(in.used[q]);
+    System sys(elaborate(nl, *in.registry));
+    const std::vector<Readable> read = readables(sys);
+    if (q == 0) {
+      for (const auto& r : read)
+        vars.push_back({r.name, r.unit, std::vector<std::vector<double>>(nr), std::vector<std::vector<double>>(nr),
+                        INFINITY, -INFINITY, r.unknown >= 0});
+    }
+    const auto& names = sys.variable_names();
+    const auto it = std::find(names.begin(), names.end(), balance);
+    const int b = it == names.end() ? -1 : static_cast<int>(it - names.begin());
+    SolverOptions so = solver_options(nl.simulation);
+    so.threads = 1;
+    simulate(sys, so, [&](double t, const double* y, const double* yp) {
+      if (b >= 0) largest = std::max(largest, std::abs(y[b]));
+      for (std::size_t k = 0; k < vars.size() && k < read.size(); ++k) {
+        const Readable& r = read[k];
+        vars[k].y[q].push_back(r.unknown >= 0 ? y[r.unknown] : sys.probe(r.probe, t, y, yp));
+        vars[k].yp[q].push_back(r.unknown >= 0 ? yp[r.unknown] : 0.0);
+      }
+    });
+  }
+  for (auto& v : vars)
+    for (const auto& run : v.y)
+      for (double x : run) v.lo = std::min(v.lo, x), v.hi = std::max(v.hi, x);
+  std::vector<Variable> out;
+  for (auto& v : vars) {
+    const double span = v.hi - v.lo;
+    if (!(span > 1e-9 * std::max(1.0, std::abs(v.hi)))) continue;
+    const bool twin = std::any_of(out.begin(), out.end(), [&](const Variable& w) { return affine_twin(joined(w), joined(v)); });
+    if (!twin) out.push_back(std::move(v));
+  }
+  return out;
+}
+
+// A candidate term: its factors, how it reads, the unit its coefficient
+// has, and its RMS along the runs (to size its probe: not its peak, which
+// an acceleration at a stop makes a thousand times its typical value).
+struct Entry {
+  std::vector<DisturbanceFactor> factors;
+  std::string text, unit;  // the term's own unit ("" when dimensionless)
+  double rms = 0;
+};
+
+// Lengths in mm, the rest in SI.
+std::string shown(double v, const std::string& unit) {
+  if (unit == "m") return rounded(1e3 * v, 3) + " mm";
+  return rounded(v, 3) + (unit.empty() ? "" : " " + unit);
+}
+
+std::string factor_text(const DisturbanceFactor& f, const std::string& unit) {
+  switch (f.of) {
+    case Of::value: return "[" + f.variable + "]";
+    case Of::rate: return "d[" + f.variable + "]/dt";
+    case Of::magnitude: return "|[" + f.variable + "]|";
+    case Of::sign: return "sgn([" + f.variable + "])";
+    case Of::bump:
+      return "bump([" + f.variable + "]; centre " + shown(f.centre, unit) + ", width " + shown(f.width, unit) + ")";
+    case Of::difference: return "([" + f.variable + "] - [" + f.other + "])";
+  }
+  return "";
+}
+
+std::string factor_unit(const DisturbanceFactor& f, const std::string& unit) {
+  if (f.of == Of::sign || f.of == Of::bump) return "";
+  return f.of == Of::rate ? rate_unit_of(unit) : unit;
+}
+
+class Dictionary {
+ public:
+  explicit Dictionary(std::vector<Variable> vars) : vars_(std::move(vars)) {
+    for (std::size_t k = 0; k < vars_.size(); ++k) index_[vars_[k].name] = static_cast<int>(k);
+  }
+  const std::vector<Variable>& vars() const { return vars_; }
+
+  Entry entry(std::vector<DisturbanceFactor> factors) const {
+    Entry e{std::move(factors), "", "", 0};
+    for (const auto& f : e.factors) {
+      const std::string& u = vars_[index_.at(f.variable)].unit;
+      e.text += (e.text.empty() ? "" : " * ") + factor_text(f, u);
+      const std::string fu = factor_unit(f, u);
+      if (!fu.empty()) e.unit += (e.unit.empty() ? "" : "*") + fu;
+    }
+    if (e.text.empty()) e.text = "1";
+    double sum = 0, count = 0;
+    for (std::size_t q = 0; q < vars_[0].y.size(); ++q)
+      for (std::size_t i = 0; i < samples(q); ++i) sum += std::pow(value(e.factors, q, i), 2), count += 1;
+    e.rms = count > 0 ? std::sqrt(sum / count) : 0.0;
+    return e;
+  }
+
+  double value(const std::vector<DisturbanceFactor>& factors, std::size_t q, std::size_t i) const {
+    double v = 1;
+    for (const auto& f : factors) {
+      const Variable& a = vars_[index_.at(f.variable)];
+      const double other = f.other.empty() ? 0.0 : vars_[index_.at(f.other)].y[q][i];
+      v *= f(a.y[q][i], a.yp[q][i], other);
+    }
+    return v;
+  }
+
+ private:
+  std::size_t samples(std::size_t q) const {
+    std::size_t n = SIZE_MAX;
+    for (const auto& v : vars_) n = std::min(n, v.y[q].size());
+    return n == SIZE_MAX ? 0 : n;
+  }
+  std::vector<Variable> vars_;
+  std::map<std::string, int> index_;
+};
+
+constexpr int kBumpCentres = 16;
+constexpr double kBumpWidths[] = {1.0 / 25, 1.0 / 10};  // of the stroke the runs cover
+
+DisturbanceFactor read(Of of, const std::string& variable, const std::string& other = "") {
+  DisturbanceFactor f;
+  f.of = of, f.variable = variable, f.other = other;
+  return f;
+}
+
+// The candidate terms: single factors by the variables' units, bumps over
+// each position's range, and sign(v) and v times each non-velocity factor
+// (sign(v) times each bump: friction concentrated somewhere on the stroke).
+std::vector<Entry> candidate_terms(const Dictionary& dict) {
+  std::vector<std::vector<DisturbanceFactor>> single, other, bumps;
+  const auto sign = [](const Variable& v) {
+    return DisturbanceFactor{Of::sign, v.name, "", 0, 0.05 * std::max(std::abs(v.lo), std::abs(v.hi))};
+  };
+  for (const auto& v : dict.vars()) {
+    if (is_velocity(v.unit)) {
+      single.push_back({read(Of::value, v.name)});
+      single.push_back({read(Of::magnitude, v.name)});
+      single.push_back({sign(v)});
+      if (v.unknown) single.push_back({read(Of::rate, v.name)});
+      continue;
+    }
+    other.push_back({read(Of::value, v.name)});
+    if (is_position(v.unit))
+      for (double w : kBumpWidths)
+        for (int j = 0; j < kBumpCentres; ++j)
+          bumps.push_back({{Of::bump, v.name, "", v.lo + (v.hi - v.lo) * (j + 0.5) / kBumpCentres, w * (v.hi - v.lo)}});
+  }
+  const auto& vars = dict.vars();
+  for (std::size_t a = 0; a < vars.size(); ++a)
+    for (std::size_t b = a + 1; b < vars.size(); ++b)
+      if (vars[a].unit == "Pa" && vars[b].unit == "Pa") other.push_back({read(Of::difference, vars[a].name, vars[b].name)});
+  std::vector<Entry> out{dict.entry({})};
+  for (const auto* set : {&other, &single, &bumps})
+    for (const auto& f : *set) out.push_back(dict.entry(f));
+  for (const auto& v : vars) {
+    if (!is_velocity(v.unit)) continue;
+    for (const auto& f : other) {
+      out.push_back(dict.entry({sign(v), f[0]}));
+      out.push_back(dict.entry({read(Of::value, v.name), f[0]}));
+    }
+    for (const auto& f : bumps) out.push_back(dict.entry({sign(v), f[0]}));
+  }
+  std::erase_if(out, [](const Entry& e) { return !(e.rms > 0) || !std::isfinite(e.rms); });
+  return out;
+}
+
+// The runs' normal equations for the linearised residuals r0 + J c: per
+// run, so that a run can be left out.
+struct Normal {
+  std::vector<Eigen::MatrixXd> G;
+  std::vector<Eigen::VectorXd> h;
+  std::vector<double> s;
+  double n = 0;
+
+  Eigen::VectorXd fit(const std::vector<int>& S, int skip) const {
+    const int p = static_cast<int>(S.size());
+    if (p == 0) return Eigen::VectorXd();
+    Eigen::MatrixXd A = Eigen::MatrixXd::Zero(p, p);
+    Eigen::VectorXd g = Eigen::VectorXd::Zero(p);
+    for (std::size_t q = 0; q < G.size(); ++q) {
+      if (static_cast<int>(q) == skip) continue;
+      for (int a = 0; a < p; ++a) {
+        g[a] += h[q][S[a]];
+        for (int b = 0; b < p; ++b) A(a, b) += G[q](S[a], S[b]);
+      }
+    }
+    A.diagonal().array() += 1e-10 * std::max(A.diagonal().maxCoeff(), 1e-300);
+    return -A.ldlt().solve(g);
+  }
+  double ssr(const std::vector<int>& S, std::size_t q, const Eigen::VectorXd& c) const {
+    double v = s[q];
+    for (std::size_t a = 0; a < S.size(); ++a) {
+      v += 2 * h[q][S[a]] * c[a];
+      for (std::size_t b = 0; b < S.size(); ++b) v += c[a] * G[q](S[a], S[b]) * c[b];
+    }
+    return v;
+  }
+  // Leave-one-run-out: each run predicted by the fit to the others.
+  double cross_validated(const std::vector<int>& S) const {
+    double total = 0;
+    for (std::size_t q = 0; q < G.size(); ++q) total += ssr(S, q, fit(S, static_cast<int>(q)));
+    return total;
+  }
+};
+
+constexpr int kMaxTerms = 4;
+constexpr std::size_t kTried = 3;  // additions simulated per round
+
+// What a term must gain to be taken: a run's worth of noise (sum of squares
+// of unit-variance residuals) per run, and a percent of the excess.
+double needed(const Normal& N, double ssr) {
+  return static_cast<double>(N.G.size()) + 0.01 * std::max(ssr - N.n, 0.0);
+}
+
+// The additions that, refitted with the form's terms `S`, lower the
+// cross-validated error most, best first, at most `count`: one term, or one
+// with the constant (an affine law - a spring with its preload - that
+// neither term alone fits); only those that gain enough. The constant is
+// candidate 0.
+std::vector<std::vector<int>> best_additions(const Normal& N, const std::vector<int>& S,
+                                             const std::vector<char>& usable, std::size_t count) {
+  const double cv = N.cross_validated(S);
+  std::vector<std::pair<double, std::vector<int>>> ranked;
+  const auto consider = [&](std::vector<int> added) {
+    auto T = S;
+    T.insert(T.end(), added.begin(), added.end());
+    const double gain = cv - N.cross_validated(T);
+    if (gain >= static_cast<double>(added.size()) * needed(N, cv)) ranked.emplace_back(gain, std::move(added));
+  };
+  const bool constant_free = usable[0] && std::find(S.begin(), S.end(), 0) == S.end();
+  for (int k = 0; k < static_cast<int>(usable.size()); ++k) {
+    if (!usable[k] || std::find(S.begin(), S.end(), k) != S.end()) continue;
+    consider({k});
+    if (k > 0 && constant_free) consider({k, 0});
+  }
+  std::sort(ranked.begin(), ranked.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+  std::vector<std::vector<int>> out;
+  for (std::size_t i = 0; i < ranked.size() && out.size() < count; ++i) out.push_back(ranked[i].second);
+  return out;
+}
+
+// The form's parameters for Gauss-Newton: each term's coefficient, and a
+// bump's centre and width.
+struct Parameter {
+  int term, factor = -1;  // factor < 0: the coefficient
+  bool width = false;
+};
+
+double& slot(std::vector<DisturbanceTerm>& terms, const Parameter& p) {
+  auto& t = terms[p.term];
+  if (p.factor < 0) return t.coefficient;
+  return p.width ? t.factors[p.factor].width : t.factors[p.factor].centre;
+}
+
+// A bump narrower than half a percent of the stroke is a step the solver
+// cannot resolve, one wider than a quarter of it no longer a bump but a
+// smooth law the other terms say plainly: Gauss-Newton is let in neither.
+bool bump_out_of_range(const std::vector<DisturbanceTerm>& terms, double range) {
+  for (const auto& t : terms)
+    for (const auto& f : t.factors)
+      if (f.of == Of::bump && !(f.width > range / 200 && f.width < range / 4)) return true;
+  return false;
+}
+
+class Refiner {
+ public:
+  Refiner(const FormInput& in, std::string balance, std::atomic<long>& sims)
+      : in_(in), balance_(std::move(balance)), sims_(sims) {}
+
+  // The residuals of every used run with `terms` in the model; false when one failed.
+  bool residuals(const std::vector<DisturbanceTerm>& terms, std::vector<Eigen::VectorXd>& r, std::string* why) const {
+    const std::size_t nr = in_.used.size();
+    r.assign(nr, Eigen::VectorXd());
+    std::vector<std::string> reasons(nr);
+    parallel_for(static_cast<long>(nr), in_.threads, [&](int, long q) {
+      const auto sim = in_.simulate(in_.used[q], {Disturbance{balance_, {}, {}, terms}}, &reasons[q]);
+      ++sims_;
+      if (!sim.empty()) r[q] = in_.residual(in_.used[q], sim);
+    });
+    for (std::size_t q = 0; q < nr; ++q)
+      if (r[q].size() == 0) {
+        if (why) *why = "run " + (*in_.runs)[in_.used[q]].name + ": " + reasons[q];
+        return false;
+      }
+    return true;
+  }
+
+  // Damped Gauss-Newton steps from `terms` while each lowers the simulated
+  // sum of squares by more than a percent; `terms` and `ssr` end at the best.
+  void refine(std::vector<DisturbanceTerm>& terms, double& ssr, std::vector<Eigen::VectorXd> r, double range) const {
+    const std::vector<Parameter> params = parameters(terms);
+    for (int it = 0; it < 4; ++it) {
+      const Eigen::VectorXd r_all = stacked(r);
+      Eigen::MatrixXd J;
+      if (!jacobian(terms, params, r_all, J)) return;
+      Eigen::MatrixXd A = J.transpose() * J;
+      A.diagonal() *= 1.001;
+      const Eigen::VectorXd delta = -A.ldlt().solve(J.transpose() * r_all);
+      const double before = ssr;
+      if (!step(terms, params, delta, range, ssr, r) || ssr > 0.99 * before) return;
+    }
+  }
+
+  static Eigen::VectorXd stacked(const std::vector<Eigen::VectorXd>& r) {
+    Eigen::Index n = 0;
+    for (const auto& v : r) n += v.size();
+    Eigen::VectorXd out(n);
+    n = 0;
+    for (const auto& v : r) out.segment(n, v.size()) = v, n += v.size();
+    return out;
+  }
+
+ private:
+  static std::vector<Parameter> parameters(const std::vector<DisturbanceTerm>& terms) {
+    std::vector<Parameter> params;
+    for (int j = 0; j < static_cast<int>(terms.size()); ++j) {
+      params.push_back({j});
+      for (int f = 0; f < static_cast<int>(terms[j].factors.size()); ++f)
+        if (terms[j].factors[f].of == Of::bump) params.push_back({j, f, false}), params.push_back({j, f, true});
+    }
+    return params;
+  }
+
+  // Forward differences of the stacked residuals in each parameter.
+  bool jacobian(const std::vector<DisturbanceTerm>& terms, const std::vector<Parameter>& params,
+                const Eigen::VectorXd& r_all, Eigen::MatrixXd& J) const {
+    J.resize(r_all.size(), static_cast<Eigen::Index>(params.size()));
+    for (std::size_t p = 0; p < params.size(); ++p) {
+      auto moved = terms;
+      double& v = slot(moved, params[p]);
+      const double h = params[p].factor < 0 ? std::max(0.05 * std::abs(v), 1e-12)
+                                            : 0.05 * terms[params[p].term].factors[params[p].factor].width;
+      v += h;
+      std::vector<Eigen::VectorXd> rp;
+      if (!residuals(moved, rp, nullptr)) return false;
+      J.col(static_cast<Eigen::Index>(p)) = (stacked(rp) - r_all) / h;
+    }
+    return true;
+  }
+
+  // The step, or its half or quarter, that lowers the sum of squares.
+  bool step(std::vector<DisturbanceTerm>& terms, const std::vector<Parameter>& params, const Eigen::VectorXd& delta,
+            double range, double& ssr, std::vector<Eigen::VectorXd>& r) const {
+    for (double f : {1.0, 0.5, 0.25}) {
+      auto trial = terms;
+      for (std::size_t p = 0; p < params.size(); ++p) slot(trial, params[p]) += f * delta[static_cast<Eigen::Index>(p)];
+      std::vector<Eigen::VectorXd> rt;
+      if (bump_out_of_range(trial, range) || !residuals(trial, rt, nullptr)) continue;
+      const double s = stacked(rt).squaredNorm();
+      if (s >= ssr) continue;
+      terms = std::move(trial), ssr = s, r = std::move(rt);
+      return true;
+    }
+    return false;
+  }
+
+  const FormInput& in_;
+  std::string balance_;
+  std::atomic<long>& sims_;
+};
+
+std::string coefficient_unit(const std::string& rate, const std::string& term) {
+  if (term.empty()) return rate;
+  if (term == rate) return "";
+  return rate + "/(" + term + ")";
+}
+
+// The terms as found: coefficient, unit, text, and the formula.
+void describe(FormFinding& f, const std::vector<DisturbanceTerm>& terms, const Dictionary& dict) {
+  std::ostringstream o;
+  o << "d[" << f.balance << "]/dt gains ";
+  for (std::size_t j = 0; j < terms.size(); ++j) {
+    const Entry e = dict.entry(terms[j].factors);
+    FormTermFinding t{e.text, terms[j].coefficient, coefficient_unit(f.unit, e.unit)};
+    o << (j == 0 ? (t.coefficient < 0 ? "-" : "") : (t.coefficient < 0 ? " - " : " + ")) << rounded(std::abs(t.coefficient), 3)
+      << (t.unit.empty() ? "" : " " + t.unit) << (e.factors.empty() ? "" : " * " + e.text);
+    f.terms.push_back(std::move(t));
+  }
+  o << " [" << f.unit << "]";
+  f.formula = o.str();
+}
+
+std::string sentence_of(const FormFinding& f) {
+  if (f.terms.empty() && f.gap_before <= 1.1)
+    return "Nothing is left on " + f.balance + " for a form to explain (gap " + rounded(f.gap_before, 2) + " x noise).";
+  if (f.terms.empty())
+    return "No function of the model's states beats the time-shaped correction on " + f.balance +
+           " across runs (none lowers the error on a run it was not fitted to).";
+  if (!f.confirmed) return "The form found (" + f.formula + ") could not be simulated: " + f.failure + ".";
+  std::string s = "The missing term's form: " + f.formula + "; simulated with it, the gap is " + rounded(f.gap_after, 2) +
+                  " x noise (from " + rounded(f.gap_before, 2) + "; the time-shaped correction leaves " +
+                  rounded(f.gap_shape, 2) + ").";
+  if (!f.beats_shape) s += " It does not beat the time-shaped correction: read it as a lead, not a finding.";
+  return s;
+}
+
+}  // namespace
+
+namespace {
+
+// The rounds of forward selection: each linearises every candidate around
+// the form so far (one simulation per candidate and run), adds the one
+// that predicts the left-out runs best, and keeps it only when the model
+// simulated with the refined form gains as much as the prediction had to.
+class Discovery {
+ public:
+  Discovery(const FormInput& in, std::string balance, std::vector<Entry> terms, double amplitude, double range)
+      : in_(in), balance_(std::move(balance)), terms_(std::move(terms)), amplitude_(amplitude), range_(range),
+        refiner_(in, balance_, sims) {
+    for (const auto& t : terms_) {
+      double p = 1;
+      for (const auto& f : t.factors) p += f.of == Of::bump ? 2 : 0;
+      parameters_of_.push_back(p);
+    }
+  }
+
+  std::atomic<long> sims{0};
+  std::vector<DisturbanceTerm> form;
+  std::vector<int> chosen;  // the candidates the form's terms came from
+  double ssr = 0, n = 0;
+  std::string failure;
+
+  void run(const std::vector<Eigen::VectorXd>& r0) {
+    std::vector<Eigen::VectorXd> r = r0;
+    for (const auto& v : r) ssr += v.squaredNorm(), n += static_cast<double>(v.size());
+    while (static_cast<int>(chosen.size()) < kMaxTerms && ssr > 1.1 * n)
+      if (!round(r)) break;
+  }
+
+ private:
+  // The runs' sensitivities to each candidate added to the form.
+  Normal linearise(const std::vector<Eigen::VectorXd>& r, std::vector<char>& usable) {
+    const std::size_t nr = in_.used.size();
+    const long T = static_cast<long>(terms_.size());
+    std::vector<Eigen::MatrixXd> J(nr);
+    for (std::size_t q = 0; q < nr; ++q) J[q] = Eigen::MatrixXd::Zero(r[q].size(), T);
+    usable.assign(T, 1);
+    parallel_for(T * static_cast<long>(nr), in_.threads, [&](int, long job) {
+      const long k = job / static_cast<long>(nr), q = job % static_cast<long>(nr);
+      const double eps = amplitude_ / terms_[k].rms;
+      auto probed = form;
+      probed.push_back({eps, terms_[k].factors});
+      const auto sim = in_.simulate(in_.used[q], {Disturbance{balance_, {}, {}, probed}}, nullptr);
+      ++sims;
+      if (sim.empty()) usable[k] = 0;
+      else J[q].col(k) = (in_.residual(in_.used[q], sim) - r[q]) / eps;
+    });
+    Normal N;
+    for (std::size_t q = 0; q < nr; ++q) {
+      N.G.push_back(J[q].transpose() * J[q]);
+      N.h.push_back(J[q].transpose() * r[q]);
+      N.s.push_back(r[q].squaredNorm());
+      N.n += static_cast<double>(r[q].size());
+    }
+    return N;
+  }
+
+  // The linearisation ranks the additions; the best few are simulated
+  // with their refined coefficients, for a large gap moves the model far
+  // from where it was linearised. The one that leaves least (each
+  // parameter it brings at the price of what a term must gain) is kept
+  // when it gains that price.
+  bool round(std::vector<Eigen::VectorXd>& r) {
+    std::vector<char> usable;
+    const Normal N = linearise(r, usable);
+    const double price = needed(N, ssr);
+    std::vector<DisturbanceTerm> best_form;
+    std::vector<int> best_chosen;
+    double best_score = INFINITY, best_ssr = ssr;
+    for (const auto& added : best_additions(N, chosen, usable, kTried)) {
+      auto S = chosen;
+      S.insert(S.end(), added.begin(), added.end());
+      const Eigen::VectorXd delta = N.fit(S, -1);
+      auto trial = form;
+      for (std::size_t a = 0; a < S.size(); ++a) {
+        if (a < chosen.size()) trial[a].coefficient += delta[a];
+        else trial.push_back({delta[a], terms_[S[a]].factors});
+      }
+      std::vector<Eigen::VectorXd> rt;
+      std::string why;
+      if (!refiner_.residuals(trial, rt, &why)) {
+        if (form.empty() && failure.empty()) failure = why;
+        continue;
+      }
+      double s = Refiner::stacked(rt).squaredNorm();
+      refiner_.refine(trial, s, rt, range_);
+      double parameters = 0;
+      for (int k : added) parameters += parameters_of_[k];
+      const double score = s + parameters * price;
+      if (ssr - s >= parameters * price && score < best_score)
+        best_score = score, best_ssr = s, best_form = std::move(trial), best_chosen = std::move(S);
+    }
+    if (best_form.empty()) return false;
+    form = std::move(best_form), chosen = std::move(best_chosen), ssr = best_ssr;
+    return refiner_.residuals(form, r, nullptr);
+  }
+
+  const FormInput& in_;
+  std::string balance_;
+  std::vector<Entry> terms_;
+  double amplitude_, range_;
+  Refiner refiner_;
+  std::vector<double> parameters_of_;
+};
+
+}  // namespace
+
+std::optional<FormFinding> discover_form(const FormInput& in, const std::string& balance, const std::string& rate_unit,
+                                         double gap_shape) {
+  const std::size_t nr = in.used.size();
+  if (nr < 2) return std::nullopt;
+  double largest = 0;
+  const Dictionary dict(record(in, balance, largest));
+  if (dict.vars().empty()) return std::nullopt;
+  std::vector<Entry> terms = candidate_terms(dict);
+  FormFinding f;
+  f.balance = balance, f.unit = rate_unit, f.gap_shape = gap_shape, f.dictionary = static_cast<int>(terms.size());
+  // Each term's probe moves the balance's state by about a percent of its
+  // largest magnitude along the runs over a ninth of the run (the System's
+  // nominal magnitude is a scale for the solver, a decade or more off).
+  const auto& t = (*in.runs)[in.used[0]].t;
+  const double amplitude = 0.01 * largest / std::max((t.back() - t.front()) / 9, 1e-12);
+  if (!(amplitude > 0)) return std::nullopt;
+  double range = 0;
+  for (const auto& v : dict.vars())
+    if (is_position(v.unit)) range = std::max(range, v.hi - v.lo);
+  if (in.log) in.log("form of " + balance + ": " + std::to_string(terms.size()) + " candidate terms x " + std::to_string(nr) + " runs a round");
+  Discovery d(in, balance, std::move(terms), amplitude, range);
+  d.run(in.r0);
+  f.gap_before = 0;
+  for (const auto& r : in.r0) f.gap_before += r.squaredNorm();
+  f.gap_before = std::sqrt(f.gap_before / d.n);
+  f.failure = d.failure;
+  if (!d.form.empty()) {
+    f.confirmed = true;
+    f.gap_after = std::sqrt(d.ssr / d.n);
+    f.beats_shape = f.gap_after <= 1.05 * gap_shape || f.gap_after <= 1.5;
+    describe(f, d.form, dict);
+  }
+  f.simulations = d.sims + static_cast<long>(nr);
+  f.sentence = sentence_of(f);
+  if (in.log) in.log("form: " + f.sentence + " [" + std::to_string(f.simulations) + " simulations]");
+  return f;
+}
+
+std::string form_json(const FormFinding& f, const std::function<std::string(double)>& num,
+                      const std::function<std::string(const std::string&)>& str) {
+  std::ostringstream o;
+  o << "{\"balance\": " << str(f.balance) << ", \"unit\": " << str(f.unit) << ", \"formula\": " << str(f.formula)
+    << ", \"terms\": [";
+  for (std::size_t j = 0; j < f.terms.size(); ++j)
+    o << (j ? ", " : "") << "{\"term\": " << str(f.terms[j].text) << ", \"coefficient\": " << num(f.terms[j].coefficient)
+      << ", \"unit\": " << str(f.terms[j].unit) << "}";
+  o << "], \"gap_before\": " << num(f.gap_before) << ", \"gap_after\": " << num(f.gap_after)
+    << ", \"gap_time_shaped\": " << num(f.gap_shape) << ", \"confirmed\": " << (f.confirmed ? "true" : "false")
+    << ", \"beats_time_shaped\": " << (f.beats_shape ? "true" : "false")
+    << ", \"failure\": " << (f.failure.empty() ? std::string("null") : str(f.failure))
+    << ", \"dictionary\": " << f.dictionary << ", \"simulations\": " << f.simulations
+    << ", \"sentence\": " << str(f.sentence) << "}";
+  return o.str();
+}
+
+std::string form_html(const FormFinding& f, const std::function<std::string(const std::string&)>& html) {
+  std::ostringstream o;
+  o << "<h3>The missing term's form</h3>\n<p id=\"form\">" << html(f.sentence) << "</p>\n";
+  if (f.terms.empty()) return o.str();
+  o << "<table id=\"form-terms\"><tr><th>term</th><th>coefficient</th><th>unit</th></tr>\n";
+  for (const auto& t : f.terms)
+    o << "<tr><td class=\"l\">" << html(t.text) << "</td><td>" << rounded(t.coefficient, 3) << "</td><td class=\"l\">"
+      << html(t.unit) << "</td></tr>\n";
+  o << "</table>\n<p>Chosen from " << f.dictionary << " candidate terms by leave-one-run-out prediction error; "
+    << f.simulations << " simulations.</p>\n";
+  return o.str();
+}
+
+}  // namespace pneumo::diagnose
