@@ -121,8 +121,12 @@ TEST(PluginEveryCommand, SensitivityRunsEveryPointAndThePressureFallsWithTheGap)
     if (cells.size() != 6 || cells[0] == "metric") continue;
     ++rows;
     for (int k = 2; k <= 4; ++k) EXPECT_TRUE(std::isfinite(number(cells[k]))) << line;
-    if (cells[0] == "p_end" && cells[1] == "h_gap") EXPECT_LT(number(cells[3]), 0) << line;
-    if (cells[0] == "p_end" && cells[1] == "V_tank") EXPECT_GT(number(cells[3]), 0) << line;
+    if (cells[0] == "p_end" && cells[1] == "h_gap") {
+      EXPECT_LT(number(cells[3]), 0) << line;
+    }
+    if (cells[0] == "p_end" && cells[1] == "V_tank") {
+      EXPECT_GT(number(cells[3]), 0) << line;
+    }
   }
   EXPECT_EQ(rows, 4) << "two metrics times two parameters";
 }

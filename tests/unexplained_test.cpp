@@ -203,6 +203,13 @@ TEST(Unexplained, LeakOfATankNoCandidateDescribesIsFoundInThatTank) {
   const std::string page = read_file(dir.path() / "report.html");
   EXPECT_NE(page.find("<p id=\"unexplained\">No candidate explains"), std::string::npos);
   EXPECT_NE(page.find("<svg id=\"unexplained-shape\""), std::string::npos);
+  // The missing term's form (form.hpp) is searched on the best balance and
+  // reported with it: in report.json and on the page, found or not.
+  ASSERT_TRUE(u.form.has_value());
+  std::cout << u.form->sentence << "\n";
+  EXPECT_TRUE(u.form->balance == "second.U" || u.form->balance == "second.m") << u.form->balance;
+  EXPECT_NE(read_file(dir.path() / "report.json").find("\"form\": {\"balance\": "), std::string::npos);
+  EXPECT_NE(page.find("<p id=\"form\">"), std::string::npos);
 }
 
 // The first tank's leak, of the candidate's own form: the verdict explains
