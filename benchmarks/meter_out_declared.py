@@ -38,6 +38,18 @@ SIGNALS = ["x", "v", "p_cap", "p_rod"]
 NOISE = {"x": 5e-5, "v": 2e-3, "p_cap": 3e3, "p_rod": 3e3}
 
 
+OUTPUT_INTERVAL = 5e-3  # s, the netlist's simulation.output_interval
+P_AMBIENT = 101325.0    # Pa, the netlist's ambient
+
+
+def to_si(value, header):
+    """A result value in its column's unit ("x [mm]", "p [barg]") in SI."""
+    unit = header.split(" [")[1].rstrip("]") if " [" in header else ""
+    scale = {"mm": 1e-3, "bar": 1e5, "barg": 1e5, "kPa": 1e3, "ms": 1e-3}.get(unit, 1.0)
+    offset = {"barg": P_AMBIENT, "degC": 273.15}.get(unit, 0.0)
+    return value * scale + offset
+
+
 def add_components(text, comps, conns):
     text = text.replace("\nconnections:", "\n" + "".join("  %s\n" % c for c in comps) + "\nconnections:", 1)
     return text.replace("\noutputs:", "\n" + "".join("  - %s\n" % c for c in conns) + "\noutputs:", 1)
@@ -94,8 +106,15 @@ def write_runs(pneumo, truth, runs_dir, rng, csv_edit, k):
     for name, role, ps in (("cal1", "calibration", 5), ("cal2", "calibration", 7), ("val", "validation", 6)):
         raw = runs_dir.parent / ("%s_raw.csv" % name)
         simulate(pneumo, truth, ps, raw, runs_dir.parent)
-        # Result columns are "NAME [UNIT]" (SI): keyed by NAME.
-        rows = [{k.split(" [")[0]: v for k, v in r.items()} for r in csv.DictReader(raw.open())]
+        # Result columns are "NAME [UNIT]" in the netlist's display units
+        # (mm, bar g): back to SI, keyed by NAME. Rows written at events are
+        # not samples: only the output grid is kept.
+        rows = []
+        for r in csv.DictReader(raw.open()):
+            row = {k.split(" [")[0]: to_si(float(v), k) for k, v in r.items()}
+            step = row["t"] / OUTPUT_INTERVAL
+            if abs(step - round(step)) < 1e-6 and (not rows or row["t"] > rows[-1]["t"]):
+                rows.append(row)
         raw.unlink()
         with (runs_dir / (name + ".csv")).open("w") as f:
             f.write("t," + ",".join(SIGNALS) + "\n")
@@ -106,7 +125,7 @@ def write_runs(pneumo, truth, runs_dir, rng, csv_edit, k):
                     if csv_edit and csv_edit[0] == s:
                         y += k
                     vals.append("%.10g" % (y + rng.gauss(0, NOISE[s])))
-                f.write("%s,%s\n" % (r["t"], ",".join(vals)))
+                f.write("%.10g,%s\n" % (r["t"], ",".join(vals)))
         (runs_dir / (name + ".yaml")).write_text(
             "data: %s.csv\nrole: %s\noperating_point:\n  p_supply: %d bar g\n" % (name, role, ps))
 
