@@ -79,8 +79,8 @@ FORMS = {
         t, ["rod_gap: {type: nozzle, d: %g mm}" % k, "rod_air: {type: atmosphere}"], ["[cyl.rod, rod_gap.a]", "[rod_gap.b, rod_air.port]"]), None),
     "needle_turned": ("flow_cap.misadjusted", 0.5, 1.8, lambda t, k: set_param(set_param(t, "flow_cap", "C", "%g dm3/(s*bar)" % (0.1 * k)), "flow_cap", "b", "0.4"), None),
     "silencer_dirt": ("silencer.misadjusted", 0.3, 2.0, lambda t, k: add_components(
-        set_param(t, "silencer", "b", "0.4"), ["dirt: {type: iso6358_throttle, C: %g dm3/(s*bar), b: 0.2}" % k, "dirt_air: {type: atmosphere}"], []).replace(
-        "  - [silencer.b, air.port]", "  - [silencer.b, dirt.a]\n  - [dirt.b, dirt_air.port]"), None),
+        set_param(t, "silencer", "b", "0.4"), ["dirt: {type: iso6358_throttle, C: %g dm3/(s*bar), b: 0.2}" % k], []).replace(
+        "  - [silencer.b, air.port]", "  - [silencer.b, dirt.a]\n  - [dirt.b, air.port]"), None),
     "supply_line": ("supply.supply_sag", 0.3, 1.5, lambda t, k: add_components(
         t, ["line_S: {type: iso6358_throttle, C: %g dm3/(s*bar), b: 0.3}" % k, "tank_S: {type: volume, V: 20 cm3, p0: 6 bar g}"], []).replace(
         "  - [supply.port, valve.P]", "  - [supply.port, line_S.a]\n  - [line_S.b, tank_S.port, valve.P]"), None),
