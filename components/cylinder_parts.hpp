@@ -1,8 +1,9 @@
-// Parts the pneumatic cylinders share (cushioned_cylinder, cylinder,
-// single_acting_cylinder): the gas state of a chamber, end-position
-// cushioning (bore opening, needle throttle, check valve), elastic end stops,
-// the wall area for gas-to-wall heat, piston friction, and one side of a
-// piston (a chamber fed through a port, optionally cushioned).
+// Parts the pneumatic cylinders share (the double-acting cylinder of
+// components/cylinder.hpp, single_acting_cylinder): the gas state of a
+// chamber, end-position cushioning (bore opening, needle throttle, check
+// valve), elastic end stops, the wall area for gas-to-wall heat, piston
+// friction, and one side of a piston (a chamber fed through a port,
+// optionally cushioned).
 //
 // A chamber's state is (m, U): T = U / (m c_v) and p = (kappa - 1) U / V are
 // evaluated in place. Its balances, with the port inflow m_in, H_in:
@@ -12,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <string>
 #include <type_traits>
 #include <utility>
@@ -317,7 +319,13 @@ class CylinderSide {
   CylinderSide(const ParameterValues& p, const std::string& end, double A, double V0, double perimeter, double A_rod,
                double stroke)
       : CylinderSide(A, V0, perimeter) {
-    if (!has_cushion(p, end)) return;
+    if (auto k = read_cushioning(p, end, A, A_rod, stroke)) cushion(*k);
+  }
+  // The cushioning of the end called `end` from its <end>_cushion_*
+  // parameters (none without <end>_cushion_length), on a side of face area A.
+  static std::optional<Cushioning> read_cushioning(const ParameterValues& p, const std::string& end, double A,
+                                                   double A_rod, double stroke) {
+    if (!has_cushion(p, end)) return std::nullopt;
     const std::string e = end + "_";
     for (const char* name : {"plug_diameter", "cushion_C"})
       if (!p.has(e + name))
@@ -325,13 +333,14 @@ class CylinderSide {
     const double A_plug = circle_area(p[e + "plug_diameter"]);
     if (!(A_plug > A_rod && A_plug - A_rod < A))
       throw ParameterError(e + "plug_diameter", "the plug diameter must lie between the rod's and the bore's");
-    cushion({p[e + "cushion_length"], A_plug - A_rod, p[e + "dead_volume_cushion"],
-             Cushion{p[e + "bore_opening_C"], p[e + "bore_opening_b"], p[e + "bore_opening_ramp"], p[e + "cushion_C"],
-                     p[e + "cushion_b"], p[e + "check_C"], p[e + "check_b"], p[e + "check_cracking"],
-                     p[e + "check_ramp"]}});
-    if (L_ + c_.ramp >= stroke)
+    const Cushioning k{p[e + "cushion_length"], A_plug - A_rod, p[e + "dead_volume_cushion"],
+                       Cushion{p[e + "bore_opening_C"], p[e + "bore_opening_b"], p[e + "bore_opening_ramp"],
+                               p[e + "cushion_C"], p[e + "cushion_b"], p[e + "check_C"], p[e + "check_b"],
+                               p[e + "check_cracking"], p[e + "check_ramp"]}};
+    if (k.length + k.paths.ramp >= stroke)
       throw ParameterError(e + "cushion_length",
                            "the cushioning length (with its ramp) must be shorter than the stroke");
+    return k;
   }
 
   // Splits the side into the cushion annulus and the channel.
@@ -366,10 +375,11 @@ class CylinderSide {
   int rows() const { return cushioned_ ? (tap_ >= 0 ? 9 : 7) : 5; }
   // Where equations() writes its rows, from the pointer it is given: the
   // chamber's four (mass, energy, gas law, outflow temperature), the
-  // wall's, the annulus' two and the tap's two. By default one block in
-  // that order; a component whose rows are named in another order places
-  // them (its parts' order).
-  void place_rows(int chamber, int wall, int annulus, int tap) { rows_ = {chamber, wall, annulus, tap}; }
+  // wall's, the annulus' two and the tap's two; by default one block in
+  // that order.
+  struct Rows {
+    int chamber = 0, wall = 4, annulus = 5, tap = 7;
+  };
 
   // Pressures and temperatures at travel d from the side's end; the flow
   // between annulus and channel is gas()'s.
@@ -435,13 +445,13 @@ class CylinderSide {
   template <class T>
   void equations(const Eval<T>& e, const GasPortView<T>& port, const HeatPortView<T>& heat, const Gas<T>& g,
                  const T& d, const T& d_dot, double wall_alpha, T* r,
-                 const ExtraInflow<T>* extra = nullptr) const {
+                 const ExtraInflow<T>* extra = nullptr, const Rows& at = {}) const {
     const GasModel& gas = e.gas();
     e.reject_unless_positive(e.var(k_));
     e.reject_unless_positive(e.var(k_ + 1));
     const T H_port = enthalpy_inflow(port.m_flow, port.T_in, port.T_out, gas);
     const bool walls_at_gas_T = !(wall_alpha > 0);
-    T* c = r + rows_.chamber;
+    T* c = r + at.chamber;
     if (!cushioned_) {
       c[0] = e.der(k_) - port.m_flow;
       if (extra) c[0] -= extra->m;
@@ -462,12 +472,12 @@ class CylinderSide {
       }
       c[2] = port.p - g.p;
       c[3] = port.T_out - g.T_gas;
-      annulus_equations(e, heat, g, d_dot, walls_at_gas_T, r);
+      annulus_equations(e, heat, g, d_dot, walls_at_gas_T, r + at.annulus, r + at.tap);
     }
     if (wall_alpha > 0)
-      r[rows_.wall] = heat.Q - wall_alpha * chamber_wall_area(A_, perimeter_, d, V0_ + V0_EC_) * (heat.T - g.T_piston);
+      r[at.wall] = heat.Q - wall_alpha * chamber_wall_area(A_, perimeter_, d, V0_ + V0_EC_) * (heat.T - g.T_piston);
     else
-      r[rows_.wall] = heat.T - g.T_piston;
+      r[at.wall] = heat.T - g.T_piston;
   }
 
   void start(StartValues& sv, const GasModel& gas, int port, int heat, double p0, double T0, double d) const {
@@ -504,11 +514,10 @@ class CylinderSide {
   // wall's heat and a tap's inflow; the tap's pressure and temperature.
   template <class T>
   void annulus_equations(const Eval<T>& e, const HeatPortView<T>& heat, const Gas<T>& g, const T& d_dot,
-                         bool walls_at_gas_T, T* rows) const {
+                         bool walls_at_gas_T, T* r, T* tap_rows) const {
     e.reject_unless_positive(e.var(k_EC_));
     e.reject_unless_positive(e.var(k_EC_ + 1));
     const T p_dV = annulus_force(g) * d_dot;
-    T* r = rows + rows_.annulus;
     if (tap_ < 0) {
       r[0] = e.der(k_EC_) + g.m_x;
       r[1] = e.der(k_EC_ + 1) + g.H_x + p_dV - heat.Q;
@@ -518,8 +527,8 @@ class CylinderSide {
     const T H_tap = enthalpy_inflow(tap.m_flow, tap.T_in, tap.T_out, e.gas());
     r[0] = e.der(k_EC_) + g.m_x - tap.m_flow;
     r[1] = e.der(k_EC_ + 1) + g.H_x - H_tap + p_dV - heat.Q;
-    rows[rows_.tap] = tap.p - g.p_piston;
-    rows[rows_.tap + 1] = tap.T_out - (walls_at_gas_T ? heat.T : g.T_piston);
+    tap_rows[0] = tap.p - g.p_piston;
+    tap_rows[1] = tap.T_out - (walls_at_gas_T ? heat.T : g.T_piston);
   }
 
   double A_, V0_, perimeter_;
@@ -527,13 +536,10 @@ class CylinderSide {
   double L_ = 0, A_col_ = 0, V0_EC_ = 0;
   Cushion c_{};
   int k_ = 0, k_EC_ = 2, tap_ = -1;
-  struct RowPlaces {
-    int chamber, wall, annulus, tap;
-  } rows_{0, 4, 5, 7};
 };
 
-// What `cylinder` and `single_acting_cylinder` share besides their rows: the
-// piston's areas and stroke, its two sides (cushioning read from the
+// The piston of single_acting_cylinder (whose parameters, faults and stop
+// events the `cylinder` preset declares too): the piston's areas and stroke, its two sides (cushioning read from the
 // <end>_cushion_* parameters where the component offers them), end stops,
 // wall heat, friction and initial state, with their parameters.
 // The friction faults every piston declares (diagnosis), 0 in a sound
@@ -586,6 +592,76 @@ struct FrictionFaults {
   }
 };
 
+// An event's tag and log message.
+struct CylinderEvent {
+  std::string tag, text;
+};
+// The events of the stops at x = 0 and x = stroke: a contact makes the
+// force jump (the damping term acts from the first contact on), so the
+// solver re-initialises there; leaving a stop is continuous (k pen - d v
+// falls to 0 before pen does).
+struct StopEvents {
+  CylinderEvent zero_contact, zero_left, stroke_contact, stroke_left;
+
+  // Crossing the stop at x = 0 (`at_zero`) or at x = stroke in direction dir.
+  EventResult event(bool at_zero, int dir, const std::string& at) const {
+    const bool contact = at_zero ? dir < 0 : dir > 0;
+    const CylinderEvent& ev =
+        at_zero ? (contact ? zero_contact : zero_left) : (contact ? stroke_contact : stroke_left);
+    return {contact, ev.text + at, ev.tag};
+  }
+};
+
+// Faults (diagnosis) of a piston's chambers, all 0 in a sound cylinder:
+// leak conductances across the piston seal and past the rod seal, heat
+// exchange of each chamber's gas with the surroundings. A cylinder that
+// declares none of their parameters has none of them.
+struct ChamberFaults {
+  double leak_piston_C = 0, leak_rod_C = 0, wall_kA = 0;
+
+  explicit ChamberFaults(const ParameterValues& p)
+      : leak_piston_C(declared(p, "fault_piston_leak_C")),
+        leak_rod_C(declared(p, "fault_rod_leak_C")),
+        wall_kA(declared(p, "fault_wall_kA")) {}
+  static double declared(const ParameterValues& p, const char* name) { return p.has(name) ? p[name] : 0.0; }
+
+  // The fault flows into each chamber: the piston-seal leak between them
+  // (`rod` null: a vented spring side, where the leak goes to the
+  // atmosphere), the rod-seal leak from the rod side and the wall heat.
+  // Null when the cylinder has none of these faults: the sound cylinder's
+  // rows are untouched.
+  template <class T>
+  struct Flows {
+    ExtraInflow<T> cap, rod;
+  };
+  bool any() const { return leak_piston_C > 0 || leak_rod_C > 0 || wall_kA > 0; }
+  template <class T>
+  Flows<T> flows(const CylinderSide::Gas<T>& cap, const CylinderSide::Gas<T>* rod, const GasModel& gas) const {
+    const T zero = 0.0 * cap.p;
+    Flows<T> f{{zero, zero}, {zero, zero}};
+    const T p_amb = zero + gas.p_ambient, T_amb = zero + gas.T_ambient;
+    const T& p_other = rod ? rod->p : p_amb;
+    const T& T_other = rod ? rod->T_gas : T_amb;
+    if (leak_piston_C > 0) {
+      const T m = iso6358_mass_flow(cap.p, p_other, cap.T_gas, T_other, T(zero + leak_piston_C), 0.3, 0.999, gas);
+      f.cap.m -= m;
+      f.cap.H += enthalpy_inflow(T(-m), T_other, cap.T_gas, gas);
+      f.rod.m += m;
+      f.rod.H += enthalpy_inflow(m, cap.T_gas, T_other, gas);
+    }
+    if (rod && leak_rod_C > 0) {
+      const T m = iso6358_mass_flow(rod->p, p_amb, rod->T_gas, T_amb, T(zero + leak_rod_C), 0.3, 0.999, gas);
+      f.rod.m -= m;
+      f.rod.H += enthalpy_inflow(T(-m), T_amb, rod->T_gas, gas);
+    }
+    if (wall_kA > 0) {
+      f.cap.H += wall_kA * (T_amb - cap.T_gas);
+      if (rod) f.rod.H += wall_kA * (T_amb - rod->T_gas);
+    }
+    return f;
+  }
+};
+
 struct Piston {
   double A, A_rod, stroke;
   CylinderSide cap, rod;
@@ -593,10 +669,7 @@ struct Piston {
   double wall_alpha;
   FrictionLaw friction;
   double x0, p0_cap, p0_rod, T0;
-  // Faults (diagnosis), all 0 in a sound cylinder: leak conductances across
-  // the piston seal and past the rod seal, heat exchange of each chamber's
-  // gas with the surroundings, and the friction faults.
-  double leak_piston_C, leak_rod_C, wall_kA;
+  ChamberFaults chamber_faults;
   FrictionFaults friction_faults;
 
   explicit Piston(const ParameterValues& p)
@@ -612,9 +685,7 @@ struct Piston {
         p0_cap(p["p0_cap"]),
         p0_rod(p["p0_rod"]),
         T0(p["T0"]),
-        leak_piston_C(p["fault_piston_leak_C"]),
-        leak_rod_C(p["fault_rod_leak_C"]),
-        wall_kA(p["fault_wall_kA"]),
+        chamber_faults(p),
         friction_faults(p) {
     if (p["rod"] >= p["bore"]) throw ParameterError("rod", "rod diameter must be smaller than the bore");
     stops.hold_before_empty(cap.travel_to_empty(), rod.travel_to_empty());
@@ -685,55 +756,27 @@ struct Piston {
     return out;
   }
 
-  // The fault flows into each chamber: the piston-seal leak between them
-  // (`rod` null: a vented spring side, where the leak goes to the
-  // atmosphere), the rod-seal leak from the rod side and the wall heat.
-  // Null when the cylinder has none of these faults: the sound cylinder's
-  // rows are untouched.
   template <class T>
-  struct FaultFlows {
-    ExtraInflow<T> cap, rod;
-  };
-  bool has_fault_flows() const { return leak_piston_C > 0 || leak_rod_C > 0 || wall_kA > 0; }
+  using FaultFlows = ChamberFaults::Flows<T>;
+  bool has_fault_flows() const { return chamber_faults.any(); }
   template <class T>
-  FaultFlows<T> fault_flows(const CylinderSide::Gas<T>& cap, const CylinderSide::Gas<T>* rod, const GasModel& gas) const {
-    const T zero = 0.0 * cap.p;
-    FaultFlows<T> f{{zero, zero}, {zero, zero}};
-    const T p_amb = zero + gas.p_ambient, T_amb = zero + gas.T_ambient;
-    const T& p_other = rod ? rod->p : p_amb;
-    const T& T_other = rod ? rod->T_gas : T_amb;
-    if (leak_piston_C > 0) {
-      const T m = iso6358_mass_flow(cap.p, p_other, cap.T_gas, T_other, T(zero + leak_piston_C), 0.3, 0.999, gas);
-      f.cap.m -= m;
-      f.cap.H += enthalpy_inflow(T(-m), T_other, cap.T_gas, gas);
-      f.rod.m += m;
-      f.rod.H += enthalpy_inflow(m, cap.T_gas, T_other, gas);
-    }
-    if (rod && leak_rod_C > 0) {
-      const T m = iso6358_mass_flow(rod->p, p_amb, rod->T_gas, T_amb, T(zero + leak_rod_C), 0.3, 0.999, gas);
-      f.rod.m -= m;
-      f.rod.H += enthalpy_inflow(T(-m), T_amb, rod->T_gas, gas);
-    }
-    if (wall_kA > 0) {
-      f.cap.H += wall_kA * (T_amb - cap.T_gas);
-      if (rod) f.rod.H += wall_kA * (T_amb - rod->T_gas);
-    }
-    return f;
+  FaultFlows<T> fault_flows(const CylinderSide::Gas<T>& cap, const CylinderSide::Gas<T>* rod,
+                            const GasModel& gas) const {
+    return chamber_faults.flows(cap, rod, gas);
   }
   // Roots 0 and 1: the stops at x = 0 and x = stroke.
   void stop_roots(double x, double* g) const {
     g[0] = x;
     g[1] = x - stroke;
   }
-  // A stop contact makes the force jump (the damping term acts from the
-  // first contact on): the solver re-initialises there. Leaving a stop is
-  // continuous (k pen - d v falls to 0 before pen does).
   static EventResult stop_event(int root, int dir, const std::string& at) {
-    if (root == 0)
-      return dir > 0 ? EventResult{false, "leaves the retracted end" + at, "left_retracted"}
-                     : EventResult{true, "retracted: contact with the cap-end stop" + at, "retracted"};
-    return dir > 0 ? EventResult{true, "extended: contact with the rod-end stop" + at, "extended"}
-                   : EventResult{false, "leaves the extended end" + at, "left_extended"};
+    return stop_texts().event(root == 0, dir, at);
+  }
+  static StopEvents stop_texts() {
+    return {{"retracted", "retracted: contact with the cap-end stop"},
+            {"left_retracted", "leaves the retracted end"},
+            {"extended", "extended: contact with the rod-end stop"},
+            {"left_extended", "leaves the extended end"}};
   }
   static std::vector<EventSpec> stop_events() {
     return {{"retracted", "contact with the cap-end stop"},
