@@ -225,6 +225,14 @@ struct ExtraInflow {
   T m, H;
 };
 
+// Where CylinderSide::equations() writes its rows, from the pointer it is
+// given: the chamber's four (mass, energy, gas law, outflow temperature),
+// the wall's, the annulus' two and the tap's two; by default one block in
+// that order. Outside the class so that it can be a default argument there.
+struct CylinderSideRows {
+  int chamber = 0, wall = 4, annulus = 5, tap = 7;
+};
+
 // One side of a piston: a gas chamber whose volume grows with the piston's
 // distance d from that side's end, V = V0 + A d, behind a port. With
 // cushioning the chamber splits into the cushion annulus at the piston,
@@ -373,13 +381,7 @@ class CylinderSide {
     k_EC_ = annulus;
   }
   int rows() const { return cushioned_ ? (tap_ >= 0 ? 9 : 7) : 5; }
-  // Where equations() writes its rows, from the pointer it is given: the
-  // chamber's four (mass, energy, gas law, outflow temperature), the
-  // wall's, the annulus' two and the tap's two; by default one block in
-  // that order.
-  struct Rows {
-    int chamber = 0, wall = 4, annulus = 5, tap = 7;
-  };
+  using Rows = CylinderSideRows;
 
   // Pressures and temperatures at travel d from the side's end; the flow
   // between annulus and channel is gas()'s.
