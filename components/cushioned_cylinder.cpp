@@ -304,8 +304,8 @@ std::optional<EnergyAuditSpec> audit(const CylinderShape& shape, const GasModel&
 
 CylinderEndLayout cap_end() {
   using S = CylinderSide;
-  return {.chamber_variables = {{"m_ch", "kg", "gas mass, channel"}, {"U_ch", "J", "internal energy, channel"}},
-          .annulus_variables = {{"m_EC", "kg", "gas mass, cushion volume"},
+  return {.chamber_variables = {{"m_ch", "kg", "gas mass, channel", 0.0, "U_ch"}, {"U_ch", "J", "internal energy, channel"}},
+          .annulus_variables = {{"m_EC", "kg", "gas mass, cushion volume", 0.0, "U_EC"},
                                 {"U_EC", "J", "internal energy, cushion volume"}},
           .chamber_rows = S::chamber_equation_names("ch", "B"),
           .annulus_rows = S::annulus_equation_names("EC"),
@@ -323,7 +323,7 @@ CylinderEndLayout rod_end() {
   using S = CylinderSide;
   const InfoPart annulus = S::annulus_part("EC_rod", "ECr", "rod cushion volume");
   return {
-      .chamber_variables = {{"m_A", "kg", "gas mass, rod side"}, {"U_A", "J", "internal energy, rod side"}},
+      .chamber_variables = {{"m_A", "kg", "gas mass, rod side", 0.0, "U_A"}, {"U_A", "J", "internal energy, rod side"}},
       .annulus_variables = annulus.variables,
       .chamber_rows = S::chamber_equation_names("A", "A"),
       .annulus_rows = annulus.equations,

@@ -117,7 +117,7 @@ CylinderEndLayout end_layout(End e) {
   using S = CylinderSide;
   const std::string end = name(e);
   const InfoPart annulus = S::annulus_part(end + "_cushion", end + " cushion", end + " cushion annulus");
-  return {.chamber_variables = {{"m_" + end, "kg", "gas mass, " + end + " side (channel with " + end + " cushioning)"},
+  return {.chamber_variables = {{"m_" + end, "kg", "gas mass, " + end + " side (channel with " + end + " cushioning)", 0.0, "U_" + end},
                                 {"U_" + end, "J", "internal energy, " + end + " side"}},
           .annulus_variables = annulus.variables,
           .chamber_rows = S::chamber_equation_names(end, end),

@@ -309,7 +309,7 @@ class CylinderSide {
   // A cushion annulus' state (m_<var>, U_<var>, of the annulus called
   // `description`) and its rows.
   static InfoPart annulus_part(const std::string& var, const std::string& rows, const std::string& description) {
-    return {.variables = {{"m_" + var, "kg", "gas mass, " + description},
+    return {.variables = {{"m_" + var, "kg", "gas mass, " + description, 0.0, "U_" + var},
                           {"U_" + var, "J", "internal energy, " + description}},
             .equations = annulus_equation_names(rows)};
   }

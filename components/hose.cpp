@@ -182,7 +182,7 @@ class Hose final : public ComponentT<Hose> {
   static std::vector<VariableSpec> variables(int n) {
     std::vector<VariableSpec> v;
     for (int k = 1; k <= n; ++k) {
-      v.push_back({"m_" + std::to_string(k), "kg", "gas mass in segment " + std::to_string(k)});
+      v.push_back({"m_" + std::to_string(k), "kg", "gas mass in segment " + std::to_string(k), 0.0, "U_" + std::to_string(k)});
       v.push_back({"U_" + std::to_string(k), "J", "internal energy in segment " + std::to_string(k)});
     }
     for (int j = 0; j <= n; ++j)

@@ -70,7 +70,7 @@ class SingleActingCylinder final : public ComponentT<SingleActingCylinder> {
     cap.ports = {{"cap", Domain::pneumatic, Causality::acausal, "cap-side port: pressure extends"},
                  {"flange", Domain::translational, Causality::acausal, "rod end; position = x (0 retracted)"},
                  {"heat_cap", Domain::thermal, Causality::acausal, "wall of the cap-side chamber", true}};
-    cap.variables = {{"m_cap", "kg", "gas mass, cap side"}, {"U_cap", "J", "internal energy, cap side"}};
+    cap.variables = {{"m_cap", "kg", "gas mass, cap side", 0.0, "U_cap"}, {"U_cap", "J", "internal energy, cap side"}};
     cap.observables = {{"x", "m", "piston position (0 retracted, stroke extended)"},
                        {"v", "m/s", "piston velocity (> 0 extending)"},
                        {"p_cap", "Pa", "cap-side pressure, absolute"},
@@ -89,7 +89,7 @@ class SingleActingCylinder final : public ComponentT<SingleActingCylinder> {
                               "spring chamber port (closed chamber; closed if unconnected)", true},
                              {"heat_rod", Domain::thermal, Causality::acausal,
                               "wall of the spring chamber (closed chamber)", true}},
-                   .variables = {{"m_rod", "kg", "gas mass, spring chamber"},
+                   .variables = {{"m_rod", "kg", "gas mass, spring chamber", 0.0, "U_rod"},
                                  {"U_rod", "J", "internal energy, spring chamber"}},
                    .observables = {{"T_rod", "K", "spring chamber gas temperature (closed chamber)"}},
                    .equations = S::equation_names("rod", "rod", "rod")});

@@ -40,7 +40,7 @@ class Volume final : public ComponentT<Volume> {
     i.ports = {{"port", Domain::pneumatic, Causality::acausal, "gas port"},
                {"heat", Domain::thermal, Causality::acausal, "heat port to the wall (insulated if unconnected)", true},
                {"port_b", Domain::pneumatic, Causality::acausal, "second gas port (closed if unconnected)", true}};
-    i.variables = {{"m", "kg", "gas mass"}, {"U", "J", "internal energy of the gas"}};
+    i.variables = {{"m", "kg", "gas mass", 0.0, "U"}, {"U", "J", "internal energy of the gas"}};
     i.observables = {{"p", "Pa", "pressure, absolute"}, {"T", "K", "gas temperature, U / (m c_v)"}};
     i.equations = {"mass balance",        "energy balance",
                    "gas law p = (kappa - 1) U / V",

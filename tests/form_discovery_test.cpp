@@ -232,11 +232,14 @@ TEST(FormDiscovery, AFrictionBumpIsFoundWhereItIs) {
   EXPECT_LT(f.gap_after, 1.5);
 }
 
-// A leak from the cap port to the atmosphere (C 0.005 dm3/(s*bar), 3 % of
-// the flow control's): on the cap chamber's mass balance most of the gap
-// goes. What a single balance cannot hold is the enthalpy the escaping gas
-// takes from the energy balance, so the form found is a lead, not the law.
-TEST(FormDiscovery, ALeakOutOfTheCapChamberIsMostlyTakenUpByItsMassBalance) {
+// A leak from the cap port to the atmosphere (an ISO 6358 throttle of
+// C 0.005 dm3/(s*bar), b 0.3, 3 % of the flow control's): the form on the
+// cap chamber's mass balance is a term growing with the chamber's pressure,
+// mass leaving at about C rho0 p while choked (ISO 6358, rho0 1.185 kg/m3:
+// 5.93e-11 kg/(s*Pa)), within 25 %; the escaping gas takes its enthalpy
+// from the energy balance with it, and the model with the form is within
+// 1.5 x noise.
+TEST(FormDiscovery, ALeakOutOfTheCapChamberIsATermInItsPressureOnItsMassBalance) {
   TempDir dir;
   const auto runs = measured(dir, [](std::string& t) {
     insert(t, "connections:", "  leak: {type: iso6358_throttle, C: 0.005 dm3/(s*bar), b: 0.3}\n  leak_air: {type: atmosphere}\n");
@@ -245,7 +248,20 @@ TEST(FormDiscovery, ALeakOutOfTheCapChamberIsMostlyTakenUpByItsMassBalance) {
   });
   const auto f = form_on(dir, runs, "cyl.m_cap", "kg/s");
   ASSERT_TRUE(f.confirmed) << f.sentence;
-  EXPECT_LT(f.gap_after, 0.1 * f.gap_before) << f.formula;
+  EXPECT_LT(f.gap_after, 1.5) << f.formula;
+  EXPECT_GT(f.gap_before, 20.0);
+  // The cap chamber's pressure under any of its names (the node's, a port's,
+  // the chamber's), as a factor alone or as either side of a difference.
+  double per_pa = 0;
+  int found = 0;
+  for (const auto& t : f.terms)
+    for (const std::string cap : {"[flow_cap.a.p]", "[cyl.cap.p]", "[cyl.p_cap]", "[p at {flow_cap.a, cyl.cap}]"}) {
+      if (t.text == cap) per_pa += t.coefficient, ++found;
+      else if (t.text.front() == '(' && t.text.find(" - " + cap + ")") != std::string::npos) per_pa -= t.coefficient, ++found;
+      else if (t.text.rfind("(" + cap + " - ", 0) == 0) per_pa += t.coefficient, ++found;
+    }
+  ASSERT_EQ(found, 1) << f.formula;
+  EXPECT_NEAR(-per_pa, 5.93e-11, 0.25 * 5.93e-11) << f.formula;
   for (const auto& t : f.terms) EXPECT_EQ(t.unit.rfind("kg/s", 0), 0u) << t.unit;
 }
 

@@ -58,14 +58,18 @@ TEST(UnexplainedFailureReason, ABalanceWhoseSimulationFailsCarriesTheSolversReas
       run_cli("diagnose '" + kNet + "' --runs '" + (dir.path() / "runs").string() + "' --out '" + out + "' -q");
   ASSERT_EQ(rc, 0) << text;
   const std::string json = test_support::read_file(std::filesystem::path(out) / "report.json");
-  // Every balance line: confirmed, or its failure named with the run and the solver's words.
-  const std::regex balance("\\{\"balance\": \"([^\"]+)\"[^\\n]*\"confirmed\": (true|false), \"failure\": (null|\"[^\\n]*\")\\}");
+  // Every balance line: confirmed (with a share of its fit below 1 only
+  // when the whole failed), or its failure named with the run and the
+  // solver's words.
+  const std::regex balance(
+      "\\{\"balance\": \"([^\"]+)\"[^\\n]*\"confirmed\": (true|false), \"failure\": (null|\"[^\\n]*\"), \"share\": ([^}]+)\\}");
   int failed = 0, confirmed = 0;
   for (auto it = std::sregex_iterator(json.begin(), json.end(), balance); it != std::sregex_iterator(); ++it) {
     const std::string name = (*it)[1], ok = (*it)[2], failure = (*it)[3];
+    const double share = std::stod((*it)[4]);
     if (ok == "true") {
       ++confirmed;
-      EXPECT_EQ(failure, "null") << name;
+      EXPECT_EQ(failure == "null", share == 1.0) << name << " at " << share << ": " << failure;
     } else if (failure != "null") {
       ++failed;
       EXPECT_NE(failure.find("\"run p"), std::string::npos) << name << ": " << failure;

@@ -184,6 +184,7 @@ struct BalanceFinding {  // one candidate balance or sensor
   double explained = 0;     // share of the remaining excess gap (gap - 1) it removes
   bool confirmed = false;   // gap_after simulated with the fitted disturbance, not linearly predicted
   std::string failure;      // why its confirming simulation failed (empty: it ran, or none was tried)
+  double share = 1;         // of the fitted disturbance the confirmation carried: halved (to 1/16) while it failed
 };
 
 // The best balance's correction as a function of the model's states

@@ -51,7 +51,8 @@ bool is_velocity(const std::string& unit) { return unit == "m/s" || unit == "rad
 bool is_position(const std::string& unit) { return unit == "m" || unit == "rad"; }
 
 // What the dictionary may read: the System's unknowns, then every
-// component's local variables and observables, by their units.
+// component's local variables (but a port's entering-stream temperature,
+// no gas's state) and observables, by their units.
 struct Readable {
   std::string name, unit;
   int unknown = -1;
@@ -67,7 +68,9 @@ std::vector<Readable> readables(const System& sys) {
   const Circuit& circuit = sys.circuit();
   for (int c = 0; c < static_cast<int>(circuit.components.size()); ++c) {
     const Component& comp = *circuit.components[c];
-    std::vector<std::string> quantities = local_variable_names(comp);
+    std::vector<std::string> quantities;
+    for (auto& q : local_variable_names(comp))
+      if (!is_entering_stream_temperature(q)) quantities.push_back(std::move(q));
     for (const auto& o : comp.info().observables) quantities.push_back(o.name);
     for (const auto& q : quantities) {
       Probe p = find_probe(circuit, c, q);

@@ -51,21 +51,13 @@ Netlist with_all_outputs(Netlist nl, const std::vector<SensorQuantity>& qs) {
 
 }  // namespace
 
-// A port's T_in is the temperature of the gas that would enter through it,
-// upwinded: held at the last stream's when nothing enters, so two models
-// can differ in it where no thermometer in the line would read anything.
-static bool entering_stream(const std::string& name) {
-  const std::string tail = ".T_in";
-  return name.size() > tail.size() && name.compare(name.size() - tail.size(), tail.size(), tail) == 0;
-}
-
 std::vector<SensorQuantity> sensor_quantities(const Netlist& model, const Registry& registry) {
   const Circuit c = elaborate(model, registry);
   std::vector<SensorQuantity> out;
   for (const auto& comp : c.components) {
     const auto names = local_variable_names(*comp), units = local_variable_units(*comp);
     for (std::size_t i = 0; i < names.size(); ++i)
-      if (kind_of(units[i]) && !entering_stream(names[i])) out.push_back({comp->name(), names[i], units[i]});
+      if (kind_of(units[i]) && !is_entering_stream_temperature(names[i])) out.push_back({comp->name(), names[i], units[i]});
     for (const auto& o : comp->info().observables)
       if (kind_of(o.unit)) out.push_back({comp->name(), o.name, o.unit});
   }

@@ -253,33 +253,53 @@ class Search {
   }
 
   // The best `kConfirm` predicted balances (cands sorted best first)
-  // simulated with their fitted disturbances: their gap as simulated.
+  // simulated with their fitted disturbances: their gap as simulated. A fit
+  // is linear; one whose whole disturbance drives the model out of its
+  // domain (a chamber emptied, a spool past its end) is confirmed with its
+  // share halved, down to a sixteenth - the share that ran, said with the
+  // reason the whole did not.
   void confirm(std::vector<Candidate>& cands) {
-    const std::size_t nr = used.size();
-    std::vector<int> chosen;
-    for (int i = 0; i < static_cast<int>(cands.size()) && static_cast<int>(chosen.size()) < kConfirm; ++i)
-      if (!cands[i].variable.empty()) chosen.push_back(i);
-    std::vector<double> ssr(chosen.size() * nr, -1);
-    std::vector<std::string> why(ssr.size());
-    parallel_for(static_cast<long>(ssr.size()), opt_.threads, [&](int, long job) {
-      const std::size_t q = job % nr;
-      const auto sim = in_.simulate(used[q], {disturbance_of(cands[chosen[job / nr]], q)}, &why[job]);
-      ++simulations;
-      if (!sim.empty()) ssr[job] = residual(used[q], sim).squaredNorm();
-    });
-    for (std::size_t a = 0; a < chosen.size(); ++a) {
-      const auto first = ssr.begin() + static_cast<long>(a * nr), last = first + static_cast<long>(nr);
-      const bool ok = std::all_of(first, last, [](double v) { return v >= 0; });
-      const double total = std::accumulate(first, last, 0.0);
-      Candidate& c = cands[chosen[a]];
-      if (!ok)
-        for (std::size_t q = 0; q < nr && c.finding.failure.empty(); ++q)
-          if (ssr[a * nr + q] < 0) c.finding.failure = "run " + runs_[used[q]].name + ": " + why[a * nr + q];
-      if (in_.log)
-        in_.log("  " + c.finding.balance + ": predicted gap " + rounded(c.finding.gap_after, 2) + ", simulated " +
-                (ok ? rounded(std::sqrt(total / n), 2) : "failed (" + c.finding.failure + ")"));
-      if (ok) c.ssr = total, c.finding.gap_after = std::sqrt(total / n), c.finding.confirmed = true;
+    std::vector<int> pending;
+    for (int i = 0; i < static_cast<int>(cands.size()) && static_cast<int>(pending.size()) < kConfirm; ++i)
+      if (!cands[i].variable.empty()) pending.push_back(i);
+    for (const double share : {1.0, 0.5, 0.25, 0.125, 0.0625}) {
+      if (pending.empty()) return;
+      std::vector<int> failed;
+      for (const int i : pending)
+        if (!confirm_at(cands[i], share)) failed.push_back(i);
+      pending = std::move(failed);
     }
+  }
+
+  // Whether `c` simulated with `share` of its fitted disturbance runs on
+  // every used run; if so its gap (and its fit, scaled to what ran) is kept.
+  bool confirm_at(Candidate& c, double share) {
+    const std::size_t nr = used.size();
+    std::vector<double> ssr(nr, -1);
+    std::vector<std::string> why(nr);
+    parallel_for(static_cast<long>(nr), opt_.threads, [&](int, long q) {
+      Disturbance d = disturbance_of(c, q);
+      for (double& rate : d.rate) rate *= share;
+      const auto sim = in_.simulate(used[q], {d}, &why[q]);
+      ++simulations;
+      if (!sim.empty()) ssr[q] = residual(used[q], sim).squaredNorm();
+    });
+    const auto bad = std::find_if(ssr.begin(), ssr.end(), [](double v) { return v < 0; });
+    if (bad != ssr.end()) {
+      const auto q = static_cast<std::size_t>(bad - ssr.begin());
+      if (c.finding.failure.empty()) c.finding.failure = "run " + runs_[used[q]].name + ": " + why[q];
+      if (in_.log)
+        in_.log("  " + c.finding.balance + ": predicted gap " + rounded(c.finding.gap_after, 2) + ", simulated at " +
+                rounded(100 * share, 2) + " % failed (run " + runs_[used[q]].name + ": " + why[q] + ")");
+      return false;
+    }
+    const double total = std::accumulate(ssr.begin(), ssr.end(), 0.0);
+    for (auto& coefficients : c.c) coefficients *= share;
+    c.ssr = total, c.finding.gap_after = std::sqrt(total / n), c.finding.confirmed = true, c.finding.share = share;
+    if (in_.log)
+      in_.log("  " + c.finding.balance + ": simulated " + (share < 1 ? "at " + rounded(100 * share, 2) + " %, " : "") +
+              "gap " + rounded(c.finding.gap_after, 2));
+    return true;
   }
 
   // The missing term's form on the best state balance, and on the next
@@ -398,7 +418,8 @@ std::string unexplained_json(const std::optional<Unexplained>& u, const std::fun
     o << (i ? ",\n    " : "\n    ") << "{\"balance\": " << str(b.balance) << ", \"kind\": " << str(b.kind)
       << ", \"unit\": " << str(b.unit) << ", \"gap_after\": " << num(b.gap_after)
       << ", \"explained\": " << num(b.explained) << ", \"confirmed\": " << (b.confirmed ? "true" : "false")
-      << ", \"failure\": " << (b.failure.empty() ? std::string("null") : str(b.failure)) << "}";
+      << ", \"failure\": " << (b.failure.empty() ? std::string("null") : str(b.failure))
+      << ", \"share\": " << num(b.share) << "}";
   }
   o << "],\n  \"shape\": [";
   for (std::size_t i = 0; i < u->shape.size(); ++i) {
@@ -473,7 +494,9 @@ std::string unexplained_html(const std::optional<Unexplained>& u,
     const auto& b = u->balances[i];
     o << "<tr><td class=\"l\">" << html(b.balance) << "</td><td class=\"l\">" << html(b.kind) << "</td><td>"
       << rounded(b.gap_after, 2)
-      << (b.confirmed ? "" : b.failure.empty() ? " (predicted)" : " (predicted; its simulation failed: " + html(b.failure) + ")")
+      << (!b.confirmed ? b.failure.empty() ? " (predicted)" : " (predicted; its simulation failed: " + html(b.failure) + ")"
+          : b.share < 1 ? " (with " + rounded(100 * b.share, 2) + " % of its fit; the whole failed: " + html(b.failure) + ")"
+                        : "")
       << "</td><td>"
       << std::lround(100 * b.explained) << " %</td></tr>\n";
   }

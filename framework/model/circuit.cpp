@@ -23,6 +23,12 @@ const std::vector<Named>& domain_variables(Domain d) {
 }
 }  // namespace
 
+bool is_entering_stream_temperature(const std::string& local_variable) {
+  const std::string tail = ".T_in";
+  return local_variable.size() > tail.size() &&
+         local_variable.compare(local_variable.size() - tail.size(), tail.size(), tail) == 0;
+}
+
 std::vector<std::string> local_variable_names(const Component& c) {
   std::vector<std::string> out;
   for (const auto& p : c.info().ports)

@@ -43,6 +43,10 @@ struct Probe {
 // "port.m_flow", ..., then internal variables).
 std::vector<std::string> local_variable_names(const Component& c);
 std::vector<std::string> local_variable_units(const Component& c);
+// Whether a local variable is a port's T_in: the temperature of the gas that
+// would enter through it, upwinded - held at the last stream's when nothing
+// enters, so it is no gas's state and no thermometer in the line reads it.
+bool is_entering_stream_temperature(const std::string& local_variable);
 
 struct Circuit;
 // The probe of a component's quantity as outputs name it: an observable, a

@@ -176,6 +176,10 @@ struct VariableSpec {
   std::string description;
   // Typical magnitude used to scale absolute tolerances; 0 = from the unit.
   double nominal = 0.0;
+  // For a gas mass: the variable holding the same gas's internal energy U.
+  // Gas that enters or leaves unseen (a disturbance of the mass balance,
+  // SolverOptions::disturbances) carries its enthalpy kappa U / m with it.
+  std::string internal_energy = {};
 };
 
 struct ObservableSpec {

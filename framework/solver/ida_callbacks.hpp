@@ -53,6 +53,8 @@ struct UserData {
     int i;
     const Disturbance* d;
     std::vector<std::vector<std::pair<Reader, Reader>>> factor_of;  // per term, per factor: variable, other
+    int energy = -1;     // a gas mass's internal energy, which the gas's enthalpy kappa U / m enters
+    double kappa = 0.0;
   };
   std::vector<Disturbed> disturbed;
   std::vector<double> disturbance_rates;
@@ -67,7 +69,12 @@ struct UserData {
     // Every rate first: a term may read the rate of a disturbed unknown.
     disturbance_rates.resize(disturbed.size());
     for (std::size_t k = 0; k < disturbed.size(); ++k) disturbance_rates[k] = disturbance_at(disturbed[k], t);
-    for (std::size_t k = 0; k < disturbed.size(); ++k) yp_phys[disturbed[k].i] -= disturbance_rates[k];
+    for (std::size_t k = 0; k < disturbed.size(); ++k) {
+      const auto& r = disturbed[k];
+      const double d = disturbance_rates[k];
+      yp_phys[r.i] -= d;
+      if (r.energy >= 0 && y_phys[r.i] > 0) yp_phys[r.energy] -= d * r.kappa * y_phys[r.energy] / y_phys[r.i];
+    }
     return yp_phys.data();
   }
   double read(const Reader& r, double t) const {

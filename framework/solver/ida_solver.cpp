@@ -95,6 +95,7 @@ class IdaRun {
   void init_quadratures();
   void find_disturbed();
   UserData::Reader reader(const Disturbance& d, const std::string& name, bool rate) const;
+  int internal_energy_of(const std::string& unknown) const;
   void check(int flag, const char* what) const {
     if (flag < 0) throw std::runtime_error(std::string(what) + " failed: " + flag_text(flag, user_));
   }
@@ -204,6 +205,21 @@ UserData::Reader IdaRun::reader(const Disturbance& d, const std::string& name, b
   return r;
 }
 
+// The unknown holding the internal energy of the gas whose mass `unknown`
+// is, as its component declares it (VariableSpec::internal_energy); -1 for
+// anything else.
+int IdaRun::internal_energy_of(const std::string& unknown) const {
+  const auto dot = unknown.rfind('.');
+  const int c = dot == std::string::npos ? -1 : system_.circuit().find(unknown.substr(0, dot));
+  if (c < 0) return -1;
+  const auto& vars = system_.circuit().components[c]->info().variables;
+  const auto spec = std::find_if(vars.begin(), vars.end(), [&](const VariableSpec& v) { return v.name == unknown.substr(dot + 1); });
+  if (spec == vars.end() || spec->internal_energy.empty()) return -1;
+  const auto& names = system_.variable_names();
+  const auto it = std::find(names.begin(), names.end(), unknown.substr(0, dot + 1) + spec->internal_energy);
+  return it == names.end() ? -1 : static_cast<int>(it - names.begin());
+}
+
 void IdaRun::find_disturbed() {
   const auto& names = system_.variable_names();
   for (const auto& d : opt_.disturbances) {
@@ -215,7 +231,7 @@ void IdaRun::find_disturbed() {
       throw std::invalid_argument("disturbance on '" + d.variable + "': an algebraic unknown has no balance to disturb");
     if ((d.t.empty() && d.terms.empty()) || d.t.size() != d.rate.size() || !std::is_sorted(d.t.begin(), d.t.end()))
       throw std::invalid_argument("disturbance on '" + d.variable + "': needs ascending times, one rate each, or terms");
-    UserData::Disturbed r{i, &d, {}};
+    UserData::Disturbed r{i, &d, {}, internal_energy_of(d.variable), system_.gas().kappa};
     for (const auto& term : d.terms) {
       auto& f = r.factor_of.emplace_back();
       for (const auto& factor : term.factors)

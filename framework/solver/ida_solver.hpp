@@ -22,10 +22,13 @@ namespace pneumo {
 // energy, momentum, ... that the equations do not have. d is piecewise
 // linear in time through (t[k], rate[k]), constant outside, plus `terms`
 // that read the state (a form the diagnosis proposes: a spring, a bump of
-// friction, a mass), in the SI unit of the state per second. The terms are
-// not in the Jacobian: IDA's Newton iteration converges on them as on any
-// approximate matrix, slower when they are strong. Set by programs (the
-// diagnosis), not by netlists.
+// friction, a mass), in the SI unit of the state per second. Gas is never
+// mass alone: a disturbance of a gas mass whose component declares its
+// internal energy (VariableSpec::internal_energy) moves that energy by the
+// gas's enthalpy, d kappa U / m - a leak takes the chamber's gas as it is.
+// The terms are not in the Jacobian: IDA's Newton iteration converges on
+// them as on any approximate matrix, slower when they are strong. Set by
+// programs (the diagnosis), not by netlists.
 struct DisturbanceFactor {
   enum class Of { value, rate, magnitude, sign, bump, difference };
   Of of = Of::value;
