@@ -31,6 +31,22 @@ inline std::string one_line(std::string s) {
   return s;
 }
 
+// `s` as XML, SVG or HTML text or attribute value: the markup characters
+// as entities, control characters (which XML 1.0 does not allow) as spaces.
+inline std::string markup_escaped(const std::string& s) {
+  std::string out;
+  for (const char c : s) {
+    switch (c) {
+      case '&': out += "&amp;"; break;
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '"': out += "&quot;"; break;
+      default: out += static_cast<unsigned char>(c) < 0x20 ? ' ' : c;
+    }
+  }
+  return out;
+}
+
 inline std::vector<std::string> split_trimmed(const std::string& s, char sep) {
   std::vector<std::string> out;
   std::string item;

@@ -21,17 +21,7 @@ namespace {
 using json::num;
 using json::str;
 
-std::string html(const std::string& s) {
-  std::string o;
-  for (char c : s) {
-    if (c == '<') o += "&lt;";
-    else if (c == '>') o += "&gt;";
-    else if (c == '&') o += "&amp;";
-    else if (c == '"') o += "&quot;";
-    else o += c;
-  }
-  return o;
-}
+std::string html(const std::string& s) { return markup_escaped(s); }
 
 // Phase shading, repeated when there are more phases.
 const char* const kShade[] = {"#f4f4f4", "#fff4e0", "#eef6ff", "#ffecec", "#eefbee", "#f6eeff"};

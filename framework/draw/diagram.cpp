@@ -9,6 +9,8 @@
 #include <set>
 #include <sstream>
 
+#include "framework/core/text.hpp"
+
 namespace pneumo::draw {
 
 namespace {
@@ -743,20 +745,6 @@ Diagram layout(const Netlist& netlist, const Circuit& circuit) {
 // ---------------------------------------------------------------- SVG
 namespace {
 
-std::string esc(const std::string& s) {
-  std::string o;
-  for (char c : s) {
-    switch (c) {
-      case '&': o += "&amp;"; break;
-      case '<': o += "&lt;"; break;
-      case '>': o += "&gt;"; break;
-      case '"': o += "&quot;"; break;
-      default: o += c;
-    }
-  }
-  return o;
-}
-
 std::string num(double v) {
   std::ostringstream o;
   o << std::round(v * 100) / 100;
@@ -807,7 +795,7 @@ void shape_svg(std::ostringstream& o, const SymbolShape& s) {
       // dashed marks a port name (small), filled a right-aligned one
       o << "<text x=\"" << num(v[0]) << "\" y=\"" << num(v[1]) << "\" class=\""
         << (s.dashed ? (s.filled ? "port end" : "port") : "sym") << "\""
-        << (s.dashed && !s.filled && v[0] > 0.5 ? "" : "") << ">" << esc(s.text) << "</text>";
+        << (s.dashed && !s.filled && v[0] > 0.5 ? "" : "") << ">" << markup_escaped(s.text) << "</text>";
       break;
     case K::spring: {
       const double dx = v[2] - v[0], dy = v[3] - v[1], len = std::max(1e-9, std::hypot(dx, dy));
@@ -850,13 +838,13 @@ std::string to_svg(const Diagram& d) {
     std::string ports;
     for (const auto& e : w.ends) ports += (ports.empty() ? "" : " ") + d.symbols[e.symbol].name + "." + e.port;
     o << "<g class=\"net" << (w.routed ? "" : " unrouted") << (w.reference.empty() ? "" : " ref") << "\" id=\"net"
-      << k << "\" data-net=\"" << k << "\" data-domain=\"" << w.domain << "\" data-ports=\"" << esc(ports) << "\""
-      << (w.reference.empty() ? "" : " data-ref=\"" + esc(w.reference) + "\"") << ">";
+      << k << "\" data-net=\"" << k << "\" data-domain=\"" << w.domain << "\" data-ports=\"" << markup_escaped(ports) << "\""
+      << (w.reference.empty() ? "" : " data-ref=\"" + markup_escaped(w.reference) + "\"") << ">";
     for (const auto& [x, y, side] : w.reference_labels) {
       const char s = static_cast<char>(side);
       const double tx = x + (s == 'r' ? 3 : s == 'l' ? -3 : 0), ty = y + (s == 'b' ? 11 : s == 't' ? -4 : 4);
       o << "<text class=\"ref\" x=\"" << num(tx) << "\" y=\"" << num(ty) << "\" text-anchor=\""
-        << (s == 'r' ? "start" : s == 'l' ? "end" : "middle") << "\">" << esc(w.reference) << "</text>";
+        << (s == 'r' ? "start" : s == 'l' ? "end" : "middle") << "\">" << markup_escaped(w.reference) << "</text>";
     }
     for (const auto& s : w.segments)
       o << "<line class=\"wire\" x1=\"" << num(s[0]) << "\" y1=\"" << num(s[1]) << "\" x2=\"" << num(s[2])
@@ -869,7 +857,7 @@ std::string to_svg(const Diagram& d) {
   for (std::size_t i = 0; i < d.symbols.size(); ++i) {
     const auto& p = d.symbols[i];
     const auto& s = p.symbol;
-    o << "<g class=\"symbol\" id=\"sym" << i << "\" data-name=\"" << esc(p.name) << "\" data-type=\"" << esc(p.type)
+    o << "<g class=\"symbol\" id=\"sym" << i << "\" data-name=\"" << markup_escaped(p.name) << "\" data-type=\"" << markup_escaped(p.type)
       << "\" data-x=\"" << num(p.x) << "\" data-y=\"" << num(p.y) << "\" data-w=\"" << num(s.width) << "\" data-h=\""
       << num(s.height) << "\" transform=\"translate(" << num(p.x) << "," << num(p.y) << ")\">";
     std::map<std::string, std::vector<const SymbolShape*>> parts;
@@ -880,17 +868,17 @@ std::string to_svg(const Diagram& d) {
         parts[sh.part].push_back(&sh);
     }
     for (const auto& [part, shapes] : parts) {
-      o << "<g class=\"part " << esc(part) << "\" data-part=\"" << esc(part) << "\">";
+      o << "<g class=\"part " << markup_escaped(part) << "\" data-part=\"" << markup_escaped(part) << "\">";
       for (const auto* sh : shapes) shape_svg(o, *sh);
       o << "</g>";
     }
     for (const auto& a : s.anchors)  // a free port shows no dot
-      o << "<circle class=\"anchor\" data-port=\"" << esc(a.port) << "\" cx=\"" << num(a.x) << "\" cy=\"" << num(a.y)
+      o << "<circle class=\"anchor\" data-port=\"" << markup_escaped(a.port) << "\" cx=\"" << num(a.x) << "\" cy=\"" << num(a.y)
         << "\" r=\"" << (p.connected.empty() || p.connected.count(a.port) ? "1.5" : "0") << "\"/>";
     o << "</g>\n";
     for (std::size_t l = 0; l < p.label.size(); ++l)
       o << "<text class=\"label\" x=\"" << num(p.label_x) << "\" y=\"" << num(p.label_y + 13.0 * static_cast<double>(l))
-        << "\"" << (l == 0 ? " font-weight=\"bold\"" : "") << ">" << esc(p.label[l]) << "</text>\n";
+        << "\"" << (l == 0 ? " font-weight=\"bold\"" : "") << ">" << markup_escaped(p.label[l]) << "</text>\n";
   }
   o << "</g>\n</svg>\n";
   return o.str();
@@ -918,7 +906,7 @@ std::string symbol_svg(const ComponentInfo& info) {
     const double x = margin + a.x + (a.side == 'l' ? -4 : a.side == 'r' ? 4 : 3);
     const double y = 30 + a.y + (a.side == 't' ? -5 : a.side == 'b' ? 12 : -3);
     names << "<text class=\"port" << (a.side == 'l' ? " end" : "") << "\" x=\"" << num(x) << "\" y=\"" << num(y)
-          << "\">" << esc(a.port) << "</text>\n";
+          << "\">" << markup_escaped(a.port) << "</text>\n";
   }
   svg.insert(svg.rfind("</svg>"), names.str());
   return svg;

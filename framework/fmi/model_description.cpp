@@ -6,26 +6,13 @@
 #include <set>
 #include <sstream>
 
+#include "framework/core/text.hpp"
 #include "framework/core/version.hpp"
 #include "framework/fmi/description.hpp"
 
 namespace pneumo::fmi {
 
 namespace {
-
-std::string xml(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += (static_cast<unsigned char>(c) < 0x20 ? ' ' : c);
-    }
-  }
-  return out;
-}
 
 std::string num(double v) {
   char buf[32];
@@ -55,9 +42,9 @@ std::string unit_definitions(const Description& d) {
   if (units.empty()) return "";
   std::string out = "  <UnitDefinitions>\n";
   for (const auto& [unit, shown] : units) {
-    out += "    <Unit name=\"" + xml(unit) + "\">" + base_unit(unit);
+    out += "    <Unit name=\"" + markup_escaped(unit) + "\">" + base_unit(unit);
     for (const auto& [name, du] : shown)
-      out += "<DisplayUnit name=\"" + xml(name) + "\" factor=\"" + num(1.0 / du.scale) + "\" offset=\"" +
+      out += "<DisplayUnit name=\"" + markup_escaped(name) + "\" factor=\"" + num(1.0 / du.scale) + "\" offset=\"" +
              num(-du.offset / du.scale) + "\"/>";
     out += "</Unit>\n";
   }
@@ -66,8 +53,8 @@ std::string unit_definitions(const Description& d) {
 
 std::string real_element(const Variable& v) {
   std::string out = "<Real";
-  if (!v.unit.empty()) out += " unit=\"" + xml(v.unit) + "\"";
-  if (!v.display.unit.empty() && v.display.unit != v.unit) out += " displayUnit=\"" + xml(v.display.unit) + "\"";
+  if (!v.unit.empty()) out += " unit=\"" + markup_escaped(v.unit) + "\"";
+  if (!v.display.unit.empty() && v.display.unit != v.unit) out += " displayUnit=\"" + markup_escaped(v.display.unit) + "\"";
   if (v.causality != Variable::Causality::output) out += " start=\"" + num(v.start) + "\"";
   return out + "/>";
 }
@@ -80,8 +67,8 @@ std::string scalar_variable(const Variable& v, std::size_t vr) {
       // circuit (volumes, start pressures), which is built then.
       R"(causality="parameter" variability="fixed" initial="exact")",
   };
-  return "    <ScalarVariable name=\"" + xml(v.name) + "\" valueReference=\"" + std::to_string(vr) + "\" " +
-         kinds[static_cast<int>(v.causality)] + " description=\"" + xml(v.description) + "\">" + real_element(v) +
+  return "    <ScalarVariable name=\"" + markup_escaped(v.name) + "\" valueReference=\"" + std::to_string(vr) + "\" " +
+         kinds[static_cast<int>(v.causality)] + " description=\"" + markup_escaped(v.description) + "\">" + real_element(v) +
          "</ScalarVariable>\n";
 }
 
@@ -101,10 +88,10 @@ std::string model_structure(const Description& d) {
 
 std::string model_description_xml(const Description& d, const std::string& identifier) {
   std::string out = "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
-  out += "<fmiModelDescription fmiVersion=\"2.0\" modelName=\"" + xml(d.model_name) + "\" guid=\"" + d.guid +
-         "\" description=\"pneumo circuit " + xml(d.model_name) + "\" generationTool=\"pneumo " +
-         xml(PNEUMO_VERSION_STRING) + "\" variableNamingConvention=\"flat\" numberOfEventIndicators=\"0\">\n";
-  out += "  <CoSimulation modelIdentifier=\"" + xml(identifier) +
+  out += "<fmiModelDescription fmiVersion=\"2.0\" modelName=\"" + markup_escaped(d.model_name) + "\" guid=\"" + d.guid +
+         "\" description=\"pneumo circuit " + markup_escaped(d.model_name) + "\" generationTool=\"pneumo " +
+         markup_escaped(PNEUMO_VERSION_STRING) + "\" variableNamingConvention=\"flat\" numberOfEventIndicators=\"0\">\n";
+  out += "  <CoSimulation modelIdentifier=\"" + markup_escaped(identifier) +
          "\" needsExecutionTool=\"false\" canHandleVariableCommunicationStepSize=\"true\" "
          "canInterpolateInputs=\"false\" maxOutputDerivativeOrder=\"0\" canRunAsynchronuously=\"false\" "
          "canBeInstantiatedOnlyOncePerProcess=\"false\" canNotUseMemoryManagementFunctions=\"true\" "
