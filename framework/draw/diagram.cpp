@@ -794,8 +794,7 @@ void shape_svg(std::ostringstream& o, const SymbolShape& s) {
     case K::text:
       // dashed marks a port name (small), filled a right-aligned one
       o << "<text x=\"" << num(v[0]) << "\" y=\"" << num(v[1]) << "\" class=\""
-        << (s.dashed ? (s.filled ? "port end" : "port") : "sym") << "\""
-        << (s.dashed && !s.filled && v[0] > 0.5 ? "" : "") << ">" << markup_escaped(s.text) << "</text>";
+        << (s.dashed ? (s.filled ? "port end" : "port") : "sym") << "\">" << markup_escaped(s.text) << "</text>";
       break;
     case K::spring: {
       const double dx = v[2] - v[0], dy = v[3] - v[1], len = std::max(1e-9, std::hypot(dx, dy));
