@@ -106,8 +106,10 @@ def main():
         u["gap"], len(u["balances"]), len(tried) - len(failed), len(failed)))
     for b in tried:
         if b.get("failure"):
-            print("  %s: %s; the whole fit failed: %s" % (
-                b["balance"], "failed" if not b["confirmed"] else "confirmed at %g %%" % (100 * b["share"]), b["failure"]))
+            print("  %s: failed: %s" % (b["balance"], b["failure"]))
+        elif b.get("longer_step_failed"):
+            print("  %s: gap %.3g, fitted on simulations from %g %% of its linear fit; a longer step failed: %s" % (
+                b["balance"], b["gap_after"], 100 * b["share"], b["longer_step_failed"]))
     if u.get("form"):
         print("form:", u["form"]["sentence"], "[%s simulations]" % u["form"]["simulations"])
     console = (work / "console.txt").read_text()

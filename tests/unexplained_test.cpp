@@ -77,6 +77,37 @@ simulation: {t_end: 0.5 s, output_interval: 10 ms}
         << "t = " << t;
 }
 
+// The same closed tank (U0 = p0 V / (kappa - 1) = 500 J): heat drawn out
+// at 2 kW would empty it in 0.25 s, but a withdrawal cannot take more than
+// the state held along the run it was fitted on (here held = U0 throughout):
+// U' = -q min(1, U / U0), so U = U0 exp(-q t / U0) and p with it - positive
+// to the end. A rate per unit held (per_held) follows the content instead:
+// r = 2 /s on held(t) falling from 500 to 250 J over 0.5 s puts in
+// r (500 t - 250 t^2) J.
+TEST(Disturbance, AWithdrawalNeverTakesMoreThanTheStateHeldAndARatePerHeldFollowsIt) {
+  const std::string text = R"(
+components:
+  tank: {type: volume, V: 1 L, p0: 2 bar, T0: 300 K}
+  shut: {type: iso6358_throttle, C: 0, b: 0.3}
+  air: {type: atmosphere}
+connections: [[tank.port, shut.a], [shut.b, air.port]]
+outputs: {p: tank.p}
+simulation: {t_end: 0.5 s, output_interval: 10 ms, rtol: 1e-8}
+)";
+  const double p0 = 2e5, U0 = 500, q = 2000;
+  Disturbance out{"tank.U", {0.0}, {-q}};
+  out.held_t = {0.0, 0.5}, out.held = {U0, U0};
+  const RunResult drawn = run_disturbed(text, {out});
+  for (double t : {0.1, 0.25, 0.5})
+    EXPECT_NEAR(at(drawn.table, "p", t), p0 * std::exp(-q * t / U0), 1e-5 * p0) << "t = " << t;
+
+  Disturbance in{"tank.U", {0.0}, {2.0}};
+  in.held_t = {0.0, 0.5}, in.held = {500, 250}, in.per_held = true;
+  const RunResult fed = run_disturbed(text, {in});
+  for (double t : {0.2, 0.5})
+    EXPECT_NEAR(at(fed.table, "p", t), p0 * (1 + 2.0 * (500 * t - 250 * t * t) / U0), 1e-5 * p0) << "t = " << t;
+}
+
 TEST(Disturbance, AnUnknownVariableIsRefused) {
   const Netlist nl = parse_netlist(kThreePortMixingCircuit, "t.yaml");
   SolverOptions opt = solver_options(nl.simulation);

@@ -183,8 +183,9 @@ struct BalanceFinding {  // one candidate balance or sensor
   double gap_after = 0;     // all runs, normalised RMS, with this disturbance fitted
   double explained = 0;     // share of the remaining excess gap (gap - 1) it removes
   bool confirmed = false;   // gap_after simulated with the fitted disturbance, not linearly predicted
-  std::string failure;      // why its confirming simulation failed (empty: it ran, or none was tried)
-  double share = 1;         // of the fitted disturbance the confirmation carried: halved (to 1/16) while it failed
+  std::string failure;      // why no step of its fit could be simulated (empty: one ran, or none was tried)
+  double share = 1;         // of the linear fit the first simulated step that lowered the gap carried (0: none did)
+  std::string longer_step_failed;  // why a longer step could not be simulated (the model left its domain)
 };
 
 // The best balance's correction as a function of the model's states

@@ -5,6 +5,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <map>
 #include <numeric>
 #include <sstream>
 
@@ -12,12 +13,15 @@
 #include "framework/core/parallel.hpp"
 #include "framework/core/text.hpp"
 #include "framework/diagnose/form.hpp"
+#include "framework/run/run.hpp"
 
 namespace pneumo::diagnose {
 
 namespace {
 
 constexpr int kConfirm = 3;  // candidates confirmed by simulation, best predicted first
+constexpr int kTrials = 8, kSteps = 3;  // simulated steps of one confirmation: tried, accepted at most
+constexpr double kShortestStep = 1.0 / 64;  // of the distance to the linearised optimum
 
 struct State {
   std::string name, unit;
@@ -61,7 +65,22 @@ struct Candidate {
   Eigen::MatrixXd P;
   std::vector<Eigen::VectorXd> c;  // fitted, per run
   double ssr = 0;
+  double lambda = 0;  // the roughness weight cross-validation chose
 };
+
+// A whisker of ridge that keeps the normal equations regular.
+Eigen::MatrixXd ridge_of(const Candidate& cand, double mean_diagonal) {
+  const auto p = cand.P.rows();
+  return 1e-10 * std::max(mean_diagonal, 1e-300) * Eigen::MatrixXd::Identity(p, p);
+}
+
+// The linearised optimum seen from a point `at` whose simulated residual is
+// r: min |r + J (c - at)|^2 + lambda c' P c (the fit's own roughness weight).
+Eigen::VectorXd chord_target(const Candidate& cand, std::size_t k, const Eigen::VectorXd& r, const Eigen::VectorXd& at) {
+  const Eigen::MatrixXd A = cand.J[k].transpose() * cand.J[k];
+  const Eigen::MatrixXd M = A + cand.lambda * cand.P + ridge_of(cand, A.trace() / static_cast<double>(A.rows()));
+  return M.ldlt().solve(cand.J[k].transpose() * (cand.J[k] * at - r));
+}
 
 // min sum_k |r0_k + J_k c_k|^2 + lambda c_k' P c_k, lambda by generalised
 // cross-validation over all runs together.
@@ -78,7 +97,7 @@ void regularised_fit(Candidate& cand, const std::vector<Eigen::VectorXd>& r0) {
     s0 += r0[k].squaredNorm();
     trace += A[k].trace() / p / nr;
   }
-  const Eigen::MatrixXd ridge = 1e-10 * std::max(trace, 1e-300) * Eigen::MatrixXd::Identity(p, p);
+  const Eigen::MatrixXd ridge = ridge_of(cand, trace);
   double best = INFINITY;
   cand.ssr = s0;
   cand.c.assign(nr, Eigen::VectorXd::Zero(p));
@@ -93,7 +112,7 @@ void regularised_fit(Candidate& cand, const std::vector<Eigen::VectorXd>& r0) {
       edf += M.solve(A[k]).trace();
     }
     const double gcv = n * ssr / ((n - edf) * (n - edf));
-    if (ssr >= 0 && edf < n && gcv < best) best = gcv, cand.ssr = ssr, cand.c = std::move(c);
+    if (ssr >= 0 && edf < n && gcv < best) best = gcv, cand.ssr = ssr, cand.c = std::move(c), cand.lambda = lambda;
   }
 }
 
@@ -164,6 +183,7 @@ class Search {
       n += static_cast<double>(r0.back().size());
       s0 += r0.back().squaredNorm();
     }
+    record_held();
   }
 
   std::vector<int> used;                               // runs the verdict model finishes
@@ -182,8 +202,20 @@ class Search {
     return r;
   }
 
+  // A disturbance of candidate `c` on used run q with these knot rates;
+  // a content's (a mass, an energy, a temperature: never below 0) carries
+  // what the state held along the verdict run, so that no withdrawal takes
+  // more than it holds (Disturbance::held).
+  Disturbance disturbance(const Candidate& c, std::size_t q, std::vector<double> rate) const {
+    Disturbance d{c.variable, knots[q], std::move(rate)};
+    if (const auto it = held[q].find(c.variable); it != held[q].end())
+      d.held_t = held_t[q], d.held = it->second, d.per_held = true;
+    return d;
+  }
+
   // The states: one simulation per hat and run, each hat's amplitude moving
-  // the state by about 1 % of its nominal magnitude over the hat's width.
+  // the state by about 1 % of its nominal magnitude (a content's: of what it
+  // holds there) over the hat's width.
   std::vector<Candidate> balances() {
     const int B = kDisturbanceKnots;
     const std::size_t nr = used.size();
@@ -200,7 +232,8 @@ class Search {
                      : st.unit == "m/s" || st.unit == "rad/s" ? "force" : "state";
       c.P = roughness(B, 0);
       for (std::size_t q = 0; q < nr; ++q) {
-        c.scale.push_back(0.01 * st.nominal / (knots[q][1] - knots[q][0]));
+        const double magnitude = held[q].contains(st.name) ? 1.0 : st.nominal;  // a content's rate is per unit held
+        c.scale.push_back(0.01 * magnitude / (knots[q][1] - knots[q][0]));
         c.J.push_back(Eigen::MatrixXd::Zero(r0[q].size(), B));
       }
       cands.push_back(std::move(c));
@@ -213,7 +246,7 @@ class Search {
       Candidate& c = cands[i];
       std::vector<double> rate(B, 0.0);
       rate[j] = c.scale[q];
-      const auto sim = in_.simulate(used[q], {Disturbance{c.variable, knots[q], rate}}, nullptr);
+      const auto sim = in_.simulate(used[q], {disturbance(c, q, std::move(rate))}, nullptr);
       ++simulations;
       if (!sim.empty()) c.J[q].col(j) = residual(used[q], sim) - r0[q];  // a failed run leaves the hat unused
     });
@@ -247,59 +280,88 @@ class Search {
 
   // A state's fitted disturbance on used run q.
   Disturbance disturbance_of(const Candidate& c, std::size_t q) const {
-    Disturbance d{c.variable, knots[q], std::vector<double>(kDisturbanceKnots)};
-    for (int j = 0; j < kDisturbanceKnots; ++j) d.rate[j] = c.c[q][j] * c.scale[q];
-    return d;
+    std::vector<double> rate(kDisturbanceKnots);
+    for (int j = 0; j < kDisturbanceKnots; ++j) rate[j] = c.c[q][j] * c.scale[q];
+    return disturbance(c, q, std::move(rate));
   }
 
-  // The best `kConfirm` predicted balances (cands sorted best first)
-  // simulated with their fitted disturbances: their gap as simulated. A fit
-  // is linear; one whose whole disturbance drives the model out of its
-  // domain (a chamber emptied, a spool past its end) is confirmed with its
-  // share halved, down to a sixteenth - the share that ran, said with the
-  // reason the whole did not.
+  // The best `kConfirm` predicted balances (cands sorted best first),
+  // fitted on simulations: the fit is linear, the model is not. From no
+  // disturbance, each step goes toward the linearised optimum seen from the
+  // point last simulated (the probes' Jacobian kept: a chord step) and is
+  // simulated; a step the model cannot run (a chamber emptied, a spool past
+  // its end) or that does not lower the gap is tried again at a quarter of
+  // its length. The gap is that of the last step that ran; why a longer one
+  // could not is kept.
   void confirm(std::vector<Candidate>& cands) {
-    std::vector<int> pending;
-    for (int i = 0; i < static_cast<int>(cands.size()) && static_cast<int>(pending.size()) < kConfirm; ++i)
-      if (!cands[i].variable.empty()) pending.push_back(i);
-    for (const double share : {1.0, 0.5, 0.25, 0.125, 0.0625}) {
-      if (pending.empty()) return;
-      std::vector<int> failed;
-      for (const int i : pending)
-        if (!confirm_at(cands[i], share)) failed.push_back(i);
-      pending = std::move(failed);
-    }
+    int tried = 0;
+    for (auto& c : cands)
+      if (!c.variable.empty() && tried++ < kConfirm) refine(c);
   }
 
-  // Whether `c` simulated with `share` of its fitted disturbance runs on
-  // every used run; if so its gap (and its fit, scaled to what ran) is kept.
-  bool confirm_at(Candidate& c, double share) {
+  struct Trial {
+    bool ran = false;
+    double ssr = 0;
+    std::vector<Eigen::VectorXd> r;  // per used run
+    std::string why;                 // of the first run that failed
+  };
+
+  Trial simulate_fit(const Candidate& c, const std::vector<Eigen::VectorXd>& coef) {
     const std::size_t nr = used.size();
-    std::vector<double> ssr(nr, -1);
+    Trial t;
+    t.r.resize(nr);
     std::vector<std::string> why(nr);
     parallel_for(static_cast<long>(nr), opt_.threads, [&](int, long q) {
-      Disturbance d = disturbance_of(c, q);
-      for (double& rate : d.rate) rate *= share;
-      const auto sim = in_.simulate(used[q], {d}, &why[q]);
+      std::vector<double> rate(kDisturbanceKnots);
+      for (int j = 0; j < kDisturbanceKnots; ++j) rate[j] = coef[q][j] * c.scale[q];
+      const auto sim = in_.simulate(used[q], {disturbance(c, q, std::move(rate))}, &why[q]);
       ++simulations;
-      if (!sim.empty()) ssr[q] = residual(used[q], sim).squaredNorm();
+      if (!sim.empty()) t.r[q] = residual(used[q], sim);
     });
-    const auto bad = std::find_if(ssr.begin(), ssr.end(), [](double v) { return v < 0; });
-    if (bad != ssr.end()) {
-      const auto q = static_cast<std::size_t>(bad - ssr.begin());
-      if (c.finding.failure.empty()) c.finding.failure = "run " + runs_[used[q]].name + ": " + why[q];
+    for (std::size_t q = 0; q < nr && t.why.empty(); ++q)
+      if (t.r[q].size() == 0) t.why = "run " + runs_[used[q]].name + ": " + why[q];
+    t.ran = t.why.empty();
+    for (const auto& r : t.r) t.ssr += r.squaredNorm();
+    return t;
+  }
+
+  void refine(Candidate& c) {
+    const std::size_t nr = used.size();
+    const double predicted = c.finding.gap_after;
+    std::vector<Eigen::VectorXd> at(nr), target = c.c;
+    for (std::size_t q = 0; q < nr; ++q) at[q] = Eigen::VectorXd::Zero(target[q].size());
+    double ssr = s0, step = 1;
+    int accepted = 0;
+    bool ran = false;
+    for (int trial = 0; trial < kTrials && accepted < kSteps && step >= kShortestStep; ++trial) {
+      std::vector<Eigen::VectorXd> next(nr);
+      for (std::size_t q = 0; q < nr; ++q) next[q] = at[q] + step * (target[q] - at[q]);
+      Trial t = simulate_fit(c, next);
+      ran = ran || t.ran;
+      if (t.ran && t.ssr < ssr) {
+        if (accepted++ == 0) c.finding.share = step;
+        at = std::move(next), ssr = t.ssr;
+        for (std::size_t q = 0; q < nr; ++q) target[q] = chord_target(c, q, t.r[q], at[q]);
+        step = std::min(1.0, 2 * step);
+        continue;
+      }
+      if (!t.ran && c.finding.longer_step_failed.empty()) c.finding.longer_step_failed = t.why;
       if (in_.log)
-        in_.log("  " + c.finding.balance + ": predicted gap " + rounded(c.finding.gap_after, 2) + ", simulated at " +
-                rounded(100 * share, 2) + " % failed (run " + runs_[used[q]].name + ": " + why[q] + ")");
-      return false;
+        in_.log("  " + c.finding.balance + ": a step of " + rounded(100 * step, 2) + " % toward the fit " +
+                (t.ran ? "lowers no gap" : "leaves the model's domain (" + t.why + ")") + "; a quarter of it next");
+      step /= 4;
     }
-    const double total = std::accumulate(ssr.begin(), ssr.end(), 0.0);
-    for (auto& coefficients : c.c) coefficients *= share;
-    c.ssr = total, c.finding.gap_after = std::sqrt(total / n), c.finding.confirmed = true, c.finding.share = share;
+    c.finding.confirmed = ran;
+    if (!ran) {  // stays predicted, with the linear fit
+      c.finding.failure = c.finding.longer_step_failed;
+    } else {
+      c.c = std::move(at), c.ssr = ssr, c.finding.gap_after = std::sqrt(ssr / n);
+      if (!accepted) c.finding.share = 0;
+    }
     if (in_.log)
-      in_.log("  " + c.finding.balance + ": simulated " + (share < 1 ? "at " + rounded(100 * share, 2) + " %, " : "") +
-              "gap " + rounded(c.finding.gap_after, 2));
-    return true;
+      in_.log("  " + c.finding.balance + ": predicted gap " + rounded(predicted, 2) +
+              (ran ? ", simulated gap " + rounded(c.finding.gap_after, 2) + " after " + std::to_string(accepted) + " step(s)"
+                   : ", no step of its fit runs (" + c.finding.failure + ")"));
   }
 
   // The missing term's form on the best state balance, and on the next
@@ -329,7 +391,8 @@ class Search {
         for (int j = 0; j < kDisturbanceKnots; ++j) sh.value.push_back(c.c[q][j] * c.scale[q]);
         sh.gain = c.c[q][kDisturbanceKnots];
       } else {
-        sh.value = disturbance_of(c, q).rate;
+        const Disturbance d = disturbance_of(c, q);
+        for (const double t : knots[q]) sh.value.push_back(d.time_shaped(t));
       }
       out.push_back(std::move(sh));
     }
@@ -340,6 +403,37 @@ class Search {
   const UnexplainedInput& in_;
   const DiagnoseOptions& opt_;
   const std::vector<MeasuredRun>& runs_;
+  std::vector<std::vector<double>> held_t;                    // per used run: the output times
+  std::vector<std::map<std::string, std::vector<double>>> held;  // per used run: each content state there
+
+  // The verdict model's contents along each used run, at its output times.
+  void record_held() {
+    held_t.assign(used.size(), {});
+    held.assign(used.size(), {});
+    if (!in_.netlist_of) return;
+    parallel_for(static_cast<long>(used.size()), opt_.threads, [&](int, long q) {
+      const Netlist nl = in_.netlist_of(used[q]);
+      System sys(elaborate(nl, *in_.registry));
+      std::vector<int> content;
+      for (int i = 0; i < sys.size(); ++i) {
+        const std::string unit = unknown_unit(sys, sys.variable_names()[i]);
+        if (sys.differential()[i] != 0.0 && (unit == "kg" || unit == "J" || unit == "K")) content.push_back(i);
+      }
+      SolverOptions so = solver_options(nl.simulation);
+      so.threads = 1;
+      std::vector<std::vector<double>> values(content.size());
+      ++simulations;
+      const auto result = simulate(sys, so, [&](double t, const double* y, const double*) {
+        held_t[q].push_back(t);
+        for (std::size_t k = 0; k < content.size(); ++k) values[k].push_back(y[content[k]]);
+      });
+      if (!result.ok || !std::is_sorted(held_t[q].begin(), held_t[q].end())) {
+        held_t[q].clear();
+        return;
+      }
+      for (std::size_t k = 0; k < content.size(); ++k) held[q][sys.variable_names()[content[k]]] = std::move(values[k]);
+    });
+  }
 };
 
 // A balance is named only when its disturbance removes at least half of the
@@ -419,7 +513,8 @@ std::string unexplained_json(const std::optional<Unexplained>& u, const std::fun
       << ", \"unit\": " << str(b.unit) << ", \"gap_after\": " << num(b.gap_after)
       << ", \"explained\": " << num(b.explained) << ", \"confirmed\": " << (b.confirmed ? "true" : "false")
       << ", \"failure\": " << (b.failure.empty() ? std::string("null") : str(b.failure))
-      << ", \"share\": " << num(b.share) << "}";
+      << ", \"share\": " << num(b.share) << ", \"longer_step_failed\": "
+      << (b.longer_step_failed.empty() ? std::string("null") : str(b.longer_step_failed)) << "}";
   }
   o << "],\n  \"shape\": [";
   for (std::size_t i = 0; i < u->shape.size(); ++i) {
@@ -495,8 +590,10 @@ std::string unexplained_html(const std::optional<Unexplained>& u,
     o << "<tr><td class=\"l\">" << html(b.balance) << "</td><td class=\"l\">" << html(b.kind) << "</td><td>"
       << rounded(b.gap_after, 2)
       << (!b.confirmed ? b.failure.empty() ? " (predicted)" : " (predicted; its simulation failed: " + html(b.failure) + ")"
-          : b.share < 1 ? " (with " + rounded(100 * b.share, 2) + " % of its fit; the whole failed: " + html(b.failure) + ")"
-                        : "")
+          : !b.longer_step_failed.empty() ? " (fitted on simulations from " + rounded(100 * b.share, 2) +
+                                                  " % of its linear fit; a longer step left the model's domain: " +
+                                                  html(b.longer_step_failed) + ")"
+                                            : "")
       << "</td><td>"
       << std::lround(100 * b.explained) << " %</td></tr>\n";
   }

@@ -82,7 +82,7 @@ struct UserData {
     return r.probe.index < 0 ? 0.0 : system->probe(r.probe, t, y_phys.data(), yp_phys.data());
   }
   double disturbance_at(const Disturbed& r, double t) const {
-    double d = r.d->t.empty() ? 0.0 : r.d->at(t);
+    double d = r.d->t.empty() ? 0.0 : r.d->time_shaped(t);
     for (std::size_t j = 0; j < r.d->terms.size(); ++j) {
       const auto& term = r.d->terms[j];
       double v = term.coefficient;
@@ -92,7 +92,7 @@ struct UserData {
       }
       d += v;
     }
-    return d;
+    return d < 0 ? d * r.d->withdrawal_share(t, y_phys[r.i]) : d;
   }
 };
 

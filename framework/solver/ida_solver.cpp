@@ -231,6 +231,8 @@ void IdaRun::find_disturbed() {
       throw std::invalid_argument("disturbance on '" + d.variable + "': an algebraic unknown has no balance to disturb");
     if ((d.t.empty() && d.terms.empty()) || d.t.size() != d.rate.size() || !std::is_sorted(d.t.begin(), d.t.end()))
       throw std::invalid_argument("disturbance on '" + d.variable + "': needs ascending times, one rate each, or terms");
+    if (d.held_t.size() != d.held.size() || !std::is_sorted(d.held_t.begin(), d.held_t.end()))
+      throw std::invalid_argument("disturbance on '" + d.variable + "': needs ascending held times, one value each");
     UserData::Disturbed r{i, &d, {}, internal_energy_of(d.variable), system_.gas().kappa};
     for (const auto& term : d.terms) {
       auto& f = r.factor_of.emplace_back();
@@ -852,12 +854,27 @@ double DisturbanceFactor::operator()(double y, double yp, double y_other) const 
   return 0.0;
 }
 
-double Disturbance::at(double time) const {
-  if (time <= t.front()) return rate.front();
-  if (time >= t.back()) return rate.back();
+namespace {
+// Through (t[k], v[k]), linear between, constant outside.
+double piecewise_linear(const std::vector<double>& t, const std::vector<double>& v, double time) {
+  if (time <= t.front()) return v.front();
+  if (time >= t.back()) return v.back();
   const std::size_t k = std::upper_bound(t.begin(), t.end(), time) - t.begin();
   const double w = (time - t[k - 1]) / (t[k] - t[k - 1]);
-  return rate[k - 1] + w * (rate[k] - rate[k - 1]);
+  return v[k - 1] + w * (v[k] - v[k - 1]);
+}
+}  // namespace
+
+double Disturbance::at(double time) const { return piecewise_linear(t, rate, time); }
+
+double Disturbance::time_shaped(double time) const {
+  return at(time) * (per_held && !held.empty() ? piecewise_linear(held_t, held, time) : 1.0);
+}
+
+double Disturbance::withdrawal_share(double time, double y) const {
+  if (held.empty()) return 1.0;
+  const double h = piecewise_linear(held_t, held, time);
+  return h > 0 ? std::clamp(y / h, 0.0, 1.0) : 1.0;
 }
 
 Integration::Integration(System& system, const SolverOptions& options, OutputFn output, const Quadratures* quad)

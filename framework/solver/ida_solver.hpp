@@ -44,8 +44,22 @@ struct DisturbanceTerm {
 struct Disturbance {
   std::string variable;  // System::variable_names(), a differential variable
   std::vector<double> t, rate;
-  std::vector<DisturbanceTerm> terms;
-  double at(double time) const;  // the time-shaped part
+  std::vector<DisturbanceTerm> terms = {};
+  // What the state held along the run the rate was fitted on (times and
+  // values; empty: nothing). A balance cannot give more than it holds: with
+  // it, a withdrawal (d < 0) is scaled by min(1, y / held(t)), so a mass or
+  // an energy taken out at the rate one trajectory allowed stays positive
+  // on another (a chamber that reaches its dead volume earlier).
+  std::vector<double> held_t = {}, held = {};
+  // The knots' rates are per unit of what the state held (1/s): the
+  // time-shaped part is rate(t) x held(t), a shape that follows the content
+  // - a chamber at its dead volume holds a few hundredths of its full charge,
+  // and a rate one knot gives the full chamber would heat that gas by
+  // thousands of kelvin.
+  bool per_held = false;
+  double at(double time) const;           // the knots' rate at `time`
+  double time_shaped(double time) const;  // at(time), times held(time) when per_held
+  double withdrawal_share(double time, double y) const;
 };
 
 // The netlist's settings (simulation_options.hpp: units, defaults, ranges)
