@@ -3,11 +3,11 @@
 //
 // The meter-out cylinder measured with a 16 mm rod where the netlist says
 // 12 mm (no component declares a wrong rod): the verdict leaves a gap, and
-// the search over the balances predicts that a disturbance of the valve's
-// spool would remove much of it. Simulated whole, that linear fit drives the
-// spool past its end (the solver stops shortly after the valve opens); a
-// shorter step runs. report.json must carry the solver's reason, not a
-// bare "failed".
+// the search over the balances predicts that disturbances of the load's
+// force balance and of the lines' and chambers' gas would remove much of
+// it. Simulated whole, a linear fit of a gas's energy drives the model out
+// of its domain (the solver stops); a shorter step runs. report.json must
+// carry the solver's reason, not a bare "failed".
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -16,6 +16,7 @@
 #include <sstream>
 #include <string>
 
+#include "framework/core/units.hpp"
 #include "framework/io/results.hpp"
 #include "tests/test_support.hpp"
 
@@ -36,13 +37,17 @@ void make_run(const TempDir& dir, const std::string& name, const std::string& ro
   const ResultsTable t = read_csv(sim);
   std::mt19937 gen(seed);
   std::normal_distribution<double> n(0.0, 1.0);
+  // The file shows each column in the netlist's display unit (mm, bar g):
+  // the runs keep that unit in their header, the noise (0.02 mm, 2 kPa) is
+  // scaled into it.
   const int x = t.column("x"), pc = t.column("p_cap"), pr = t.column("p_rod");
+  const auto sd = [&](int col, double si) { return si / units::parse_unit(t.units[col]).scale; };
   std::ostringstream csv;
-  csv << "t [s],x [m],p_cap [Pa],p_rod [Pa]\n";
+  csv << "t [s],x [" << t.units[x] << "],p_cap [" << t.units[pc] << "],p_rod [" << t.units[pr] << "]\n";
   csv.precision(10);
   for (const auto& row : t.rows)
-    csv << row[0] << "," << row[x] + 2e-5 * n(gen) << "," << row[pc] + 2e3 * n(gen) << "," << row[pr] + 2e3 * n(gen)
-        << "\n";
+    csv << row[0] << "," << row[x] + sd(x, 2e-5) * n(gen) << "," << row[pc] + sd(pc, 2e3) * n(gen) << ","
+        << row[pr] + sd(pr, 2e3) * n(gen) << "\n";
   std::filesystem::create_directories(dir.path() / "runs");
   std::ofstream(dir.path() / "runs" / (name + ".csv")) << csv.str();
   std::ofstream(dir.path() / "runs" / (name + ".yaml"))
@@ -80,7 +85,7 @@ TEST(UnexplainedFailureReason, ABalanceWhoseSimulationFailsCarriesTheSolversReas
     }
   }
   EXPECT_GE(confirmed, 3) << json;
-  EXPECT_GE(failures, 1) << json;  // the spool's disturbance (see the file's comment)
+  EXPECT_GE(failures, 1) << json;  // a gas's energy fitted whole (see the file's comment)
 }
 
 }  // namespace
