@@ -56,18 +56,23 @@ simulation: {t_end: 20 s, output_interval: 0.5 s, rtol: 1e-8}
   }
 }
 
-// A closed tank whose energy balance gets a piecewise-linear heat input
-// (ramp up over 0.2 s, hold): p rises by (kappa - 1) / V times its integral.
-TEST(Disturbance, PiecewiseLinearHeatIntoAClosedTank) {
-  const std::string text = R"(
+// A 1 L tank at 2 bar, 300 K, shut off from the atmosphere, run for 0.5 s
+// (`extra`: more simulation settings).
+std::string closed_tank(const std::string& extra) {
+  return R"(
 components:
   tank: {type: volume, V: 1 L, p0: 2 bar, T0: 300 K}
   shut: {type: iso6358_throttle, C: 0, b: 0.3}
   air: {type: atmosphere}
 connections: [[tank.port, shut.a], [shut.b, air.port]]
 outputs: {p: tank.p}
-simulation: {t_end: 0.5 s, output_interval: 10 ms}
-)";
+simulation: {t_end: 0.5 s, output_interval: 10 ms)" + extra + "}\n";
+}
+
+// A closed tank whose energy balance gets a piecewise-linear heat input
+// (ramp up over 0.2 s, hold): p rises by (kappa - 1) / V times its integral.
+TEST(Disturbance, PiecewiseLinearHeatIntoAClosedTank) {
+  const std::string text = closed_tank("");
   const double q = 50;  // W after the ramp
   const RunResult r = run_disturbed(text, {Disturbance{"tank.U", {0.0, 0.2}, {0.0, q}}});
   const double kappa = 1.4, V = 1e-3;
@@ -85,15 +90,7 @@ simulation: {t_end: 0.5 s, output_interval: 10 ms}
 // r = 2 /s on held(t) falling from 500 to 250 J over 0.5 s puts in
 // r (500 t - 250 t^2) J.
 TEST(Disturbance, AWithdrawalNeverTakesMoreThanTheStateHeldAndARatePerHeldFollowsIt) {
-  const std::string text = R"(
-components:
-  tank: {type: volume, V: 1 L, p0: 2 bar, T0: 300 K}
-  shut: {type: iso6358_throttle, C: 0, b: 0.3}
-  air: {type: atmosphere}
-connections: [[tank.port, shut.a], [shut.b, air.port]]
-outputs: {p: tank.p}
-simulation: {t_end: 0.5 s, output_interval: 10 ms, rtol: 1e-8}
-)";
+  const std::string text = closed_tank(", rtol: 1e-8");
   const double p0 = 2e5, U0 = 500, q = 2000;
   Disturbance out{"tank.U", {0.0}, {-q}};
   out.held_t = {0.0, 0.5}, out.held = {U0, U0};
