@@ -278,10 +278,12 @@ class Search {
     return cands;
   }
 
-  // A state's fitted disturbance on used run q.
-  Disturbance disturbance_of(const Candidate& c, std::size_t q) const {
+  // A state's disturbance on used run q with coefficients `coef` (by
+  // default its fit).
+  Disturbance disturbance_of(const Candidate& c, std::size_t q, const Eigen::VectorXd* coef = nullptr) const {
+    const Eigen::VectorXd& k = coef ? *coef : c.c[q];
     std::vector<double> rate(kDisturbanceKnots);
-    for (int j = 0; j < kDisturbanceKnots; ++j) rate[j] = c.c[q][j] * c.scale[q];
+    for (int j = 0; j < kDisturbanceKnots; ++j) rate[j] = k[j] * c.scale[q];
     return disturbance(c, q, std::move(rate));
   }
 
@@ -300,10 +302,10 @@ class Search {
   }
 
   struct Trial {
-    bool ran = false;
     double ssr = 0;
     std::vector<Eigen::VectorXd> r;  // per used run
     std::string why;                 // of the first run that failed
+    bool ran() const { return why.empty(); }
   };
 
   Trial simulate_fit(const Candidate& c, const std::vector<Eigen::VectorXd>& coef) {
@@ -312,15 +314,12 @@ class Search {
     t.r.resize(nr);
     std::vector<std::string> why(nr);
     parallel_for(static_cast<long>(nr), opt_.threads, [&](int, long q) {
-      std::vector<double> rate(kDisturbanceKnots);
-      for (int j = 0; j < kDisturbanceKnots; ++j) rate[j] = coef[q][j] * c.scale[q];
-      const auto sim = in_.simulate(used[q], {disturbance(c, q, std::move(rate))}, &why[q]);
+      const auto sim = in_.simulate(used[q], {disturbance_of(c, q, &coef[q])}, &why[q]);
       ++simulations;
       if (!sim.empty()) t.r[q] = residual(used[q], sim);
     });
     for (std::size_t q = 0; q < nr && t.why.empty(); ++q)
       if (t.r[q].size() == 0) t.why = "run " + runs_[used[q]].name + ": " + why[q];
-    t.ran = t.why.empty();
     for (const auto& r : t.r) t.ssr += r.squaredNorm();
     return t;
   }
@@ -337,18 +336,18 @@ class Search {
       std::vector<Eigen::VectorXd> next(nr);
       for (std::size_t q = 0; q < nr; ++q) next[q] = at[q] + step * (target[q] - at[q]);
       Trial t = simulate_fit(c, next);
-      ran = ran || t.ran;
-      if (t.ran && t.ssr < ssr) {
+      ran = ran || t.ran();
+      if (t.ran() && t.ssr < ssr) {
         if (accepted++ == 0) c.finding.share = step;
         at = std::move(next), ssr = t.ssr;
         for (std::size_t q = 0; q < nr; ++q) target[q] = chord_target(c, q, t.r[q], at[q]);
         step = std::min(1.0, 2 * step);
         continue;
       }
-      if (!t.ran && c.finding.longer_step_failed.empty()) c.finding.longer_step_failed = t.why;
+      if (!t.ran() && c.finding.longer_step_failed.empty()) c.finding.longer_step_failed = t.why;
       if (in_.log)
         in_.log("  " + c.finding.balance + ": a step of " + rounded(100 * step, 2) + " % toward the fit " +
-                (t.ran ? "lowers no gap" : "leaves the model's domain (" + t.why + ")") + "; a quarter of it next");
+                (t.ran() ? "lowers no gap" : "leaves the model's domain (" + t.why + ")") + "; a quarter of it next");
       step /= 4;
     }
     c.finding.confirmed = ran;
