@@ -141,6 +141,28 @@ TEST(DiagnoseRanking, ATinyGainNeverOutranksALargeOne) {
   EXPECT_EQ(r[1].rank, 1);
 }
 
+TEST(DiagnoseRanking, AmongFitsWithinTheNoiseTheLikelierRanksFirst) {
+  // A check valve's leak and a rod-seal leak both take a gap of 9.7 to the
+  // noise (0.99, 0.94): the excess removed is all of it for both, and the
+  // one whose whitened likelihood is higher comes first, whichever the
+  // circuit declared first.
+  auto effect = [](const std::string& name, double after, double dbic) {
+    EffectResult e;
+    e.name = name;
+    e.gap_before = 9.72;
+    e.gap_after = after;
+    e.delta_bic = dbic;
+    e.significant = true;
+    return e;
+  };
+  std::vector<EffectResult> r = {effect("check_leak", 0.99, 9805), effect("rod_seal_leak", 0.94, 11352),
+                                 effect("partial", 1.5, 20000)};
+  const auto order = rank_effects(r);
+  EXPECT_EQ(r[order[0]].name, "rod_seal_leak");
+  EXPECT_EQ(r[order[1]].name, "check_leak");
+  EXPECT_EQ(r[order[2]].name, "partial");  // leaves some excess: after both, whatever its likelihood
+}
+
 TEST(DiagnoseRanking, PracticalSignificanceIsCountedInNoiseUnits) {
   DiagnoseOptions opt;  // noise sigma uncertain by 10 %: a mean square is uncertain by 21 %
   // x 14 noise sd -> 8: removes 132 noise variances (67 % of the mean

@@ -52,7 +52,11 @@ std::vector<int> rank_effects(std::vector<EffectResult>& results) {
     // no fit: its gap is a sentinel's, ranked after every fit that ran.
     if ((A.failed_validation_runs > 0) != (B.failed_validation_runs > 0)) return A.failed_validation_runs == 0;
     if (A.significant != B.significant) return A.significant;
-    return excess_reduction(A.gap_before, A.gap_after) > excess_reduction(B.gap_before, B.gap_after);
+    const double ra = excess_reduction(A.gap_before, A.gap_after), rb = excess_reduction(B.gap_before, B.gap_after);
+    // Two that each bring the gap within the noise remove all of its excess:
+    // the likelihood, not the order the candidates were declared in, decides.
+    if (ra != rb) return ra > rb;
+    return A.delta_bic > B.delta_bic;
   });
   for (std::size_t q = 0; q < order.size(); ++q) results[order[q]].rank = static_cast<int>(q) + 1;
   return order;
