@@ -119,20 +119,22 @@ GapTable gaps(double total, double x) {  // a validation gap table: the total an
   return g;
 }
 
+// An effect's result as the ranking sees it: validation gaps, dBIC, gate.
+EffectResult ranked(const std::string& name, double before, double after, double dbic, bool significant) {
+  EffectResult e;
+  e.name = name;
+  e.gap_before = before;
+  e.gap_after = after;
+  e.delta_bic = dbic;
+  e.significant = significant;
+  return e;
+}
+
 TEST(DiagnoseRanking, ATinyGainNeverOutranksALargeOne) {
   // The likelihood ratio on a strongly autocorrelated residual can be huge
   // for an effect that barely changes it: it gates, it does not order.
-  auto effect = [](const std::string& name, double after, double dbic, bool significant) {
-    EffectResult e;
-    e.name = name;
-    e.gap_before = 10.0;
-    e.gap_after = after;
-    e.delta_bic = dbic;
-    e.significant = significant;
-    return e;
-  };
-  std::vector<EffectResult> r = {effect("tiny", 9.9, 5000, true), effect("large", 2.35, 40, true),
-                                 effect("insignificant", 1.0, 2, false)};
+  std::vector<EffectResult> r = {ranked("tiny", 10, 9.9, 5000, true), ranked("large", 10, 2.35, 40, true),
+                                 ranked("insignificant", 10, 1.0, 2, false)};
   const auto order = rank_effects(r);
   ASSERT_EQ(order.size(), 3u);
   EXPECT_EQ(r[order[0]].name, "large");
@@ -146,17 +148,9 @@ TEST(DiagnoseRanking, AmongFitsWithinTheNoiseTheLikelierRanksFirst) {
   // noise (0.99, 0.94): the excess removed is all of it for both, and the
   // one whose whitened likelihood is higher comes first, whichever the
   // circuit declared first.
-  auto effect = [](const std::string& name, double after, double dbic) {
-    EffectResult e;
-    e.name = name;
-    e.gap_before = 9.72;
-    e.gap_after = after;
-    e.delta_bic = dbic;
-    e.significant = true;
-    return e;
-  };
-  std::vector<EffectResult> r = {effect("check_leak", 0.99, 9805), effect("rod_seal_leak", 0.94, 11352),
-                                 effect("partial", 1.5, 20000)};
+  std::vector<EffectResult> r = {ranked("check_leak", 9.72, 0.99, 9805, true),
+                                 ranked("rod_seal_leak", 9.72, 0.94, 11352, true),
+                                 ranked("partial", 9.72, 1.5, 20000, true)};
   const auto order = rank_effects(r);
   EXPECT_EQ(r[order[0]].name, "rod_seal_leak");
   EXPECT_EQ(r[order[1]].name, "check_leak");
