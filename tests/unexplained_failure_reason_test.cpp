@@ -7,10 +7,7 @@
 // force balance and of the lines' and chambers' gas would remove much of
 // it. Simulated whole, a linear fit of a gas's energy drives the model out
 // of its domain (the solver stops); a shorter step runs. report.json must
-// carry the solver's reason, not a bare "failed". The candidates are the
-// cylinder's faults (--faults cyl): with the valve's too, a late release
-// stands in for more of the gap and leaves a rest no balance fit leaves
-// the domain on.
+// carry the solver's reason, not a bare "failed".
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -64,7 +61,7 @@ TEST(UnexplainedFailureReason, ABalanceWhoseSimulationFailsCarriesTheSolversReas
   make_run(dir, "p6", "validation", "6 bar g", 3);
   const auto out = (dir.path() / "report").string();
   const auto [rc, text] =
-      run_cli("diagnose '" + kNet + "' --runs '" + (dir.path() / "runs").string() + "' --out '" + out + "' --faults cyl -q");
+      run_cli("diagnose '" + kNet + "' --runs '" + (dir.path() / "runs").string() + "' --out '" + out + "' -q");
   ASSERT_EQ(rc, 0) << text;
   const std::string json = test_support::read_file(std::filesystem::path(out) / "report.json");
   // Every balance line: confirmed by a simulation that ran, or its failure

@@ -484,17 +484,6 @@ class Diagnosis {
     return n;
   }
 
-  // The gate on validation runs: the whitened likelihood ratio, or - when
-  // the residual is model error rather than noise, so that its AR(p) is the
-  // error's own course and a better level (a friction band that widens with
-  // pressure) is whitened down to the few samples where the model's form is
-  // wrong (the reversals) - the fit made on the calibration runs alone
-  // halves the mean square gap on every validation run it never saw, which
-  // chance and a fit to noise do not do.
-  bool evident(const Engine::Significance& s) const {
-    return s.delta_bic > opt_.significance_bic || s.worst_run_ratio <= opt_.out_of_sample_ratio;
-  }
-
   void judge(EffectResult& er, const Engine::Fit& f, const std::vector<double>& r_val) const {
     er.values = f.effects[0].values;
     er.fit_evaluations = f.evaluations;
@@ -506,11 +495,9 @@ class Diagnosis {
     er.delta_bic = s.delta_bic;
     er.p_value = s.p;
     er.n_eff = s.n_eff;
-    er.significant = er.failed_validation_runs == 0 && evident(s) &&
+    er.significant = er.failed_validation_runs == 0 && s.delta_bic > opt_.significance_bic &&
                      !explains_the_data(rep_.validation_before, opt_) &&
                      practically_significant(rep_.validation_before, er.validation_after, opt_);
-    er.worst_run_ratio = s.worst_run_ratio;
-    er.out_of_sample = er.significant && s.delta_bic <= opt_.significance_bic;
   }
 
   // Groups: effects the data cannot tell apart - near-collinear improvements
@@ -684,7 +671,7 @@ class Diagnosis {
           (practical ? ", removes enough of the gap of " + why : ", not practically significant"));
       if (failed_runs_in(st.r_val) > 0)
         log("    the solver fails on a validation run with it: not a fit");
-      else if (evident(s) && practical && adds_its_own(st))
+      else if (s.delta_bic > opt_.significance_bic && practical && adds_its_own(st))
         passed.push_back(std::move(st));
     }
     if (passed.empty()) return false;
@@ -724,7 +711,7 @@ class Diagnosis {
       without[i].values = null;
       const auto r_without = eng_.residuals({eng_.model(without)}, val_)[0];
       const auto s = eng_.significance(r_without, r_val_cur_, val_, static_cast<int>(null.size()));
-      if (failed_runs_in(r_without) > 0 || evident(s)) {
+      if (failed_runs_in(r_without) > 0 || s.delta_bic > opt_.significance_bic) {
         ++i;
         continue;
       }
@@ -756,9 +743,9 @@ class Diagnosis {
     without.back().values = null;
     const auto r_without = eng_.residuals({eng_.model(without)}, val_)[0];
     const auto s = eng_.significance(r_without, st.r_val, val_, static_cast<int>(null.size()));
-    if (!evident(s))
+    if (s.delta_bic <= opt_.significance_bic)
       log(fmt("    its own share is not significant (dBIC %.3g against it at its null): not added", s.delta_bic));
-    return evident(s);
+    return s.delta_bic > opt_.significance_bic;
   }
 
   // Decimated traces of every validation run, measured against before and after.

@@ -88,9 +88,6 @@ struct DiagnoseOptions {
   // after AR(p) whitening (each signal of each run its own series, p <= 5
   // by BIC) minus a BIC penalty k ln(n) above this ("strong" evidence).
   double significance_bic = 6.0;
-  // ... or, out of sample: every validation run keeps at most this share of
-  // its mean square gap (framework/diagnose/diagnose.cpp, evident()).
-  double out_of_sample_ratio = 0.5;
   double group_cosine = 0.9;  // grouped: improvements at least this collinear, neither fit practically better
   // Practical significance in noise units (framework/diagnose/ranking.hpp),
   // because a model-form mismatch of the right effect leaves residual
@@ -145,9 +142,7 @@ struct EffectResult {
   double gap_before = 0, gap_after = 0;  // validation, normalised RMS
   GapTable validation_after;
   double lr_eff = 0, delta_bic = 0, p_value = 1, n_eff = 0;  // whitened LR, whitened samples
-  double worst_run_ratio = 1;  // the largest share of a validation run's mean square gap it keeps
   bool significant = false;
-  bool out_of_sample = false;  // significant by that share alone, not by the whitened ratio
   int rank = 0;              // 1 = best; 0 = not ranked (unavailable)
   std::vector<std::string> group;  // effects the data cannot tell apart from this one
   int fit_evaluations = 0;

@@ -238,19 +238,11 @@ GapTable Engine::gaps(const std::vector<double>& r, const Layout& L) const {
 Engine::Significance Engine::significance(const std::vector<double>& r0, const std::vector<double>& r1,
                                           const Layout& L, int added_parameters) const {
   Significance s;
-  std::map<int, std::pair<double, double>> ssr;  // per run: SSR0, SSR1
   for (const auto& seg : L.segments) {
     double m = 0;
     s.lr += whitened_log_ratio(&r0[seg.offset], &r1[seg.offset], seg.n, &m);
     s.n_eff += m;
-    for (std::size_t i = seg.offset; i < seg.offset + seg.n; ++i) {
-      ssr[seg.run].first += r0[i] * r0[i];
-      ssr[seg.run].second += r1[i] * r1[i];
-    }
   }
-  double worst = 0;
-  for (const auto& [run, q] : ssr) worst = std::max(worst, q.first > 0 ? q.second / q.first : 1.0);
-  if (!ssr.empty()) s.worst_run_ratio = worst;
   s.delta_bic = s.lr - added_parameters * std::log(std::max(2.0, s.n_eff));
   // A switch without free parameters (k = 0) has no chi-square reference.
   s.p = s.lr <= 0 ? 1.0 : added_parameters > 0 ? gamma_q(0.5 * added_parameters, 0.5 * s.lr) : NAN;

@@ -79,12 +79,10 @@ class Engine {
 
   struct Significance {
     double lr = 0, n_eff = 0, delta_bic = 0, p = 1;
-    double worst_run_ratio = 1;  // the largest of each run's SSR1 / SSR0 (all its signals)
   };
   // Likelihood ratio of model 1 over model 0 after whitening both residual
   // series with the AR(p) model of model 1's (each signal of each run its
-  // own series), less a BIC penalty per added parameter; and how much of
-  // its mean square the run model 1 helps least keeps.
+  // own series), less a BIC penalty per added parameter.
   Significance significance(const std::vector<double>& r0, const std::vector<double>& r1, const Layout& L,
                             int added_parameters) const;
 

@@ -350,8 +350,7 @@ void write_report_json(const DiagnosisReport& r, const std::string& path) {
       << ", \"screening_improvement\": " << num(e.screening_improvement) << ", \"significance\": {\"significant\": "
       << (e.significant ? "true" : "false") << ", \"lr_effective\": " << num(e.lr_eff)
       << ", \"n_effective\": " << num(e.n_eff) << ", \"delta_bic\": " << num(e.delta_bic)
-      << ", \"p_value\": " << num(e.p_value) << ", \"worst_run_ratio\": " << num(e.worst_run_ratio)
-      << ", \"out_of_sample\": " << (e.out_of_sample ? "true" : "false") << "}, \"group\": [";
+      << ", \"p_value\": " << num(e.p_value) << "}, \"group\": [";
     for (std::size_t j = 0; j < e.group.size(); ++j) o << (j ? ", " : "") << str(e.group[j]);
     o << "]";
     if (e.failed_runs) {
@@ -522,8 +521,7 @@ void ranking_section(std::ostream& o, const DiagnosisReport& r) {
         << html(from_netlist(e.values[j], e.netlist_value, e.parameter_units[j])) << "<br>";
     o << "</td><td>" << gap(e.gap_before) << "</td><td>" << (fitted ? gap(e.gap_after) : "") << "</td><td>"
       << (fitted ? fixed(std::round(e.delta_bic), 0) : "") << "</td><td>" << (fitted ? p_value(e.p_value) : "")
-      << "</td><td>" << (e.out_of_sample ? "yes, out of sample" : e.significant ? "yes" : "no")
-      << "</td><td class=\"l w\">";
+      << "</td><td>" << (e.significant ? "yes" : "no") << "</td><td class=\"l w\">";
     for (const auto& g : e.group) o << html(g) << " ";
     o << "</td></tr>\n";
   }
