@@ -28,33 +28,56 @@ void System::block_inputs(double t, const double*& y, const double*& yp, bool re
   yp = work_.yp.data();
 }
 
-bool System::expand(double t, const double* y, const double* yp) const {
-  for (int i = 0; i < n_; ++i) work_.yp[plan_.ida_to_m[i]] = yp[i];
-  if (work_.cache_valid && t == work_.cache_t && std::equal(y, y + n_, work_.cache_y.begin())) return work_.cache_invalid;
-  for (int i = 0; i < n_; ++i) work_.y[plan_.ida_to_m[i]] = y[i];
+void System::load_states(const double* y, const double* yp) const {
+  for (int i = 0; i < n_; ++i) {
+    work_.y[plan_.ida_to_m[i]] = y[i];
+    work_.yp[plan_.ida_to_m[i]] = yp[i];
+  }
   // Each explicit unknown is solved from its start value, not from the last
   // call's: the result is then a function of (t, y) alone, without rounding
   // noise from the call history (which stalled IDA's initialisation Newton
   // at rtol 1e-9); a start value also keeps blocks that read an unknown
   // before its level from seeing zero pressures.
   for (const auto& x : plan_.unknowns) work_.y[x.var] = plan_.m_start[x.var];
-  bool invalid = false;
-  EvalContext ctx{&circuit_.gas, modes_.data(), &invalid};
+}
+
+void System::solve_stage(double t, const Stage& stage, const EvalContext& ctx) const {
   double ly[kMaxLocal], lyp[kMaxLocal];
-  for (const auto& stage : plan_.stages)
-    for (const auto& [bi, list] : stage) {
-      const Block& b = *blocks_[bi];
-      gather(b, work_.y.data(), work_.yp.data(), ly, lyp);
-      b.residual(t, ly, lyp, work_.F_full.data() + b.row0, ctx);
-      for (int e : list) {
-        const auto& x = plan_.unknowns[e];
-        work_.y[x.var] -= work_.F_full[x.row] / x.coef;
-      }
+  for (const auto& [bi, list] : stage) {
+    const Block& b = *blocks_[bi];
+    gather(b, work_.y.data(), work_.yp.data(), ly, lyp);
+    b.residual(t, ly, lyp, work_.F_full.data() + b.row0, ctx);
+    for (int e : list) {
+      const auto& x = plan_.unknowns[e];
+      work_.y[x.var] -= work_.F_full[x.row] / x.coef;
     }
+  }
+}
+
+bool System::expand(double t, const double* y, const double* yp) const {
+  if (work_.cache_valid && t == work_.cache_t && std::equal(y, y + n_, work_.cache_y.begin())) {
+    for (int i = 0; i < n_; ++i) work_.yp[plan_.ida_to_m[i]] = yp[i];
+    return work_.cache_invalid;
+  }
+  load_states(y, yp);
+  bool invalid = false;
+  const EvalContext ctx{&circuit_.gas, modes_.data(), &invalid};
+  for (const auto& stage : plan_.stages) solve_stage(t, stage, ctx);
   std::copy_n(y, n_, work_.cache_y.begin());
   work_.cache_t = t;
   work_.cache_valid = true;
   work_.cache_invalid = invalid;
+  return invalid;
+}
+
+bool System::expand_part(double t, const double* y, const double* yp, const Stage& part) const {
+  // The whole expansion at this point is at hand: it holds the part's values.
+  if (work_.cache_valid && t == work_.cache_t && std::equal(y, y + n_, work_.cache_y.begin())) return expand(t, y, yp);
+  load_states(y, yp);
+  bool invalid = false;
+  const EvalContext ctx{&circuit_.gas, modes_.data(), &invalid};
+  solve_stage(t, part, ctx);
+  work_.cache_valid = false;  // the unknowns outside the part keep their start values
   return invalid;
 }
 

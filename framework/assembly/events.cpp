@@ -19,7 +19,13 @@ void System::reset_modes() {
 }
 
 void System::roots(double t, const double* y, const double* yp, double* g) const {
-  block_inputs(t, y, yp, plan_.any_roots_read_explicit);
+  if (plan_.any_roots_read_explicit) {
+    expand_part(t, y, yp, plan_.root_stages);
+    y = work_.y.data();
+    yp = work_.yp.data();
+  } else {
+    block_inputs(t, y, yp, false);
+  }
   bool invalid = false;
   double ly[kMaxLocal], lyp[kMaxLocal];
   for (int bi : root_blocks_) {

@@ -1,5 +1,7 @@
 #include <algorithm>
 #include <cmath>
+#include <iterator>
+#include <limits>
 #include <map>
 #include <numeric>
 #include <random>
@@ -362,28 +364,63 @@ void System::plan_stages(const ExplicitRows& rows, const ExplicitOrder& o) {
     if (keeps[bi]) plan_.final_blocks.push_back(static_cast<int>(bi));
 }
 
-// Root functions usually read a position or a time only. Evaluated with
-// every explicit unknown set to NaN at three points, a block whose roots
-// stay finite does not read them: IDA's root checks (one per step and per
-// output) then skip expand().
+// Root functions usually read a position, a time or a command. IDA's root
+// checks (one per step and per output) solve only the explicit unknowns
+// they read, with those these depend on (plan_.root_stages): a valve's
+// command, not the circuit's flows; none, and no expand(), when roots read
+// states alone.
 void System::find_root_inputs() {
+  std::vector<char> needed(plan_.unknowns.size(), 0);
+  std::vector<int> work;
+  for (std::size_t bi = 0; bi < blocks_.size(); ++bi)
+    for (int e : explicit_root_inputs(*blocks_[bi]))
+      if (!needed[e]) {
+        needed[e] = 1;
+        work.push_back(e);
+      }
+  plan_.any_roots_read_explicit = !work.empty();
+  while (!work.empty()) {
+    const int e = work.back();
+    work.pop_back();
+    for (int v : plan_.unknowns[e].deps) {
+      const int d = plan_.of_m[v];
+      if (d >= 0 && !needed[d]) {
+        needed[d] = 1;
+        work.push_back(d);
+      }
+    }
+  }
+  plan_.root_stages.clear();
+  for (const auto& stage : plan_.stages)
+    for (const auto& [bi, list] : stage) {
+      std::vector<int> part;
+      std::copy_if(list.begin(), list.end(), std::back_inserter(part), [&](int e) { return needed[e] != 0; });
+      if (!part.empty()) plan_.root_stages.push_back({bi, std::move(part)});
+    }
+}
+
+std::vector<int> System::explicit_root_inputs(const Block& b) const {
+  std::vector<int> out;
+  if (!b.component || b.component->info().roots == 0) return out;
   bool invalid = false;
-  plan_.roots_read_explicit.assign(blocks_.size(), 0);
-  for (std::size_t bi = 0; bi < blocks_.size(); ++bi) {
-    const Block& b = *blocks_[bi];
-    if (!b.component || b.component->info().roots == 0) continue;
-    std::mt19937 rng2(13579);
-    std::vector<double> g(b.component->info().roots);
-    double ly[kMaxLocal], lyp[kMaxLocal];
-    for (int pass = 0; pass < 3 && !plan_.roots_read_explicit[bi]; ++pass) {
-      poisoned_locals(b, pass, rng2, true, false, ly, lyp);
+  std::vector<double> g(b.component->info().roots);
+  double ly[kMaxLocal], lyp[kMaxLocal];
+  for (std::size_t i = 0; i < b.vars.size(); ++i) {
+    const int v = b.vars[i];
+    if (v < 0 || plan_.of_m[v] < 0) continue;
+    std::mt19937 rng(13579);
+    bool reads = false;
+    for (int pass = 0; pass < 3 && !reads; ++pass) {
+      poisoned_locals(b, pass, rng, false, false, ly, lyp);
+      ly[i] = std::numeric_limits<double>::quiet_NaN();
       Eval<double> e(*b.component, 0.1 * pass, ly, lyp, modes_.data() + b.mode0, b.connected.get(), circuit_.gas,
                      &invalid);
       b.component->roots(e, g.data());
-      for (double x : g) plan_.roots_read_explicit[bi] |= !std::isfinite(x);
+      for (double x : g) reads |= !std::isfinite(x);
     }
-    plan_.any_roots_read_explicit |= plan_.roots_read_explicit[bi] != 0;
+    if (reads) out.push_back(plan_.of_m[v]);
   }
+  return out;
 }
 
 void System::verify_explicit(int block, double t) const {

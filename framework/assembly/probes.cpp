@@ -22,13 +22,20 @@ void System::poisoned_locals(const Block& b, int pass, std::mt19937& rng, bool n
   }
 }
 
+namespace {
+
+// A local-variable probe's value from the unknowns the blocks read.
+double local_value(const Block& b, const Probe& p, const double* y) {
+  const int g = b.vars[p.index];
+  return g >= 0 ? b.scale[p.index] * y[g] : b.offset[p.index];
+}
+
+}  // namespace
+
 double System::probe(const Probe& p, double t, const double* y, const double* yp) const {
   block_inputs(t, y, yp);
   const Block& b = *blocks_[p.component];  // component blocks come first, in order
-  if (p.kind == Probe::Kind::local) {
-    const int g = b.vars[p.index];
-    return g >= 0 ? b.scale[p.index] * y[g] : b.offset[p.index];
-  }
+  if (p.kind == Probe::Kind::local) return local_value(b, p, y);
   double ly[kMaxLocal], lyp[kMaxLocal];
   gather(b, y, yp, ly, lyp);
   bool invalid = false;
@@ -88,8 +95,11 @@ ProbeSet System::probe_set(const std::vector<Probe>& probes) const {
 }
 
 void System::probe_all(const ProbeSet& set, double t, const double* y, const double* yp, double* out) const {
-  for (std::size_t i = 0; i < set.locals.size(); ++i) out[set.local_slots[i]] = probe(set.locals[i], t, y, yp);
+  // Locals too read the inputs expanded only if some probe of the set needs
+  // the explicit unknowns: a state read alone costs no explicit solve.
   block_inputs(t, y, yp, set.reads_explicit);
+  for (std::size_t i = 0; i < set.locals.size(); ++i)
+    out[set.local_slots[i]] = local_value(*blocks_[set.locals[i].component], set.locals[i], y);
   double ly[kMaxLocal], lyp[kMaxLocal];
   bool invalid = false;
   for (const auto& g : set.groups) {

@@ -204,6 +204,10 @@ class System {
   void probe_all(const ProbeSet& set, double t, const double* y, const double* yp, double* out) const;
 
  private:
+  // Explicit unknowns solved together: (block, indices into
+  // ExplicitPlan::unknowns the block's rows give), in level order.
+  using Stage = std::vector<std::pair<int, std::vector<int>>>;
+
   // The structure (structure.cpp).
   void build_nodes();
   int new_var(std::string name, double start, unsigned char kind, double nominal);
@@ -236,6 +240,10 @@ class System {
                                     const std::vector<int>& ida_row_of_m);
   void plan_stages(const ExplicitRows& rows, const ExplicitOrder& o);
   void find_root_inputs();
+  // The explicit unknowns (indices into plan_.unknowns) block b's root
+  // functions read: each of its explicit locals set to NaN in turn, at the
+  // start values and two perturbations, the roots stay finite if not.
+  std::vector<int> explicit_root_inputs(const Block& b) const;
   // After an event changed the modes of a component that gives explicit
   // unknowns: its rows must still give them linearly, with the same
   // coefficient and no new dependencies (throws otherwise).
@@ -247,6 +255,15 @@ class System {
   // unknowns into work_.y/yp (cached for the last t and y). Returns true if a
   // component rejected the point.
   bool expand(double t, const double* y, const double* yp) const;
+  // Only the explicit unknowns of `part` (a subset of the stages closed
+  // under their dependencies) from IDA's y, the others at their start
+  // values; no cache. Returns true if a component rejected the point.
+  bool expand_part(double t, const double* y, const double* yp, const Stage& part) const;
+  // IDA's y and y' into the m-level unknowns, the explicit ones at their
+  // start values (from which expand() and expand_part() solve them).
+  void load_states(const double* y, const double* yp) const;
+  // One stage's blocks evaluated and their unknowns solved into work_.y.
+  void solve_stage(double t, const Stage& stage, const EvalContext& ctx) const;
   // Points y and yp at the unknowns the blocks read: expanded, or with
   // `read_explicit` false the states alone (the explicit unknowns then keep
   // stale values the caller promises not to read). Unchanged without
@@ -316,7 +333,7 @@ class System {
     std::vector<int> of_m;                  // m-level unknown -> index in unknowns or -1
     std::vector<int> ida_to_m, m_to_ida;    // IDA unknown <-> m-level unknown (-1: explicit)
     std::vector<int> ida_row_of_full;       // full row -> IDA row, -1 if eliminated
-    std::vector<std::vector<std::pair<int, std::vector<int>>>> stages;  // per level: (block, unknowns' indices)
+    std::vector<Stage> stages;              // per level
     std::vector<int> final_blocks;          // blocks evaluated for IDA's rows (and the alias checks)
     std::vector<std::pair<int, int>> kept_full_rows;  // (full row, IDA row) of IDA's rows
     std::vector<double> m_start;
@@ -324,10 +341,12 @@ class System {
     std::vector<long> j1_col_ptr, j1_row_idx;  // the m-level Jacobian's pattern
     std::vector<int> d_cols;
     std::vector<KeptRow> kept_rows;
-    // Blocks whose root functions read explicit unknowns (the others are
-    // evaluated on the states alone, without expand()).
-    std::vector<char> roots_read_explicit;
+    // Whether some root function reads explicit unknowns (else roots are
+    // evaluated on the states alone), and the part of the stages that solves
+    // those unknowns and the ones they depend on, in level order: root
+    // checks run it, not the whole expand().
     bool any_roots_read_explicit = false;
+    Stage root_stages;
   } plan_;
 
   // The evaluator's scratch and its cache of the last expansion
