@@ -73,6 +73,7 @@ Figure measure(const Netlist& nl, Mode mode, int threads, int runs) {
     const double c0 = process_cpu_ms();
     SolverOptions opt = solver_options(nl.simulation);
     opt.threads = threads;
+    opt.time_phases = true;  // the cost breakdown below
     RunResult run;
     if (mode == Mode::parts) {
       run = run_circuit(elaborate(nl, builtin_registry()), opt);

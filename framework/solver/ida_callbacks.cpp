@@ -68,20 +68,18 @@ int fresh_matrix(UserData& u, double t, double cj, N_Vector y, N_Vector yp, doub
 int residual_cb(realtype t_ida, N_Vector y, N_Vector yp, N_Vector rr, void* user) {
   auto* u = static_cast<UserData*>(user);
   const double t = u->model_t(t_ida);
-  const auto start = std::chrono::steady_clock::now();
-  const int flag = guarded(u, [&] {
+  const PhaseTimer timer(u->time_phases, u->seconds_residual);
+  return guarded(u, [&] {
     return u->system->residual(t, u->physical_y(y), u->disturbed_yp(t, y, yp), N_VGetArrayPointer(rr));
   });
-  u->seconds_residual += seconds_since(start);
-  return flag;
 }
 
 int jacobian_cb(realtype t_ida, realtype cj, N_Vector y, N_Vector yp, N_Vector, SUNMatrix J, void* user, N_Vector,
                 N_Vector, N_Vector) {
   auto* u = static_cast<UserData*>(user);
   const double t = u->model_t(t_ida);
-  const auto start = std::chrono::steady_clock::now();
-  const int flag = guarded(u, [&] {
+  const PhaseTimer timer(u->time_phases, u->seconds_jacobian);
+  return guarded(u, [&] {
     // IDA zeroes the matrix (structure included) before each call.
     std::memcpy(SUNSparseMatrix_IndexPointers(J), u->col_ptr.data(), u->col_ptr.size() * sizeof(sunindextype));
     std::memcpy(SUNSparseMatrix_IndexValues(J), u->row_idx.data(), u->row_idx.size() * sizeof(sunindextype));
@@ -99,8 +97,6 @@ int jacobian_cb(realtype t_ida, realtype cj, N_Vector y, N_Vector yp, N_Vector, 
     }
     return fresh_matrix(*u, t, cj, y, yp, values, steps, convergence_failures);
   });
-  u->seconds_jacobian += seconds_since(start);
-  return flag;
 }
 
 int quadrature_cb(realtype t_ida, N_Vector y, N_Vector yp, N_Vector q, void* user) {

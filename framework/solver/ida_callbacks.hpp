@@ -27,7 +27,8 @@ struct UserData {
   void* ida = nullptr;
   NewtonMatrixParts parts;
   const ProbeSet* integrands = nullptr;
-  double seconds_residual = 0.0, seconds_jacobian = 0.0;  // in the callbacks
+  bool time_phases = false;  // SolverOptions::time_phases
+  double seconds_residual = 0.0, seconds_jacobian = 0.0;  // in the callbacks, if timed
   // IDA integrates scaled variables y / nominal: pressures (1e5 Pa) and
   // masses (1e-6 kg) in one Newton matrix would otherwise differ by 1e11 and
   // leave the sparse LU numerically singular.

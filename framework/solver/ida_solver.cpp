@@ -178,6 +178,7 @@ IdaRun::IdaRun(System& system, const SolverOptions& opt, OutputFn output, const 
       grid_(opt.t_start, opt.t_end, opt.output_interval),
       roots_(system.n_roots()) {
   user_.system = &system;
+  user_.time_phases = opt.time_phases;
   user_.col_ptr.assign(system.col_ptr().begin(), system.col_ptr().end());
   user_.row_idx.assign(system.row_idx().begin(), system.row_idx().end());
   create_vectors();
@@ -272,7 +273,7 @@ void IdaRun::create_vectors() {
 void IdaRun::create_ida() {
   A_.reset(SUNSparseMatrix(n_, n_, std::max<long>(1, system_.nnz()), CSC_MAT, context_.ctx));
   LS_.reset(SUNLinSol_KLU(y_.get(), A_.get(), context_.ctx));
-  if (LS_) timed_LS_.reset(timed_klu(LS_.get(), &lu_, context_.ctx));
+  if (LS_) timed_LS_.reset(timed_klu(LS_.get(), &lu_, opt_.time_phases, context_.ctx));
   mem_.reset(IDACreate(context_.ctx));
   user_.klu = LS_.get();
   user_.ida = mem_.get();

@@ -75,6 +75,11 @@ struct SolverOptions : SimulationSettings {
   // Additive sources on states' balances; a name the System does not have,
   // or an algebraic variable, throws std::invalid_argument at simulate().
   std::vector<Disturbance> disturbances;
+  // Time the residual, Newton matrix and LU calls (SolverStats::
+  // seconds_residual, seconds_jacobian, lu.setup_seconds, lu.solve_seconds;
+  // 0 without): two clock readings a call, about 5 % of a small circuit's
+  // run, so only benchmarks that take the time apart ask for it.
+  bool time_phases = false;
 };
 
 struct SolverStats {
