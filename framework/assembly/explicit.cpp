@@ -372,23 +372,18 @@ void System::plan_stages(const ExplicitRows& rows, const ExplicitOrder& o) {
 void System::find_root_inputs() {
   std::vector<char> needed(plan_.unknowns.size(), 0);
   std::vector<int> work;
+  auto need = [&](int e) {
+    if (e < 0 || needed[e]) return;
+    needed[e] = 1;
+    work.push_back(e);
+  };
   for (std::size_t bi = 0; bi < blocks_.size(); ++bi)
-    for (int e : explicit_root_inputs(*blocks_[bi]))
-      if (!needed[e]) {
-        needed[e] = 1;
-        work.push_back(e);
-      }
+    for (int e : explicit_root_inputs(*blocks_[bi])) need(e);
   plan_.any_roots_read_explicit = !work.empty();
   while (!work.empty()) {
     const int e = work.back();
     work.pop_back();
-    for (int v : plan_.unknowns[e].deps) {
-      const int d = plan_.of_m[v];
-      if (d >= 0 && !needed[d]) {
-        needed[d] = 1;
-        work.push_back(d);
-      }
-    }
+    for (int v : plan_.unknowns[e].deps) need(plan_.of_m[v]);
   }
   plan_.root_stages.clear();
   for (const auto& stage : plan_.stages)
