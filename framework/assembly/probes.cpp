@@ -43,6 +43,15 @@ double System::probe(const Probe& p, double t, const double* y, const double* yp
   return b.component->observe(p.index, e);
 }
 
+std::vector<int> System::components_reading(int i) const {
+  const int m = plan_.ida_to_m[i];
+  std::vector<int> out;
+  for (const auto& b : blocks_)
+    if (b->component_index >= 0 && std::find(b->vars.begin(), b->vars.end(), m) != b->vars.end())
+      out.push_back(b->component_index);
+  return out;
+}
+
 ProbeSet System::probe_set(const std::vector<Probe>& probes) const {
   ProbeSet set;
   set.size = probes.size();

@@ -193,6 +193,10 @@ class System {
   std::vector<std::string> end_notes(double t, const double* y, const double* yp);
 
   double probe(const Probe& p, double t, const double* y, const double* yp) const;
+  // The components (indices into circuit().components) whose equations read
+  // IDA's unknown `i`: a node's unknown is read by every component at the
+  // node, a component's internal unknown by that component.
+  std::vector<int> components_reading(int i) const;
 
   // Number of Jacobian entries that AD found outside the structural pattern
   // (should stay 0; reported in the statistics).

@@ -59,14 +59,70 @@ struct Readable {
   Probe probe;
 };
 
-std::vector<Readable> readables(const System& sys) {
+// The circuit's physical nodes (pneumatic, thermal, translational), each as
+// the components with a port at it; connections that share a port are one
+// node. Signal wires carry commands, not the quantities a balance's missing
+// term reads (a sequencer is wired to every valve of a line).
+std::vector<std::vector<int>> physical_nodes(const Circuit& c) {
+  std::vector<int> root(c.connections.size());
+  std::iota(root.begin(), root.end(), 0);
+  const auto find = [&](int k) {
+    while (root[k] != k) k = root[k] = root[root[k]];
+    return k;
+  };
+  std::map<std::pair<int, int>, int> holder;  // port -> a connection holding it
+  for (int k = 0; k < static_cast<int>(c.connections.size()); ++k)
+    for (const auto& p : c.connections[k].ports)
+      if (const auto [it, fresh] = holder.emplace(std::make_pair(p.component, p.port), k); !fresh)
+        root[find(k)] = find(it->second);
+  std::map<int, std::vector<int>> nodes;
+  for (int k = 0; k < static_cast<int>(c.connections.size()); ++k)
+    for (const auto& p : c.connections[k].ports)
+      if (c.components[p.component]->info().ports[p.port].domain != Domain::signal)
+        nodes[find(k)].push_back(p.component);
+  std::vector<std::vector<int>> out;
+  for (auto& [k, comps] : nodes) out.push_back(std::move(comps));
+  return out;
+}
+
+// The components a missing term in the balance of unknown `balance` may
+// read: those whose equations read the balance's state, and those within
+// three physical nodes of them - a force on a piston or a chamber's leak
+// depends on the cylinder's own chambers and position and on its drive (the
+// throttles at its ports, the lines behind them, their valve), not on
+// another cylinder's. On a small circuit that is most of it; on a line of
+// cylinders the dictionary would otherwise grow with the square of the
+// line's pressures (their differences). All components when `balance` is
+// not an unknown.
+std::vector<char> neighbourhood(const System& sys, int balance) {
+  constexpr int kHops = 3;
+  const Circuit& circuit = sys.circuit();
+  if (balance < 0) return std::vector<char>(circuit.components.size(), 1);
+  std::vector<char> near(circuit.components.size(), 0);
+  for (int c : sys.components_reading(balance)) near[c] = 1;
+  const auto nodes = physical_nodes(circuit);
+  for (int hop = 0; hop < kHops; ++hop) {
+    const std::vector<char> from = near;
+    for (const auto& node : nodes)
+      if (std::any_of(node.begin(), node.end(), [&](int c) { return from[c] != 0; }))
+        for (int c : node) near[c] = 1;
+  }
+  return near;
+}
+
+std::vector<Readable> readables(const System& sys, int balance) {
   static const std::set<std::string> units = {"m", "m/s", "rad", "rad/s", "Pa", "K"};
+  const std::vector<char> near = neighbourhood(sys, balance);
   std::vector<Readable> out;
   const auto& names = sys.variable_names();
-  for (int i = 0; i < sys.size(); ++i)
+  for (int i = 0; i < sys.size(); ++i) {
+    const auto readers = sys.components_reading(i);
+    if (std::none_of(readers.begin(), readers.end(), [&](int c) { return near[c] != 0; })) continue;
     if (const std::string u = unknown_unit(sys, names[i]); units.count(u)) out.push_back({names[i], u, i, {}});
+  }
   const Circuit& circuit = sys.circuit();
   for (int c = 0; c < static_cast<int>(circuit.components.size()); ++c) {
+    if (!near[c]) continue;
     const Component& comp = *circuit.components[c];
     std::vector<std::string> quantities;
     for (auto& q : local_variable_names(comp))
@@ -108,15 +164,15 @@ std::vector<Variable> record(const FormInput& in, const std::string& balance, do
   for (std::size_t q = 0; q < nr; ++q) {
     const Netlist nl = in.netlist_of(in.used[q]);
     System sys(elaborate(nl, *in.registry));
-    const std::vector<Readable> read = readables(sys);
+    const auto& names = sys.variable_names();
+    const auto it = std::find(names.begin(), names.end(), balance);
+    const int b = it == names.end() ? -1 : static_cast<int>(it - names.begin());
+    const std::vector<Readable> read = readables(sys, b);
     if (q == 0) {
       for (const auto& r : read)
         vars.push_back({r.name, r.unit, std::vector<std::vector<double>>(nr), std::vector<std::vector<double>>(nr),
                         INFINITY, -INFINITY, r.unknown >= 0});
     }
-    const auto& names = sys.variable_names();
-    const auto it = std::find(names.begin(), names.end(), balance);
-    const int b = it == names.end() ? -1 : static_cast<int>(it - names.begin());
     SolverOptions so = solver_options(nl.simulation);
     so.threads = 1;
     simulate(sys, so, [&](double t, const double* y, const double* yp) {

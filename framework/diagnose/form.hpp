@@ -4,7 +4,10 @@
 // acceleration", "friction concentrated around x = 45 mm" - rather than a
 // shape over time that holds only for the runs it was fitted on.
 //
-// A dictionary of candidate terms is built from the model's unknowns by
+// A dictionary of candidate terms is built from the model's unknowns near
+// the balance (of the components whose equations read its state and those
+// joined to them: a missing term reads its own part of the circuit, and the
+// dictionary does not grow with the square of a line's pressures) by
 // their units (constant; positions, and Gaussian bumps on a grid of centres
 // and widths over the stroke the runs cover; velocities, |v|, a smoothed
 // sign and the acceleration; pressures and their differences;
