@@ -24,7 +24,6 @@ import math
 import random
 import re
 import subprocess
-import sys
 import time
 from pathlib import Path
 
@@ -94,6 +93,34 @@ FORMS = {
 }
 
 
+# Two faults planted together: both must be named. After the shuffled
+# single cases, so that those stay as each seed drew them before.
+DOUBLES = [("piston_leak_laminar", "heavier_tool"), ("needle_turned", "transducer_zero"),
+           ("sluggish_spool", "supply_line")]
+
+
+def plant(model, table, forms, rng):
+    """MODEL with FORMS (names in TABLE) planted at magnitudes drawn
+    log-uniformly; returns (expected, magnitude, truth, csv edit, its
+    magnitude), expected and magnitude tuples for more than one form."""
+    truth, ks, expected, edit, ek = model, [], [], None, 0.0
+    for form in forms:
+        exp, lo, hi, apply, e = table[form]
+        k = math.exp(rng.uniform(math.log(lo), math.log(hi)))
+        truth = apply(truth, k)
+        ks.append(k)
+        expected.append(exp)
+        if e:
+            edit, ek = e, k
+    if len(forms) == 1:
+        return expected[0], ks[0], truth, edit, ek
+    return tuple(expected), tuple(ks), truth, edit, ek
+
+
+# The runs: (name, role, supply pressure in bar g).
+POINTS = (("cal1", "calibration", 5), ("cal2", "calibration", 7), ("val", "validation", 6))
+
+
 def simulate(pneumo, netlist, p_supply, out_csv, work):
     path = work / "truth.yaml"
     path.write_text(netlist)
@@ -101,9 +128,10 @@ def simulate(pneumo, netlist, p_supply, out_csv, work):
                    check=True)
 
 
-def write_runs(pneumo, truth, runs_dir, rng, csv_edit, k):
+def write_runs(pneumo, truth, runs_dir, rng, csv_edit, k, signals=SIGNALS, noise=NOISE, interval=OUTPUT_INTERVAL,
+               points=POINTS):
     runs_dir.mkdir(parents=True)
-    for name, role, ps in (("cal1", "calibration", 5), ("cal2", "calibration", 7), ("val", "validation", 6)):
+    for name, role, ps in points:
         raw = runs_dir.parent / ("%s_raw.csv" % name)
         simulate(pneumo, truth, ps, raw, runs_dir.parent)
         # Result columns are "NAME [UNIT]" in the netlist's display units
@@ -112,22 +140,52 @@ def write_runs(pneumo, truth, runs_dir, rng, csv_edit, k):
         rows = []
         for r in csv.DictReader(raw.open()):
             row = {k.split(" [")[0]: to_si(float(v), k) for k, v in r.items()}
-            step = row["t"] / OUTPUT_INTERVAL
+            step = row["t"] / interval
             if abs(step - round(step)) < 1e-6 and (not rows or row["t"] > rows[-1]["t"]):
                 rows.append(row)
         raw.unlink()
         with (runs_dir / (name + ".csv")).open("w") as f:
-            f.write("t," + ",".join(SIGNALS) + "\n")
+            f.write("t," + ",".join(signals) + "\n")
             for i, r in enumerate(rows):
                 vals = []
-                for s in SIGNALS:
+                for s in signals:
                     y = float(r[s])
                     if csv_edit and csv_edit[0] == s:
                         y += k
-                    vals.append("%.10g" % (y + rng.gauss(0, NOISE[s])))
+                    vals.append("%.10g" % (y + rng.gauss(0, noise[s])))
                 f.write("%.10g,%s\n" % (r["t"], ",".join(vals)))
         (runs_dir / (name + ".yaml")).write_text(
             "data: %s.csv\nrole: %s\noperating_point:\n  p_supply: %d bar g\n" % (name, role, ps))
+
+
+def diagnose_case(pneumo, model, case, form, expected, k, stats, extra=()):
+    """Diagnoses CASE/runs without a catalogue, scores the verdict into STATS
+    and prints one line: expected None is an undeclared effect, "" a null, a
+    tuple two effects planted together (both must be in the verdict)."""
+    t0 = time.time()
+    r = subprocess.run([pneumo, "diagnose", str(model), "--runs", str(case / "runs"), "--out", str(case / "report"),
+                        "-q", *extra], capture_output=True, text=True)
+    secs = time.time() - t0
+    if r.returncode:
+        print("%-34s diagnose failed: %s" % (case.name, r.stdout[-300:] + r.stderr[-300:]))
+        return secs
+    rep = json.loads((case / "report" / "report.json").read_text())
+    verdict, unexplained = rep["verdict"], rep["unexplained"] is not None
+    if form == "null":
+        kind, ok = "null", not verdict
+    elif expected is None:
+        kind, ok = "undeclared", unexplained or not verdict
+    elif isinstance(expected, tuple):
+        kind, ok = "double", set(expected) <= set(verdict)
+    else:
+        kind, ok = "single", bool(verdict) and verdict[0] == expected
+    stats.setdefault(kind, [0, 0])
+    stats[kind][0] += ok
+    stats[kind][1] += 1
+    print("%-34s k=%-9s -> %-44s %-4s %s (%.0f s)" % (
+        case.name, "/".join("%.3g" % x for x in (k if isinstance(k, tuple) else (k,))), "+".join(verdict) or "(none)", "ok" if ok else "MISS",
+        "unexplained flagged;" if unexplained else "", secs), flush=True)
+    return secs
 
 
 def main():
@@ -136,6 +194,7 @@ def main():
     ap.add_argument("--cases", type=int, default=0, help="first K cases only (0: all)")
     ap.add_argument("--pneumo", default=str(ROOT / "build" / "pneumo"))
     ap.add_argument("--work", default="/tmp/pneumo_meter_out_declared")
+    ap.add_argument("--doubles", action="store_true", help="also the cases of two faults planted together")
     a = ap.parse_args()
     rng = random.Random(a.seed)
     work = Path(a.work)
@@ -143,40 +202,22 @@ def main():
     (work / "model.yaml").write_text(MODEL)
     plan = [(f,) for f in FORMS] + [("null",), ("null",)]
     rng.shuffle(plan)
+    if a.doubles:
+        plan += DOUBLES
     if a.cases:
         plan = plan[:a.cases]
     stats = {"single": [0, 0], "undeclared": [0, 0], "null": [0, 0]}
-    for i, (form,) in enumerate(plan):
+    for i, forms in enumerate(plan):
+        form = "+".join(forms)
         case = work / ("seed%d_%02d_%s" % (a.seed, i, form))
         subprocess.run(["rm", "-rf", str(case)], check=True)
         case.mkdir(parents=True)
         if form == "null":
-            expected, k, truth, edit = "", 0.0, MODEL, None
+            expected, k, truth, edit, ek = "", 0.0, MODEL, None, 0.0
         else:
-            expected, lo, hi, apply, edit = FORMS[form]
-            k = math.exp(rng.uniform(math.log(lo), math.log(hi)))
-            truth = apply(MODEL, k)
-        write_runs(a.pneumo, truth, case / "runs", rng, edit, k)
-        t0 = time.time()
-        r = subprocess.run([a.pneumo, "diagnose", str(work / "model.yaml"), "--runs", str(case / "runs"), "--out",
-                            str(case / "report"), "-q"], capture_output=True, text=True)
-        secs = time.time() - t0
-        if r.returncode:
-            print("%-34s diagnose failed: %s" % (case.name, r.stdout[-300:] + r.stderr[-300:]))
-            continue
-        rep = json.loads((case / "report" / "report.json").read_text())
-        verdict, unexplained = rep["verdict"], rep["unexplained"] is not None
-        if form == "null":
-            kind, ok = "null", not verdict
-        elif expected is None:
-            kind, ok = "undeclared", unexplained or not verdict
-        else:
-            kind, ok = "single", bool(verdict) and verdict[0] == expected
-        stats[kind][0] += ok
-        stats[kind][1] += 1
-        print("%-34s k=%-9.3g -> %-44s %-4s %s (%.0f s)" % (
-            case.name, k, "+".join(verdict) or "(none)", "ok" if ok else "MISS",
-            "unexplained flagged;" if unexplained else "", secs), flush=True)
+            expected, k, truth, edit, ek = plant(MODEL, FORMS, forms, rng)
+        write_runs(a.pneumo, truth, case / "runs", rng, edit, ek)
+        diagnose_case(a.pneumo, work / "model.yaml", case, form, expected, k, stats)
     for kind, (ok, n) in stats.items():
         print("%-11s %d of %d" % (kind, ok, n))
 

@@ -1,0 +1,100 @@
+"""Catalogue-free diagnosis of a six-cylinder line (issue #37, "scale with
+the circuit").
+
+netlists/assembly_line.yaml: six cylinders, each with its valve, two flow
+controls, two tubes, a load and two limit switches - about a hundred
+declared faults. Measured runs of the line with one withheld fault (written
+in a form of its own: an extra component, another parameter, an edit of the
+CSV; never the declared fault's parameter), or two such faults in
+different cylinders, or none, at supply 5 and 7 bar g
+(calibration) and 6 bar g (validation), the six positions at 200 Hz with
+0.05 mm noise; each case diagnosed by `pneumo diagnose` WITHOUT --effects.
+Prints per case the verdict, whether the faulty cylinder's fault is named
+first, and the wall time with the number of candidates (the cost per
+candidate). Run by hand, not in CI:
+
+    python3 benchmarks/assembly_line_declared.py [--seed N] [--cases K] [--threads T] [--pneumo build/pneumo]
+"""
+import argparse
+import json
+import random
+import subprocess
+from pathlib import Path
+
+from meter_out_declared import add_components, diagnose_case, plant, set_param, write_runs
+
+ROOT = Path(__file__).resolve().parent.parent
+# The line's outputs every 5 ms (1 ms in the netlist): the fit's rows.
+MODEL = (ROOT / "netlists" / "assembly_line.yaml").read_text().replace("output_interval: 1 ms", "output_interval: 5 ms")
+SIGNALS = ["x_A", "x_B", "x_C", "x_D", "x_E", "x_F"]
+NOISE = {s: 5e-5 for s in SIGNALS}
+INTERVAL = 5e-3
+
+# name: (expected candidate or None for undeclared, lo, hi, apply(text, k) -> text, csv edit or None)
+FORMS = {
+    "piston_leak_D": ("cyl_D.piston_seal_leak", 0.005, 0.05, lambda t, k: add_components(
+        t, ["seal_gap: {type: iso6358_throttle, C: %g dm3/(s*bar), b: 0.05}" % k],
+        ["[cyl_D.cap, seal_gap.a]", "[seal_gap.b, cyl_D.rod]"]), None),
+    "rod_leak_F": ("cyl_F.rod_seal_leak", 0.1, 0.5, lambda t, k: add_components(
+        t, ["rod_gap: {type: nozzle, d: %g mm}" % k, "rod_air: {type: atmosphere}"],
+        ["[cyl_F.rod, rod_gap.a]", "[rod_gap.b, rod_air.port]"]), None),
+    "needle_B_rod": ("flow_B_rod.misadjusted", 0.4, 0.7, lambda t, k: set_param(
+        set_param(t, "flow_B_rod", "C", "%g dm3/(s*bar)" % (0.25 * k)), "flow_B_rod", "b", "0.35"), None),
+    "heavier_C": ("load_C.mass_off", 1.5, 3.0, lambda t, k: set_param(t, "load_C", "m", "%g kg" % (8 * k)), None),
+    "sluggish_E": ("valve_E.slow_switching", 3.0, 8.0, lambda t, k: set_param(
+        t, "valve_E", "t_switch_time", "%g ms" % (15 * k)), None),
+    "x_A_zero": ("x_A.offset", 0.5e-3, 3e-3, lambda t, k: t, ("x_A", "offset")),
+    # undeclared: a process force against the press
+    "press_force": (None, 30.0, 120.0, lambda t, k: add_components(
+        t, ["push: {type: force_source, F: %g N}" % -k], ["[load_D.flange, push.flange]"]), None),
+}
+
+
+# Two faults planted together, in different cylinders: both must be named.
+DOUBLES = [("piston_leak_D", "heavier_C"), ("needle_B_rod", "x_A_zero"), ("rod_leak_F", "sluggish_E")]
+
+
+def candidates(report):
+    rep = json.loads((report / "report.json").read_text())
+    return len(rep["effects"])
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--cases", type=int, default=0, help="first K cases only (0: all)")
+    ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--pneumo", default=str(ROOT / "build" / "pneumo"))
+    ap.add_argument("--work", default="/tmp/pneumo_assembly_line_declared")
+    a = ap.parse_args()
+    rng = random.Random(a.seed)
+    work = Path(a.work)
+    work.mkdir(parents=True, exist_ok=True)
+    (work / "model.yaml").write_text(MODEL)
+    plan = [(f,) for f in FORMS] + DOUBLES + [("null",)]
+    rng.shuffle(plan)
+    if a.cases:
+        plan = plan[:a.cases]
+    stats = {"single": [0, 0], "double": [0, 0], "undeclared": [0, 0], "null": [0, 0]}
+    for i, forms in enumerate(plan):
+        form = "+".join(forms)
+        case = work / ("seed%d_%02d_%s" % (a.seed, i, form))
+        subprocess.run(["rm", "-rf", str(case)], check=True)
+        case.mkdir(parents=True)
+        if form == "null":
+            expected, k, truth, edit, ek = "", 0.0, MODEL, None, 0.0
+        else:
+            expected, k, truth, edit, ek = plant(MODEL, FORMS, forms, rng)
+        write_runs(a.pneumo, truth, case / "runs", rng, edit, ek, SIGNALS, NOISE, INTERVAL)
+        secs = diagnose_case(a.pneumo, work / "model.yaml", case, form, expected, k, stats,
+                             ("--threads", str(a.threads)))
+        if (case / "report" / "report.json").exists():
+            n = candidates(case / "report")
+            print("    %d candidates, %.0f s wall on %d threads: %.2f s per candidate" % (n, secs, a.threads, secs / max(n, 1)),
+                  flush=True)
+    for kind, (ok, n) in stats.items():
+        print("%-11s %d of %d" % (kind, ok, n))
+
+
+if __name__ == "__main__":
+    main()
