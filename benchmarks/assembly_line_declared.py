@@ -18,10 +18,9 @@ candidate). Run by hand, not in CI:
 import argparse
 import json
 import random
-import subprocess
 from pathlib import Path
 
-from meter_out_declared import add_components, diagnose_case, plant, set_param, write_runs
+from meter_out_declared import add_components, diagnose_case, new_case, set_param, write_runs
 
 ROOT = Path(__file__).resolve().parent.parent
 # The line's outputs every 5 ms (1 ms in the netlist): the fit's rows.
@@ -77,14 +76,7 @@ def main():
         plan = plan[:a.cases]
     stats = {"single": [0, 0], "double": [0, 0], "undeclared": [0, 0], "null": [0, 0]}
     for i, forms in enumerate(plan):
-        form = "+".join(forms)
-        case = work / ("seed%d_%02d_%s" % (a.seed, i, form))
-        subprocess.run(["rm", "-rf", str(case)], check=True)
-        case.mkdir(parents=True)
-        if form == "null":
-            expected, k, truth, edit, ek = "", 0.0, MODEL, None, 0.0
-        else:
-            expected, k, truth, edit, ek = plant(MODEL, FORMS, forms, rng)
+        case, form, expected, k, truth, edit, ek = new_case(work, a.seed, i, forms, MODEL, FORMS, rng)
         write_runs(a.pneumo, truth, case / "runs", rng, edit, ek, SIGNALS, NOISE, INTERVAL)
         secs = diagnose_case(a.pneumo, work / "model.yaml", case, form, expected, k, stats,
                              ("--threads", str(a.threads)))

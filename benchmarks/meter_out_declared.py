@@ -117,6 +117,18 @@ def plant(model, table, forms, rng):
     return tuple(expected), tuple(ks), truth, edit, ek
 
 
+def new_case(work, seed, i, forms, model, table, rng):
+    """An empty folder for case I of FORMS ("null": nothing planted) and
+    what plant() returns for it, with the case's name."""
+    form = "+".join(forms)
+    case = work / ("seed%d_%02d_%s" % (seed, i, form))
+    subprocess.run(["rm", "-rf", str(case)], check=True)
+    case.mkdir(parents=True)
+    if form == "null":
+        return case, form, "", 0.0, model, None, 0.0
+    return (case, form) + plant(model, table, forms, rng)
+
+
 # The runs: (name, role, supply pressure in bar g).
 POINTS = (("cal1", "calibration", 5), ("cal2", "calibration", 7), ("val", "validation", 6))
 
@@ -208,14 +220,7 @@ def main():
         plan = plan[:a.cases]
     stats = {"single": [0, 0], "undeclared": [0, 0], "null": [0, 0]}
     for i, forms in enumerate(plan):
-        form = "+".join(forms)
-        case = work / ("seed%d_%02d_%s" % (a.seed, i, form))
-        subprocess.run(["rm", "-rf", str(case)], check=True)
-        case.mkdir(parents=True)
-        if form == "null":
-            expected, k, truth, edit, ek = "", 0.0, MODEL, None, 0.0
-        else:
-            expected, k, truth, edit, ek = plant(MODEL, FORMS, forms, rng)
+        case, form, expected, k, truth, edit, ek = new_case(work, a.seed, i, forms, MODEL, FORMS, rng)
         write_runs(a.pneumo, truth, case / "runs", rng, edit, ek)
         diagnose_case(a.pneumo, work / "model.yaml", case, form, expected, k, stats)
     for kind, (ok, n) in stats.items():
