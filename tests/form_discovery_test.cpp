@@ -127,10 +127,10 @@ std::filesystem::path measured(const TempDir& dir, const std::function<void(std:
 
 // The form on `balance` that the runs in `runs` call for, the model being kMeterOut.
 diagnose::FormFinding form_on(const TempDir& dir, const std::filesystem::path& runs, const std::string& balance,
-                              const std::string& unit) {
+                              const std::string& unit, const std::string& model_text = kMeterOut) {
   diagnose::DiagnoseOptions opt;
   opt.progress = false;
-  diagnose::engine::Engine eng(dir.write("model.yaml", kMeterOut), builtin_registry(), opt);
+  diagnose::engine::Engine eng(dir.write("model.yaml", model_text), builtin_registry(), opt);
   eng.runs = diagnose::load_runs(runs.string(), eng.base(), eng.base_probes(), eng.registry());
   const auto model = eng.model({});
   const auto residual = [&](int k, const std::vector<std::vector<double>>& sim) {
@@ -263,6 +263,44 @@ TEST(FormDiscovery, ALeakOutOfTheCapChamberIsATermInItsPressureOnItsMassBalance)
   ASSERT_EQ(found, 1) << f.formula;
   EXPECT_NEAR(-per_pa, 5.93e-11, 0.25 * 5.93e-11) << f.formula;
   for (const auto& t : f.terms) EXPECT_EQ(t.unit.rfind("kg/s", 0), 0u) << t.unit;
+}
+
+// The meter-out cylinder beside a drive of its own: a second supply, valve,
+// lines, flow controls, a smaller cylinder and load, switching at other
+// times.
+std::string with_second_drive() {
+  std::string t = kMeterOut;
+  insert(t, "connections:",
+         "  supply2: {type: pressure_source, p: 5 bar g}\n"
+         "  valve2: {type: directional_valve_52, C: 1 dm3/(s*bar), b: 0.3, t_switch_time: 10 ms,"
+         " schedule: [[0.3, 1], [1.3, 0]]}\n"
+         "  silencer2: {type: iso6358_throttle, C: 2 dm3/(s*bar), b: 0.3}\n  air2: {type: atmosphere}\n"
+         "  line_A2: {type: volume, V: 5 cm3, p0: 0 bar g}\n  line_B2: {type: volume, V: 5 cm3, p0: 6 bar g}\n"
+         "  flow_cap2: {type: one_way_flow_control, C: 0.1 dm3/(s*bar), check_C: 1 dm3/(s*bar)}\n"
+         "  flow_rod2: {type: one_way_flow_control, C: 0.1 dm3/(s*bar), check_C: 1 dm3/(s*bar)}\n"
+         "  cyl2: {type: cylinder, bore: 25 mm, rod: 10 mm, stroke: 80 mm, p0_rod: 6 bar g,"
+         " friction_model: coulomb_viscous, friction_FC: 15 N, friction_viscous: 80 N*s/m}\n"
+         "  load2: {type: translational_mass, m: 3 kg}\n\n");
+  insert(t, "outputs:",
+         "  - [supply2.port, valve2.P]\n  - [valve2.A, line_A2.port]\n  - [line_A2.port_b, flow_cap2.b]\n"
+         "  - [flow_cap2.a, cyl2.cap]\n  - [valve2.B, line_B2.port]\n  - [line_B2.port_b, flow_rod2.b]\n"
+         "  - [flow_rod2.a, cyl2.rod]\n  - [valve2.R, silencer2.a]\n  - [silencer2.b, air2.port]\n"
+         "  - [cyl2.flange, load2.flange]\n\n");
+  return t;
+}
+
+// A missing term in one cylinder's balance reads that cylinder's part of
+// the circuit (form.hpp): beside a second drive that moves on its own, the
+// dictionary on the first cylinder's cap mass balance is the one it has
+// alone - none of the second drive's pressures, positions, velocities,
+// temperatures or their products enter it.
+TEST(FormDiscovery, ABalanceOfOneCylinderReadsNothingOfAnotherDrive) {
+  TempDir dir;
+  const auto runs = measured(dir, [](std::string&) {});
+  const auto alone = form_on(dir, runs, "cyl.m_cap", "kg/s");
+  const auto beside = form_on(dir, runs, "cyl.m_cap", "kg/s", with_second_drive());
+  EXPECT_GT(alone.dictionary, 50);
+  EXPECT_EQ(beside.dictionary, alone.dictionary);
 }
 
 // Runs of the model itself: nothing is left to explain, no form is proposed.
