@@ -6,6 +6,7 @@
 // with the form added leaves a gap within 1.5 x noise.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -265,13 +266,13 @@ TEST(FormDiscovery, ALeakOutOfTheCapChamberIsATermInItsPressureOnItsMassBalance)
   for (const auto& t : f.terms) EXPECT_EQ(t.unit.rfind("kg/s", 0), 0u) << t.unit;
 }
 
-// The meter-out cylinder beside a drive of its own: a second supply, valve,
-// lines, flow controls, a smaller cylinder and load, switching at other
-// times.
-std::string with_second_drive() {
+// The meter-out cylinder beside a drive of its own: a valve, lines, flow
+// controls, a smaller cylinder and load, switching at other times, on a
+// second supply or (`shared_supply`) on the first cylinder's.
+std::string with_second_drive(bool shared_supply = false) {
   std::string t = kMeterOut;
   insert(t, "connections:",
-         "  supply2: {type: pressure_source, p: 5 bar g}\n"
+         std::string(shared_supply ? "" : "  supply2: {type: pressure_source, p: 5 bar g}\n") +
          "  valve2: {type: directional_valve_52, C: 1 dm3/(s*bar), b: 0.3, t_switch_time: 10 ms,"
          " schedule: [[0.3, 1], [1.3, 0]]}\n"
          "  silencer2: {type: iso6358_throttle, C: 2 dm3/(s*bar), b: 0.3}\n  air2: {type: atmosphere}\n"
@@ -282,7 +283,8 @@ std::string with_second_drive() {
          " friction_model: coulomb_viscous, friction_FC: 15 N, friction_viscous: 80 N*s/m}\n"
          "  load2: {type: translational_mass, m: 3 kg}\n\n");
   insert(t, "outputs:",
-         "  - [supply2.port, valve2.P]\n  - [valve2.A, line_A2.port]\n  - [line_A2.port_b, flow_cap2.b]\n"
+         std::string(shared_supply ? "  - [supply.port, valve2.P]\n" : "  - [supply2.port, valve2.P]\n") +
+         "  - [valve2.A, line_A2.port]\n  - [line_A2.port_b, flow_cap2.b]\n"
          "  - [flow_cap2.a, cyl2.cap]\n  - [valve2.B, line_B2.port]\n  - [line_B2.port_b, flow_rod2.b]\n"
          "  - [flow_rod2.a, cyl2.rod]\n  - [valve2.R, silencer2.a]\n  - [silencer2.b, air2.port]\n"
          "  - [cyl2.flange, load2.flange]\n\n");
@@ -301,6 +303,31 @@ TEST(FormDiscovery, ABalanceOfOneCylinderReadsNothingOfAnotherDrive) {
   const auto beside = form_on(dir, runs, "cyl.m_cap", "kg/s", with_second_drive());
   EXPECT_GT(alone.dictionary, 50);
   EXPECT_EQ(beside.dictionary, alone.dictionary);
+}
+
+// A source holds its node's pressure whatever flows through it, so a drive
+// on the same supply is as far from a balance as one on a supply of its
+// own: the line to the first valve's A port reads what it reads alone and
+// nothing of the second drive's components. (What the first valve reads of
+// the supply node may now move - the stream temperature its three ports
+// share, and the valve's outlet temperatures with it - and is read.) Its
+// valve is one node from it, the supply two: without the stop at a held
+// node, the second drive's valve and lines would be read (249 terms against
+// 153).
+TEST(FormDiscovery, ASharedSupplyDoesNotJoinTwoDrives) {
+  TempDir dir;
+  const auto runs = measured(dir, [](std::string&) {});
+  const auto alone = form_on(dir, runs, "line_A.m", "kg/s");
+  const auto beside = form_on(dir, runs, "line_A.m", "kg/s", with_second_drive(true));
+  EXPECT_GT(alone.dictionary, 50);
+  for (const auto& name : alone.read)
+    EXPECT_NE(std::find(beside.read.begin(), beside.read.end(), name), beside.read.end()) << name;
+  const std::string shared = "{supply.port, valve.P, valve2.P}";
+  for (std::string name : beside.read) {
+    if (const auto at = name.find(shared); at != std::string::npos) name.erase(at, shared.size());
+    for (const char* other : {"valve2", "silencer2", "line_A2", "line_B2", "flow_cap2", "flow_rod2", "cyl2", "load2"})
+      EXPECT_EQ(name.find(other), std::string::npos) << name;
+  }
 }
 
 // Runs of the model itself: nothing is left to explain, no form is proposed.

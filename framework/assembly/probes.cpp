@@ -52,6 +52,10 @@ std::vector<int> System::components_reading(int i) const {
   return out;
 }
 
+bool System::holds_constant(int component, int local) const {
+  return blocks_[component]->vars[local] < 0;  // component blocks come first, in order
+}
+
 ProbeSet System::probe_set(const std::vector<Probe>& probes) const {
   ProbeSet set;
   set.size = probes.size();

@@ -197,6 +197,11 @@ class System {
   // IDA's unknown `i`: a node's unknown is read by every component at the
   // node, a component's internal unknown by that component.
   std::vector<int> components_reading(int i) const;
+  // Whether a local variable of component `component` (an index into its
+  // local_variable_names) is a constant after alias elimination: a node
+  // held by a source's pressure or the atmosphere, a flange on a fixed
+  // wall. Always false when the System keeps its aliases.
+  bool holds_constant(int component, int local) const;
 
   // Number of Jacobian entries that AD found outside the structural pattern
   // (should stay 0; reported in the statistics).

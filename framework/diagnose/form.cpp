@@ -59,11 +59,20 @@ struct Readable {
   Probe probe;
 };
 
-// The circuit's physical nodes (pneumatic, thermal, translational), each as
-// the components with a port at it; connections that share a port are one
-// node. Signal wires carry commands, not the quantities a balance's missing
-// term reads (a sequencer is wired to every valve of a line).
-std::vector<std::vector<int>> physical_nodes(const Circuit& c) {
+// A physical node (pneumatic, thermal, translational) of the circuit: the
+// components with a port at it; connections that share a port are one
+// node. `held`: its across variable is a constant (a source's pressure, the
+// atmosphere, a fixed temperature, a wall) - what happens on one side of it
+// does not reach the other.
+struct PhysicalNode {
+  std::vector<int> components;
+  bool held = false;
+};
+
+// Signal wires carry commands, not the quantities a balance's missing term
+// reads (a sequencer is wired to every valve of a line): they make no node.
+std::vector<PhysicalNode> physical_nodes(const System& sys) {
+  const Circuit& c = sys.circuit();
   std::vector<int> root(c.connections.size());
   std::iota(root.begin(), root.end(), 0);
   const auto find = [&](int k) {
@@ -75,13 +84,17 @@ std::vector<std::vector<int>> physical_nodes(const Circuit& c) {
     for (const auto& p : c.connections[k].ports)
       if (const auto [it, fresh] = holder.emplace(std::make_pair(p.component, p.port), k); !fresh)
         root[find(k)] = find(it->second);
-  std::map<int, std::vector<int>> nodes;
+  std::map<int, PhysicalNode> nodes;
   for (int k = 0; k < static_cast<int>(c.connections.size()); ++k)
-    for (const auto& p : c.connections[k].ports)
-      if (c.components[p.component]->info().ports[p.port].domain != Domain::signal)
-        nodes[find(k)].push_back(p.component);
-  std::vector<std::vector<int>> out;
-  for (auto& [k, comps] : nodes) out.push_back(std::move(comps));
+    for (const auto& p : c.connections[k].ports) {
+      const Component& comp = *c.components[p.component];
+      if (comp.info().ports[p.port].domain == Domain::signal) continue;
+      PhysicalNode& node = nodes[find(k)];
+      node.components.push_back(p.component);
+      node.held = node.held || sys.holds_constant(p.component, comp.port_offset(p.port));
+    }
+  std::vector<PhysicalNode> out;
+  for (auto& [k, node] : nodes) out.push_back(std::move(node));
   return out;
 }
 
@@ -90,22 +103,24 @@ std::vector<std::vector<int>> physical_nodes(const Circuit& c) {
 // three physical nodes of them - a force on a piston or a chamber's leak
 // depends on the cylinder's own chambers and position and on its drive (the
 // throttles at its ports, the lines behind them, their valve), not on
-// another cylinder's. On a small circuit that is most of it; on a line of
-// cylinders the dictionary would otherwise grow with the square of the
-// line's pressures (their differences). All components when `balance` is
-// not an unknown.
+// another cylinder's. The search does not cross a held node: a supply or
+// exhaust manifold joins every valve of a line, but its pressure is the
+// source's, whatever the other drives do. On a small circuit that is most
+// of it; on a line of cylinders the dictionary would otherwise grow with
+// the square of the line's pressures (their differences). All components
+// when `balance` is not an unknown.
 std::vector<char> neighbourhood(const System& sys, int balance) {
   constexpr int kHops = 3;
   const Circuit& circuit = sys.circuit();
   if (balance < 0) return std::vector<char>(circuit.components.size(), 1);
   std::vector<char> near(circuit.components.size(), 0);
   for (int c : sys.components_reading(balance)) near[c] = 1;
-  const auto nodes = physical_nodes(circuit);
+  const auto nodes = physical_nodes(sys);
   for (int hop = 0; hop < kHops; ++hop) {
     const std::vector<char> from = near;
     for (const auto& node : nodes)
-      if (std::any_of(node.begin(), node.end(), [&](int c) { return from[c] != 0; }))
-        for (int c : node) near[c] = 1;
+      if (!node.held && std::any_of(node.components.begin(), node.components.end(), [&](int c) { return from[c] != 0; }))
+        for (int c : node.components) near[c] = 1;
   }
   return near;
 }
@@ -674,6 +689,7 @@ std::optional<FormFinding> discover_form(const FormInput& in, const std::string&
   std::vector<Entry> terms = candidate_terms(dict);
   FormFinding f;
   f.balance = balance, f.unit = rate_unit, f.gap_shape = gap_shape, f.dictionary = static_cast<int>(terms.size());
+  for (const auto& v : dict.vars()) f.read.push_back(v.name);
   // Each term's probe moves the balance's state by about a percent of its
   // largest magnitude along the runs over a ninth of the run (the System's
   // nominal magnitude is a scale for the solver, a decade or more off).
@@ -714,7 +730,9 @@ std::string form_json(const FormFinding& f, const std::function<std::string(doub
     << ", \"gap_time_shaped\": " << num(f.gap_shape) << ", \"confirmed\": " << (f.confirmed ? "true" : "false")
     << ", \"beats_time_shaped\": " << (f.beats_shape ? "true" : "false")
     << ", \"failure\": " << (f.failure.empty() ? std::string("null") : str(f.failure))
-    << ", \"dictionary\": " << f.dictionary << ", \"simulations\": " << f.simulations
+    << ", \"dictionary\": " << f.dictionary << ", \"read\": [";
+  for (std::size_t j = 0; j < f.read.size(); ++j) o << (j ? ", " : "") << str(f.read[j]);
+  o << "], \"simulations\": " << f.simulations
     << ", \"sentence\": " << str(f.sentence) << "}";
   return o.str();
 }
