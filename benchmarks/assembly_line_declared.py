@@ -62,6 +62,7 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--cases", type=int, default=0, help="first K cases only (0: all)")
+    ap.add_argument("--only", help="diagnose only the cases that plant this form (the others' runs are still drawn)")
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--pneumo", default=str(ROOT / "build" / "pneumo"))
     ap.add_argument("--work", default="/tmp/pneumo_assembly_line_declared")
@@ -78,6 +79,8 @@ def main():
     for i, forms in enumerate(plan):
         case, form, expected, k, truth, edit, ek = new_case(work, a.seed, i, forms, MODEL, FORMS, rng)
         write_runs(a.pneumo, truth, case / "runs", rng, edit, ek, SIGNALS, NOISE, INTERVAL)
+        if a.only and a.only not in forms:
+            continue
         secs = diagnose_case(a.pneumo, work / "model.yaml", case, form, expected, k, stats,
                              ("--threads", str(a.threads)))
         if (case / "report" / "report.json").exists():

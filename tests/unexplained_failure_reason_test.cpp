@@ -69,7 +69,7 @@ TEST(UnexplainedFailureReason, ABalanceWhoseSimulationFailsCarriesTheSolversReas
   // confirmed with a shorter one - names the run and the solver's words.
   const std::regex balance(
       "\\{\"balance\": \"([^\"]+)\"[^\\n]*\"confirmed\": (true|false), \"failure\": (null|\"[^\\n]*\"), "
-      "\"share\": ([^,]+), \"longer_step_failed\": (null|\"[^\\n]*\")\\}");
+      "\"share\": ([^,]+), \"longer_step_failed\": (null|\"[^\\n]*\"), \"hats\": (\\d+)\\}");
   int failures = 0, confirmed = 0;
   for (auto it = std::sregex_iterator(json.begin(), json.end(), balance); it != std::sregex_iterator(); ++it) {
     const std::string name = (*it)[1], ok = (*it)[2], failure = (*it)[3], longer = (*it)[5];

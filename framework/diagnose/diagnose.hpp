@@ -186,6 +186,7 @@ struct BalanceFinding {  // one candidate balance or sensor
   std::string failure;      // why no step of its fit could be simulated (empty: one ran, or none was tried)
   double share = 1;         // of the linear fit the first simulated step that lowered the gap carried (0: none did)
   std::string longer_step_failed;  // why a longer step could not be simulated (the model left its domain)
+  int hats = 0;             // a state's disturbance: hat functions per run (fewer than the knots: screened only)
 };
 
 // The best balance's correction as a function of the model's states
@@ -207,6 +208,7 @@ struct FormFinding {
   bool beats_shape = false;             // as good as the time-shaped correction, or down to 1.5 x noise
   std::string failure;                  // why the form's simulation failed
   int dictionary = 0;                   // candidate terms tried
+  std::vector<std::string> read;        // the model's variables those terms are built from
   long simulations = 0;
   std::string sentence;
 };

@@ -22,6 +22,11 @@ namespace {
 constexpr int kConfirm = 3;  // candidates confirmed by simulation, best predicted first
 constexpr int kTrials = 8, kSteps = 3;  // simulated steps of one confirmation: tried, accepted at most
 constexpr double kShortestStep = 1.0 / 64;  // of the distance to the linearised optimum
+// Many states are screened on coarse hats first (Search::balances()).
+constexpr int kCoarseHats = 4;
+constexpr std::size_t kFineStates = 8;
+static_assert((kDisturbanceKnots - 1) % (kCoarseHats - 1) == 0, "coarse knots are fine knots");
+static_assert(kFineStates > static_cast<std::size_t>(kConfirm), "the confirmed balances have the fine hats");
 
 struct State {
   std::string name, unit;
@@ -63,7 +68,8 @@ struct Candidate {
   std::vector<double> scale;  // per run: the state's rate per unit coefficient
   std::vector<Eigen::MatrixXd> J;
   Eigen::MatrixXd P;
-  std::vector<Eigen::VectorXd> c;  // fitted, per run
+  Eigen::MatrixXd shapes;  // a state's hats: their values on the fine knots (Search::hat_shapes)
+  std::vector<Eigen::VectorXd> c;  // fitted, per run, on its hats
   double ssr = 0;
   double lambda = 0;  // the roughness weight cross-validation chose
 };
@@ -215,10 +221,12 @@ class Search {
 
   // The states: one simulation per hat and run, each hat's amplitude moving
   // the state by about 1 % of its nominal magnitude (a content's: of what it
-  // holds there) over the hat's width.
+  // holds there) over the hat's width. With many states (a line of
+  // cylinders has dozens) they are screened first on coarse hats - every
+  // third knot's, a subspace of the fine hats', so a coarse fit's gap is no
+  // smaller than the fine one's - and only the best kFineStates get the
+  // fine hats; the others keep their coarse fit, reported as such.
   std::vector<Candidate> balances() {
-    const int B = kDisturbanceKnots;
-    const std::size_t nr = used.size();
     std::vector<Candidate> cands;
     for (const auto& st : model_states(*in_.model, *in_.registry)) {
       // ds/dt = v defines the velocity: nothing physical is missing from it,
@@ -230,27 +238,64 @@ class Search {
       c.finding.unit = st.unit.empty() ? "1/s" : st.unit.ends_with("/s") ? st.unit + "2" : st.unit + "/s";
       c.finding.kind = st.unit == "kg" ? "mass" : st.unit == "J" || st.unit == "K" ? "energy"
                      : st.unit == "m/s" || st.unit == "rad/s" ? "force" : "state";
-      c.P = roughness(B, 0);
-      for (std::size_t q = 0; q < nr; ++q) {
+      for (std::size_t q = 0; q < used.size(); ++q) {
         const double magnitude = held[q].contains(st.name) ? 1.0 : st.nominal;  // a content's rate is per unit held
         c.scale.push_back(0.01 * magnitude / (knots[q][1] - knots[q][0]));
-        c.J.push_back(Eigen::MatrixXd::Zero(r0[q].size(), B));
       }
       cands.push_back(std::move(c));
     }
+    const std::size_t n = cands.size();
+    const bool coarse_first = n * kDisturbanceKnots > n * kCoarseHats + kFineStates * kDisturbanceKnots;
+    std::vector<Candidate*> all;
+    for (auto& c : cands) all.push_back(&c);
+    if (!coarse_first) {
+      respond(all, hat_shapes(kDisturbanceKnots));
+      return cands;
+    }
+    respond(all, hat_shapes(kCoarseHats));
+    for (auto& c : cands) regularised_fit(c, r0);
+    std::sort(cands.begin(), cands.end(), [](const Candidate& a, const Candidate& b) { return a.ssr < b.ssr; });
+    std::vector<Candidate*> best;
+    for (std::size_t i = 0; i < kFineStates; ++i) best.push_back(&cands[i]);
+    respond(best, hat_shapes(kDisturbanceKnots));
+    return cands;
+  }
+
+  // The knot values of `hats` hat functions on every ((B - 1) / (hats - 1))-th
+  // of the B knots: the fine hats themselves, or coarse ones whose
+  // disturbance is still piecewise linear on the fine knots.
+  static Eigen::MatrixXd hat_shapes(int hats) {
+    const int B = kDisturbanceKnots, stride = (B - 1) / (hats - 1);
+    Eigen::MatrixXd T = Eigen::MatrixXd::Zero(B, hats);
+    for (int j = 0; j < B; ++j)
+      for (int h = 0; h < hats; ++h) T(j, h) = std::max(0.0, 1.0 - std::abs(j - h * stride) / static_cast<double>(stride));
+    return T;
+  }
+
+  // Each candidate's output sensitivity to each hat of `shapes` (columns:
+  // knot values), by one simulation per hat and run; its J, roughness and
+  // coefficients are then on those hats.
+  void respond(const std::vector<Candidate*>& cs, const Eigen::MatrixXd& shapes) {
+    const long nr = static_cast<long>(used.size()), H = shapes.cols();
+    for (Candidate* c : cs) {
+      c->P = roughness(static_cast<int>(H), 0);
+      c->shapes = shapes;
+      c->finding.hats = static_cast<int>(H);
+      c->J.assign(nr, Eigen::MatrixXd());
+      for (long q = 0; q < nr; ++q) c->J[q] = Eigen::MatrixXd::Zero(r0[q].size(), H);
+    }
     if (in_.log)
-      in_.log("unexplained: " + std::to_string(cands.size()) + " balances x " + std::to_string(nr) + " runs x " +
-              std::to_string(B) + " hats: " + std::to_string(cands.size() * nr * B) + " simulations");
-    parallel_for(static_cast<long>(cands.size() * nr * B), opt_.threads, [&](int, long job) {
-      const long i = job / static_cast<long>(nr * B), q = (job / B) % static_cast<long>(nr), j = job % B;
-      Candidate& c = cands[i];
-      std::vector<double> rate(B, 0.0);
-      rate[j] = c.scale[q];
+      in_.log("unexplained: " + std::to_string(cs.size()) + " balances x " + std::to_string(nr) + " runs x " +
+              std::to_string(H) + " hats: " + std::to_string(cs.size() * nr * H) + " simulations");
+    parallel_for(static_cast<long>(cs.size()) * nr * H, opt_.threads, [&](int, long job) {
+      const long i = job / (nr * H), q = (job / H) % nr, j = job % H;
+      Candidate& c = *cs[i];
+      std::vector<double> rate(kDisturbanceKnots);
+      for (int k = 0; k < kDisturbanceKnots; ++k) rate[k] = shapes(k, j) * c.scale[q];
       const auto sim = in_.simulate(used[q], {disturbance(c, q, std::move(rate))}, nullptr);
       ++simulations;
       if (!sim.empty()) c.J[q].col(j) = residual(used[q], sim) - r0[q];  // a failed run leaves the hat unused
     });
-    return cands;
   }
 
   // The sensors: a smooth offset (in noise units) and a gain per run, exactly linear.
@@ -261,6 +306,7 @@ class Search {
       Candidate c;
       c.finding.balance = "sensor " + name;
       c.finding.kind = "sensor";
+      c.finding.hats = B;
       c.P = roughness(B, 1);
       for (std::size_t q = 0; q < used.size(); ++q) {
         const auto& run = runs_[used[q]];
@@ -282,8 +328,9 @@ class Search {
   // default its fit).
   Disturbance disturbance_of(const Candidate& c, std::size_t q, const Eigen::VectorXd* coef = nullptr) const {
     const Eigen::VectorXd& k = coef ? *coef : c.c[q];
+    const Eigen::VectorXd knot_values = c.shapes * k;
     std::vector<double> rate(kDisturbanceKnots);
-    for (int j = 0; j < kDisturbanceKnots; ++j) rate[j] = k[j] * c.scale[q];
+    for (int j = 0; j < kDisturbanceKnots; ++j) rate[j] = knot_values[j] * c.scale[q];
     return disturbance(c, q, std::move(rate));
   }
 
@@ -513,7 +560,7 @@ std::string unexplained_json(const std::optional<Unexplained>& u, const std::fun
       << ", \"explained\": " << num(b.explained) << ", \"confirmed\": " << (b.confirmed ? "true" : "false")
       << ", \"failure\": " << (b.failure.empty() ? std::string("null") : str(b.failure))
       << ", \"share\": " << num(b.share) << ", \"longer_step_failed\": "
-      << (b.longer_step_failed.empty() ? std::string("null") : str(b.longer_step_failed)) << "}";
+      << (b.longer_step_failed.empty() ? std::string("null") : str(b.longer_step_failed)) << ", \"hats\": " << b.hats << "}";
   }
   o << "],\n  \"shape\": [";
   for (std::size_t i = 0; i < u->shape.size(); ++i) {
@@ -588,7 +635,8 @@ std::string unexplained_html(const std::optional<Unexplained>& u,
     const auto& b = u->balances[i];
     o << "<tr><td class=\"l\">" << html(b.balance) << "</td><td class=\"l\">" << html(b.kind) << "</td><td>"
       << rounded(b.gap_after, 2)
-      << (!b.confirmed ? b.failure.empty() ? " (predicted)" : " (predicted; its simulation failed: " + html(b.failure) + ")"
+      << (b.hats < kDisturbanceKnots ? " (predicted on " + std::to_string(b.hats) + " coarse hats; screened only)"
+          : !b.confirmed ? b.failure.empty() ? " (predicted)" : " (predicted; its simulation failed: " + html(b.failure) + ")"
           : !b.longer_step_failed.empty() ? " (fitted on simulations from " + rounded(100 * b.share, 2) +
                                                   " % of its linear fit; a longer step left the model's domain: " +
                                                   html(b.longer_step_failed) + ")"
