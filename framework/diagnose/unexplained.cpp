@@ -265,10 +265,12 @@ class Search {
   // of the B knots: the fine hats themselves, or coarse ones whose
   // disturbance is still piecewise linear on the fine knots.
   static Eigen::MatrixXd hat_shapes(int hats) {
-    const int B = kDisturbanceKnots, stride = (B - 1) / (hats - 1);
-    Eigen::MatrixXd T = Eigen::MatrixXd::Zero(B, hats);
-    for (int j = 0; j < B; ++j)
-      for (int h = 0; h < hats; ++h) T(j, h) = std::max(0.0, 1.0 - std::abs(j - h * stride) / static_cast<double>(stride));
+    const int stride = (kDisturbanceKnots - 1) / (hats - 1);
+    std::vector<double> at(hats);  // the hats' knots, counted in fine knots
+    for (int h = 0; h < hats; ++h) at[h] = h * stride;
+    Eigen::MatrixXd T(kDisturbanceKnots, hats);
+    for (int j = 0; j < kDisturbanceKnots; ++j)
+      for (int h = 0; h < hats; ++h) T(j, h) = hat(at, h, j);
     return T;
   }
 
@@ -281,8 +283,8 @@ class Search {
       c->P = roughness(static_cast<int>(H), 0);
       c->shapes = shapes;
       c->finding.hats = static_cast<int>(H);
-      c->J.assign(nr, Eigen::MatrixXd());
-      for (long q = 0; q < nr; ++q) c->J[q] = Eigen::MatrixXd::Zero(r0[q].size(), H);
+      c->J.clear();
+      for (long q = 0; q < nr; ++q) c->J.push_back(Eigen::MatrixXd::Zero(r0[q].size(), H));
     }
     if (in_.log)
       in_.log("unexplained: " + std::to_string(cs.size()) + " balances x " + std::to_string(nr) + " runs x " +
