@@ -346,6 +346,18 @@ struct Normal {
   std::vector<double> s;
   double n = 0;
 
+  // Of each run's sensitivities J[q] (a column a term) and residuals r[q].
+  static Normal of(const std::vector<Eigen::MatrixXd>& J, const std::vector<Eigen::VectorXd>& r) {
+    Normal N;
+    for (std::size_t q = 0; q < r.size(); ++q) {
+      N.G.push_back(J[q].transpose() * J[q]);
+      N.h.push_back(J[q].transpose() * r[q]);
+      N.s.push_back(r[q].squaredNorm());
+      N.n += static_cast<double>(r[q].size());
+    }
+    return N;
+  }
+
   Eigen::VectorXd fit(const std::vector<int>& S, int skip) const {
     const int p = static_cast<int>(S.size());
     if (p == 0) return Eigen::VectorXd();
@@ -379,6 +391,7 @@ struct Normal {
 
 constexpr int kMaxTerms = 4;
 constexpr std::size_t kTried = 3;  // additions simulated per round
+constexpr std::size_t kScreened = 24;  // terms linearised after the first round (Discovery::linearise)
 
 // What a term must gain to be taken: a run's worth of noise (sum of squares
 // of unit-variance residuals) per run, and a percent of the excess.
@@ -386,20 +399,18 @@ double needed(const Normal& N, double ssr) {
   return static_cast<double>(N.G.size()) + 0.01 * std::max(ssr - N.n, 0.0);
 }
 
-// The additions that, refitted with the form's terms `S`, lower the
-// cross-validated error most, best first, at most `count`: one term, or one
-// with the constant (an affine law - a spring with its preload - that
-// neither term alone fits); only those that gain enough. The constant is
-// candidate 0.
-std::vector<std::vector<int>> best_additions(const Normal& N, const std::vector<int>& S,
-                                             const std::vector<char>& usable, std::size_t count) {
-  const double cv = N.cross_validated(S);
+// The additions to the form's terms `S` - one term, or one with the
+// constant (an affine law - a spring with its preload - that neither term
+// alone fits) - with how much each, refitted with S, lowers `error` (of
+// the terms fitted); best first. The constant is candidate 0.
+std::vector<std::pair<double, std::vector<int>>> additions(const std::vector<int>& S, const std::vector<char>& usable,
+                                                           const std::function<double(const std::vector<int>&)>& error) {
+  const double before = error(S);
   std::vector<std::pair<double, std::vector<int>>> ranked;
   const auto consider = [&](std::vector<int> added) {
     auto T = S;
     T.insert(T.end(), added.begin(), added.end());
-    const double gain = cv - N.cross_validated(T);
-    if (gain >= static_cast<double>(added.size()) * needed(N, cv)) ranked.emplace_back(gain, std::move(added));
+    ranked.emplace_back(before - error(T), std::move(added));
   };
   const bool constant_free = usable[0] && std::find(S.begin(), S.end(), 0) == S.end();
   for (int k = 0; k < static_cast<int>(usable.size()); ++k) {
@@ -408,8 +419,18 @@ std::vector<std::vector<int>> best_additions(const Normal& N, const std::vector<
     if (k > 0 && constant_free) consider({k, 0});
   }
   std::sort(ranked.begin(), ranked.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+  return ranked;
+}
+
+// The additions that lower the cross-validated error by enough (a term's
+// price each), best first, at most `count`.
+std::vector<std::vector<int>> best_additions(const Normal& N, const std::vector<int>& S,
+                                             const std::vector<char>& usable, std::size_t count) {
+  const double price = needed(N, N.cross_validated(S));
   std::vector<std::vector<int>> out;
-  for (std::size_t i = 0; i < ranked.size() && out.size() < count; ++i) out.push_back(ranked[i].second);
+  const auto cv = [&](const std::vector<int>& T) { return N.cross_validated(T); };
+  for (auto& [gain, added] : additions(S, usable, cv))
+    if (out.size() < count && gain >= static_cast<double>(added.size()) * price) out.push_back(std::move(added));
   return out;
 }
 
@@ -602,31 +623,58 @@ class Discovery {
   }
 
  private:
-  // The runs' sensitivities to each candidate added to the form.
+  // The runs' sensitivities to each candidate added to the form. The first
+  // round linearises every candidate on every run; later ones only the
+  // form's terms, the constant and the terms of the additions that the
+  // first round's sensitivities, with the residuals left now, rank best -
+  // until kScreened are new: the form moves the model little next to what
+  // tells one term from another, and it saves simulations where the
+  // dictionary is longer than twice that. The others are unusable.
   Normal linearise(const std::vector<Eigen::VectorXd>& r, std::vector<char>& usable) {
-    const std::size_t nr = in_.used.size();
-    const long T = static_cast<long>(terms_.size());
-    std::vector<Eigen::MatrixXd> J(nr);
-    for (std::size_t q = 0; q < nr; ++q) J[q] = Eigen::MatrixXd::Zero(r[q].size(), T);
+    const std::size_t nr = in_.used.size(), T = terms_.size();
     usable.assign(T, 1);
-    parallel_for(T * static_cast<long>(nr), in_.threads, [&](int, long job) {
-      const long k = job / static_cast<long>(nr), q = job % static_cast<long>(nr);
+    if (!first_.empty() && T > 2 * kScreened) usable = screened(r);
+    std::vector<Eigen::MatrixXd> J(nr);
+    for (std::size_t q = 0; q < nr; ++q) J[q] = Eigen::MatrixXd::Zero(r[q].size(), static_cast<Eigen::Index>(T));
+    std::vector<std::pair<long, long>> jobs;  // (term, run)
+    for (std::size_t k = 0; k < T; ++k)
+      for (std::size_t q = 0; q < nr && usable[k]; ++q) jobs.emplace_back(static_cast<long>(k), static_cast<long>(q));
+    std::vector<char> failed(T, 0);
+    parallel_for(static_cast<long>(jobs.size()), in_.threads, [&](int, long job) {
+      const auto [k, q] = jobs[job];
       const double eps = amplitude_ / terms_[k].rms;
       auto probed = form;
       probed.push_back({eps, terms_[k].factors});
       const auto sim = in_.simulate(in_.used[q], {Disturbance{balance_, {}, {}, probed}}, nullptr);
       ++sims;
-      if (sim.empty()) usable[k] = 0;
+      if (sim.empty()) failed[k] = 1;
       else J[q].col(k) = (in_.residual(in_.used[q], sim) - r[q]) / eps;
     });
-    Normal N;
-    for (std::size_t q = 0; q < nr; ++q) {
-      N.G.push_back(J[q].transpose() * J[q]);
-      N.h.push_back(J[q].transpose() * r[q]);
-      N.s.push_back(r[q].squaredNorm());
-      N.n += static_cast<double>(r[q].size());
+    for (std::size_t k = 0; k < T; ++k) usable[k] = usable[k] && !failed[k];
+    Normal N = Normal::of(J, r);
+    if (first_.empty() && T > 2 * kScreened) {
+      for (auto& j : J) first_.push_back(j.cast<float>()), j.resize(0, 0);
+      first_usable_ = usable;
     }
     return N;
+  }
+
+  std::vector<char> screened(const std::vector<Eigen::VectorXd>& r) const {
+    Normal N;
+    for (std::size_t q = 0; q < r.size(); ++q) {
+      const Normal run = Normal::of({first_[q].cast<double>()}, {r[q]});
+      N.G.push_back(run.G[0]), N.h.push_back(run.h[0]), N.s.push_back(run.s[0]), N.n += run.n;
+    }
+    std::vector<char> wanted(terms_.size(), 0);
+    wanted[0] = 1;
+    for (int k : chosen) wanted[k] = 1;
+    std::size_t fresh = 0;
+    const auto cv = [&](const std::vector<int>& S) { return N.cross_validated(S); };
+    for (const auto& [gain, added] : additions(chosen, first_usable_, cv)) {
+      if (fresh >= kScreened) break;
+      for (int k : added) fresh += wanted[k] ? 0 : 1, wanted[k] = 1;
+    }
+    return wanted;
   }
 
   // The linearisation ranks the additions; the best few are simulated
@@ -675,6 +723,8 @@ class Discovery {
   double amplitude_, range_;
   Refiner refiner_;
   std::vector<double> parameters_of_;
+  std::vector<Eigen::MatrixXf> first_;  // the first round's sensitivities, per run (ranking needs no more digits)
+  std::vector<char> first_usable_;
 };
 
 }  // namespace

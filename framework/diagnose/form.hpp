@@ -14,7 +14,8 @@
 // temperatures; sign(v) and v times each of those), each term's output
 // sensitivity from one simulation per run with it added to the balance
 // (SolverOptions::disturbances' terms, which read the state as it is
-// simulated). Terms are chosen by forward selection, each kept only when it
+// simulated) - after the first round only for the terms the first round's
+// sensitivities rank best. Terms are chosen by forward selection, each kept only when it
 // lowers the leave-one-run-out prediction error: a form must carry from the
 // runs it was fitted on to a run it was not. The chosen coefficients are
 // refined by Gauss-Newton steps on simulations with the form in the model,
