@@ -346,15 +346,16 @@ struct Normal {
   std::vector<double> s;
   double n = 0;
 
-  // Of each run's sensitivities J[q] (a column a term) and residuals r[q].
+  // One more run: its sensitivities J (a column a term) and residuals r.
+  void add(const Eigen::MatrixXd& J, const Eigen::VectorXd& r) {
+    G.push_back(J.transpose() * J);
+    h.push_back(J.transpose() * r);
+    s.push_back(r.squaredNorm());
+    n += static_cast<double>(r.size());
+  }
   static Normal of(const std::vector<Eigen::MatrixXd>& J, const std::vector<Eigen::VectorXd>& r) {
     Normal N;
-    for (std::size_t q = 0; q < r.size(); ++q) {
-      N.G.push_back(J[q].transpose() * J[q]);
-      N.h.push_back(J[q].transpose() * r[q]);
-      N.s.push_back(r[q].squaredNorm());
-      N.n += static_cast<double>(r[q].size());
-    }
+    for (std::size_t q = 0; q < r.size(); ++q) N.add(J[q], r[q]);
     return N;
   }
 
@@ -633,7 +634,7 @@ class Discovery {
   Normal linearise(const std::vector<Eigen::VectorXd>& r, std::vector<char>& usable) {
     const std::size_t nr = in_.used.size(), T = terms_.size();
     usable.assign(T, 1);
-    if (!first_.empty() && T > 2 * kScreened) usable = screened(r);
+    if (!first_.empty()) usable = screened(r);
     std::vector<Eigen::MatrixXd> J(nr);
     for (std::size_t q = 0; q < nr; ++q) J[q] = Eigen::MatrixXd::Zero(r[q].size(), static_cast<Eigen::Index>(T));
     std::vector<std::pair<long, long>> jobs;  // (term, run)
@@ -661,10 +662,7 @@ class Discovery {
 
   std::vector<char> screened(const std::vector<Eigen::VectorXd>& r) const {
     Normal N;
-    for (std::size_t q = 0; q < r.size(); ++q) {
-      const Normal run = Normal::of({first_[q].cast<double>()}, {r[q]});
-      N.G.push_back(run.G[0]), N.h.push_back(run.h[0]), N.s.push_back(run.s[0]), N.n += run.n;
-    }
+    for (std::size_t q = 0; q < r.size(); ++q) N.add(first_[q].cast<double>(), r[q]);
     std::vector<char> wanted(terms_.size(), 0);
     wanted[0] = 1;
     for (int k : chosen) wanted[k] = 1;
