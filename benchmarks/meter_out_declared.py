@@ -83,7 +83,12 @@ FORMS = {
     "supply_line": ("supply.supply_sag", 0.3, 1.5, lambda t, k: add_components(
         t, ["line_S: {type: iso6358_throttle, C: %g dm3/(s*bar), b: 0.3}" % k, "tank_S: {type: volume, V: 20 cm3, p0: 6 bar g}"], []).replace(
         "  - [supply.port, valve.P]", "  - [supply.port, line_S.a]\n  - [line_S.b, tank_S.port, valve.P]"), None),
-    "seal_friction": ("cyl.friction_running", 1.4, 3.0, lambda t, k: set_param(set_param(t, "cyl", "friction_FC", "%g N" % (20 * k)), "cyl", "friction_viscous", "%g N*s/m" % (100 * math.sqrt(k))), None),
+    # a seal running dry: a second friction on the rod with a Stribeck hump
+    # and a speed law |v|^0.6 of its own - not the cylinder's law rescaled
+    "seal_friction": ("cyl.friction_running", 1.4, 3.0, lambda t, k: add_components(
+        t, ["seal_drag: {type: friction_element, friction: custom, friction_b0: %g N, friction_FS0: %g N, "
+            "friction_vS: 20 mm/s, friction_kv0: %g N, friction_a: 0.6}" % (20 * (k - 1), 8 * (k - 1), 60 * (k - 1))],
+        ["[load.flange, seal_drag.flange]"]), None),
     "heavier_tool": ("load.mass_off", 2.0, 6.0, lambda t, k: set_param(t, "load", "m", "%g kg" % (2 * k)), None),
     "sluggish_spool": ("valve.slow_switching", 3.0, 12.0, lambda t, k: set_param(t, "valve", "t_switch_time", "%g ms" % (10 * k)), None),
     "transducer_zero": ("p_cap.offset", 0.05e5, 0.3e5, lambda t, k: t, ("p_cap", "offset")),

@@ -222,8 +222,7 @@ ComponentInfo describe() {
   for (auto& f : FrictionFaults::parameters()) i.parameters.push_back(std::move(f));
   DoubleActingCylinder::add_parts(layout(), i, true, true, true, true);
   i.faults = {
-      {"friction_running", "friction off (seal wear, lubrication, side load), as a factor on the friction",
-       {{"k", "friction_scale", "1", true, 1.0, 0.25, 4.0, 1.3, true}}},
+      FrictionFaults::running_friction_fault(),
       {"cushion_needle_misadjusted", "cushion needle opening off its setting (turned, clogged)",
        {{"k", "z_EC", "1", true, 1.0, 0.2, 5.0, 1.3, true}}},
       {"cushion_check_off", "cushion check valve conductance off (sticking, leaking)",

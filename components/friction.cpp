@@ -136,6 +136,16 @@ std::vector<ParameterSpec> FrictionLaw::parameters(bool with_cushion) {
                       .optional());
   const std::vector<ParameterSpec> rest = {
       P::scalar("friction_scale", "1", "factor on the friction force", 1.0).non_negative(),
+      P::scalar("friction_coulomb_scale", "1",
+                "factor on the dry part alone: F_C (coulomb_viscous), F_C and F_S (lugre), b0 + b1 p and the "
+                "Stribeck term (presets, custom)",
+                1.0)
+          .non_negative(),
+      P::scalar("friction_viscous_scale", "1",
+                "factor on the viscous part alone: d v (coulomb_viscous), sigma2 v (lugre), (kv0 + kv1 p) |v|^a "
+                "(presets, custom)",
+                1.0)
+          .non_negative(),
       P::scalar("friction_v_reg", "m/s", "velocity scale of the tanh sign regularisation", 1e-4).positive(),
       P::scalar("friction_v_eps", "m/s", "velocity below which |v| is rounded (|v|^a stays smooth)", 1e-6)
           .positive(),
@@ -155,6 +165,24 @@ std::vector<ParameterSpec> FrictionLaw::parameters(bool with_cushion) {
     for (auto& c : custom_parameters("friction_cushion", true)) out.push_back(std::move(c));
   return out;
 }
+
+namespace {
+
+// The factors on the dry and the viscous part are folded into the
+// coefficients once, so that the laws' equations stay as the papers write
+// them. LuGre's bristle force follows g(v), so scaling F_C and F_S scales it.
+void fold_part_scales(FrictionLaw& f, double dry, double viscous) {
+  for (FrictionCoefficients* c : {&f.main, &f.cushion}) {
+    for (double* x : {&c->b0, &c->b1, &c->FS0, &c->FS1, &c->FC}) *x *= dry;
+    c->kv0 *= viscous;
+    c->kv1 *= viscous;
+  }
+  f.FC *= dry;
+  f.FS *= dry;
+  f.viscous *= viscous;
+}
+
+}  // namespace
 
 FrictionLaw FrictionLaw::from(const ParameterValues& p) {
   FrictionLaw f;
@@ -196,6 +224,7 @@ FrictionLaw FrictionLaw::from(const ParameterValues& p) {
   f.sigma0 = p["friction_sigma0"];
   f.sigma1 = p["friction_sigma1"];
   f.viscous = p["friction_viscous"];
+  fold_part_scales(f, p["friction_coulomb_scale"], p["friction_viscous_scale"]);
   if (f.model == FrictionModel::lugre && !(f.FC > 0))
     throw ParameterError("friction_FC", "LuGre friction needs a Coulomb force friction_FC > 0 (g(v) > 0)");
   return f;

@@ -181,6 +181,27 @@ TEST(DeclaredFaults, SensorReadsGainTimesValuePlusOffset) {
   EXPECT_NEAR(column(r.table, "p").back(), 1.1 * 2e5 + 1e3, 1e-6);
 }
 
+// A mass pushed by a constant force F against friction reaches the speed
+// where F = k_C F_C + k_v d v: the running-friction fault's two factors act
+// on the dry and on the viscous part alone, in every law that has both.
+TEST(DeclaredFaults, RunningFrictionScalesItsDryAndViscousPartsApart) {
+  const double F = 50, FC = 20, d = 100, kc = 1.5, kv = 0.5;
+  for (const std::string law : {"friction_model: coulomb_viscous, friction_FC: 20 N, friction_viscous: 100 N*s/m",
+                                "friction: custom, friction_b0: 20 N, friction_kv0: 100 N, friction_a: 1"}) {
+    const RunResult r = run_text(
+        "components:\n"
+        "  load: {type: translational_mass, m: 1 kg}\n"
+        "  push: {type: force_source, F: " + num(F) + " N}\n"
+        "  seal: {type: friction_element, " + law + ", friction_coulomb_scale: " + num(kc) +
+            ", friction_viscous_scale: " + num(kv) + "}\n"
+        "connections:\n  - [load.flange, push.flange, seal.flange]\n"
+        "outputs: {v: load.v}\n"
+        "simulation: {t_end: 1 s, output_interval: 10 ms}\n",
+        "running_friction.yaml");
+    EXPECT_LT(rel_err(column(r.table, "v").back(), (F - kc * FC) / (kv * d)), 1e-5) << law;
+  }
+}
+
 const char* kMeterOut = PNEUMO_SOURCE_DIR "/netlists/meter_out_cylinder.yaml";
 
 Netlist meter_out() {

@@ -140,5 +140,32 @@ TEST(DiagnoseDeclared, ATransducerOffsetIsNamedWithoutACatalogue) {
     }
 }
 
+// The second cylinder's seal runs dry: its Coulomb force doubles, its
+// viscous part stays. The running-friction fault moves the two parts apart,
+// so it is named, with about those factors - not the pressure-dependent
+// friction, whose extra force would follow the pressure across the seal.
+TEST(DiagnoseDeclared, DryFrictionGrownAloneIsTheRunningFrictionWithItsTwoFactors) {
+  TempDir dir;
+  const std::string model = dir.write("two.yaml", kTwoCylinders);
+  std::string truth = kTwoCylinders;
+  const std::string b_law = "friction_FC: 20 N, friction_viscous: 100 N*s/m}\n  load_a";
+  truth.replace(truth.find(b_law), b_law.size(), "friction_FC: 40 N, friction_viscous: 100 N*s/m}\n  load_a");
+  make_runs(dir.path() / "runs", truth, {"x_a", "p_a", "x_b", "p_b"});
+  const auto rep =
+      diagnose::diagnose(model, (dir.path() / "runs").string(), "", builtin_registry(), declared({"cyl_b"}));
+  ASSERT_FALSE(rep.verdict.empty());
+  EXPECT_EQ(rep.verdict[0], "cyl_b.friction_running");
+  EXPECT_LT(rep.validation_after.total.rms, 1.5);
+  bool found = false;
+  for (const auto& [name, values] : rep.final_values)
+    if (name == "cyl_b.friction_running") {
+      found = true;
+      ASSERT_EQ(values.size(), 2u);
+      EXPECT_NEAR(values[0], 2.0, 0.2);  // k_coulomb
+      EXPECT_NEAR(values[1], 1.0, 0.1);  // k_viscous
+    }
+  EXPECT_TRUE(found);
+}
+
 }  // namespace
 }  // namespace pneumo
