@@ -13,6 +13,9 @@ declared faults and the measurement faults only) and reports:
                  signals so little (excess over the noise, from the truth's
                  and the model's own simulations) that a diagnosis would see
                  a gap under 1.1 times the noise: printed, scored apart
+  first group  - besides: single cases whose expected fault is in the
+                 verdict's first group, the candidates the diagnosis says
+                 these runs cannot tell apart ("grp" where not first)
 Run by hand, not in CI (minutes per case):
 
     python3 benchmarks/meter_out_declared.py [--seed N] [--cases K] [--pneumo build/pneumo] [--work DIR]
@@ -242,9 +245,17 @@ def diagnose_case(pneumo, model, case, form, expected, k, stats, extra=(), exces
     stats.setdefault(kind, [0, 0])
     stats[kind][0] += ok
     stats[kind][1] += 1
+    # Apart from the strict score: the expected fault among the first slot's
+    # group - the candidates the diagnosis says these runs cannot tell apart.
+    groups = rep.get("verdict_groups") or [[]]
+    if kind == "single":
+        stats.setdefault("single, in the first group", [0, 0])
+        stats["single, in the first group"][0] += expected in groups[0]
+        stats["single, in the first group"][1] += 1
     print("%-34s k=%-9s %s-> %-44s %-4s %s (%.0f s)" % (
         case.name, "/".join("%.3g" % x for x in (k if isinstance(k, tuple) else (k,))),
-        "" if excess is None else "excess %-6.3g " % excess, "+".join(verdict) or "(none)", "ok" if ok else "MISS",
+        "" if excess is None else "excess %-6.3g " % excess, "+".join(verdict) or "(none)",
+        "ok" if ok else "MISS" if kind != "single" or expected not in groups[0] else "grp",
         "unexplained flagged;" if unexplained else "", secs), flush=True)
     return secs
 

@@ -1,0 +1,88 @@
+"""Catalogue-free diagnosis of the two-cylinder sequence A+ B+ B- A-
+(issue #37's second everyday circuit).
+
+netlists/sequence_ab.yaml: two cylinders on their valves with meter-out
+flow controls, limit switches and a sequencer - 19 components. Measured
+runs with one withheld fault written in a form of its own (an extra
+component, another parameter, an edit of the CSV; never the declared
+fault's own parameter), two such faults in different cylinders, an effect
+no component declares (a limit switch set 3-10 mm early: B starts before A
+is out; a process force against B), or none; supply 5 and 7 bar g
+(calibration) and 6 bar g (validation); both positions and both cap
+pressures at 200 Hz (0.05 mm, 3 kPa noise). Each case is diagnosed by
+`pneumo diagnose` WITHOUT --effects and scored as in
+meter_out_declared.py (named first, doubles both named, undeclared
+flagged, nulls clean, invisible cases apart). Run by hand, not in CI:
+
+    python3 benchmarks/sequence_ab_declared.py [--seed N] [--cases K] [--pneumo build/pneumo] [--work DIR]
+"""
+import argparse
+import random
+from pathlib import Path
+
+from meter_out_declared import add_components, diagnose_case, new_case, planted_excess, set_param, write_runs
+
+ROOT = Path(__file__).resolve().parent.parent
+# Outputs every 5 ms (1 ms in the netlist): the fit's rows.
+MODEL = (ROOT / "netlists" / "sequence_ab.yaml").read_text().replace("output_interval: 1 ms", "output_interval: 5 ms")
+SIGNALS = ["x_A", "x_B", "p_cap_A", "p_cap_B"]
+NOISE = {"x_A": 5e-5, "x_B": 5e-5, "p_cap_A": 3e3, "p_cap_B": 3e3}
+INTERVAL = 5e-3
+
+# name: (expected candidate or None for undeclared, lo, hi, apply(text, k) -> text, csv edit or None)
+FORMS = {
+    "piston_leak_B": ("cyl_B.piston_seal_leak", 0.005, 0.03, lambda t, k: add_components(
+        t, ["seal_gap: {type: iso6358_throttle, C: %g dm3/(s*bar), b: 0.05}" % k],
+        ["[cyl_B.cap, seal_gap.a]", "[seal_gap.b, cyl_B.rod]"]), None),
+    "rod_leak_A": ("cyl_A.rod_seal_leak", 0.1, 0.4, lambda t, k: add_components(
+        t, ["rod_gap: {type: nozzle, d: %g mm}" % k, "rod_air: {type: atmosphere}"],
+        ["[cyl_A.rod, rod_gap.a]", "[rod_gap.b, rod_air.port]"]), None),
+    "needle_A_rod": ("flow_A_rod.misadjusted", 0.4, 0.8, lambda t, k: set_param(
+        set_param(t, "flow_A_rod", "C", "%g dm3/(s*bar)" % (0.3 * k)), "flow_A_rod", "b", "0.35"), None),
+    "heavier_B": ("load_B.mass_off", 2.0, 5.0, lambda t, k: set_param(t, "load_B", "m", "%g kg" % (2 * k)), None),
+    "sluggish_A": ("valve_A.slow_switching", 3.0, 10.0, lambda t, k: set_param(
+        t, "valve_A", "t_switch_time", "%g ms" % (15 * k)), None),
+    # a seal running dry: a second friction on A's rod, its own law
+    "seal_friction_A": ("cyl_A.friction_running", 1.5, 3.0, lambda t, k: add_components(
+        t, ["seal_drag: {type: friction_element, friction: custom, friction_b0: %g N, friction_FS0: %g N, "
+            "friction_vS: 20 mm/s, friction_kv0: %g N, friction_a: 0.6}" % (20 * (k - 1), 8 * (k - 1), 30 * (k - 1))],
+        ["[load_A.flange, seal_drag.flange]"]), None),
+    "x_B_zero": ("x_B.offset", 0.3e-3, 2e-3, lambda t, k: t, ("x_B", "offset")),
+    # undeclared: no component declares a misplaced limit switch
+    "switch_a1_early": (None, 3.0, 10.0, lambda t, k: set_param(t, "a1", "position", "%g mm" % (100 - k)), None),
+    # undeclared: a process force against B's stroke
+    "process_force_B": (None, 10.0, 40.0, lambda t, k: add_components(
+        t, ["push: {type: force_source, F: %g N}" % -k], ["[load_B.flange, push.flange]"]), None),
+}
+
+# Two faults planted together, in different cylinders: both must be named.
+DOUBLES = [("piston_leak_B", "sluggish_A"), ("heavier_B", "needle_A_rod")]
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--cases", type=int, default=0, help="first K cases only (0: all)")
+    ap.add_argument("--pneumo", default=str(ROOT / "build" / "pneumo"))
+    ap.add_argument("--work", default="/tmp/pneumo_sequence_ab_declared")
+    a = ap.parse_args()
+    rng = random.Random(a.seed)
+    work = Path(a.work)
+    work.mkdir(parents=True, exist_ok=True)
+    (work / "model.yaml").write_text(MODEL)
+    plan = [(f,) for f in FORMS] + DOUBLES + [("null",), ("null",)]
+    rng.shuffle(plan)
+    if a.cases:
+        plan = plan[:a.cases]
+    stats = {"single": [0, 0], "double": [0, 0], "undeclared": [0, 0], "null": [0, 0]}
+    for i, forms in enumerate(plan):
+        case, form, expected, k, truth, edit, ek = new_case(work, a.seed, i, forms, MODEL, FORMS, rng)
+        clean = write_runs(a.pneumo, truth, case / "runs", rng, edit, ek, SIGNALS, NOISE, INTERVAL)
+        excess = planted_excess(a.pneumo, MODEL, clean, case, SIGNALS, NOISE, INTERVAL) if form != "null" else None
+        diagnose_case(a.pneumo, work / "model.yaml", case, form, expected, k, stats, excess=excess)
+    for kind, (ok, n) in stats.items():
+        print("%-11s %d of %d" % (kind, ok, n))
+
+
+if __name__ == "__main__":
+    main()
