@@ -170,6 +170,8 @@ void System::build_nodes() {
   join_connections(c, l);
   add_lone_ports(c, l);
   check_nodes(c, l);
+  for (const auto& ports : l.nodes)
+    if (!ports.empty()) nodes_.push_back(ports);
   add_node_variables(l);
   int mode = 0, root = 0;
   for (std::size_t ci = 0; ci < c.components.size(); ++ci) add_component_block(static_cast<int>(ci), l, mode, root);

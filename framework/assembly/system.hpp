@@ -197,6 +197,9 @@ class System {
   // IDA's unknown `i`: a node's unknown is read by every component at the
   // node, a component's internal unknown by that component.
   std::vector<int> components_reading(int i) const;
+  // The circuit's nodes, each the ports it joins: connections that share a
+  // port are one node; an optional port left unconnected is a node alone.
+  const std::vector<std::vector<PortId>>& nodes() const { return nodes_; }
   // Whether a local variable of component `component` (an index into its
   // local_variable_names) is a constant after alias elimination: a node
   // held by a source's pressure or the atmosphere, a flange on a fixed
@@ -291,6 +294,7 @@ class System {
                        double* lyp) const;
 
   Circuit circuit_;
+  std::vector<std::vector<PortId>> nodes_;
   std::vector<std::unique_ptr<Block>> blocks_;
   int n_ = 0;
   std::vector<std::string> var_names_;

@@ -4,7 +4,6 @@
 #include <atomic>
 #include <cmath>
 #include <map>
-#include <numeric>
 #include <set>
 #include <sstream>
 
@@ -60,10 +59,9 @@ struct Readable {
 };
 
 // A physical node (pneumatic, thermal, translational) of the circuit: the
-// components with a port at it; connections that share a port are one
-// node. `held`: its across variable is a constant (a source's pressure, the
-// atmosphere, a fixed temperature, a wall) - what happens on one side of it
-// does not reach the other.
+// components with a port at it. `held`: its across variable is a constant (a
+// source's pressure, the atmosphere, a fixed temperature, a wall) - what
+// happens on one side of it does not reach the other.
 struct PhysicalNode {
   std::vector<int> components;
   bool held = false;
@@ -73,28 +71,17 @@ struct PhysicalNode {
 // reads (a sequencer is wired to every valve of a line): they make no node.
 std::vector<PhysicalNode> physical_nodes(const System& sys) {
   const Circuit& c = sys.circuit();
-  std::vector<int> root(c.connections.size());
-  std::iota(root.begin(), root.end(), 0);
-  const auto find = [&](int k) {
-    while (root[k] != k) k = root[k] = root[root[k]];
-    return k;
-  };
-  std::map<std::pair<int, int>, int> holder;  // port -> a connection holding it
-  for (int k = 0; k < static_cast<int>(c.connections.size()); ++k)
-    for (const auto& p : c.connections[k].ports)
-      if (const auto [it, fresh] = holder.emplace(std::make_pair(p.component, p.port), k); !fresh)
-        root[find(k)] = find(it->second);
-  std::map<int, PhysicalNode> nodes;
-  for (int k = 0; k < static_cast<int>(c.connections.size()); ++k)
-    for (const auto& p : c.connections[k].ports) {
-      const Component& comp = *c.components[p.component];
-      if (comp.info().ports[p.port].domain == Domain::signal) continue;
-      PhysicalNode& node = nodes[find(k)];
-      node.components.push_back(p.component);
-      node.held = node.held || sys.holds_constant(p.component, comp.port_offset(p.port));
-    }
   std::vector<PhysicalNode> out;
-  for (auto& [k, node] : nodes) out.push_back(std::move(node));
+  for (const auto& ports : sys.nodes()) {
+    const Component& first = *c.components[ports.front().component];
+    if (first.info().ports[ports.front().port].domain == Domain::signal) continue;
+    PhysicalNode node;
+    for (const auto& p : ports) {
+      node.components.push_back(p.component);
+      node.held = node.held || sys.holds_constant(p.component, c.components[p.component]->port_offset(p.port));
+    }
+    out.push_back(std::move(node));
+  }
   return out;
 }
 
