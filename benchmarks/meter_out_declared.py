@@ -77,31 +77,78 @@ def set_param(text, comp, key, value):
     return text[:start] + body + text[i - 1:]
 
 
-# name: (expected candidate or None for undeclared, lo, hi, apply(text, k) -> text, csv edit or None)
+# The withheld forms each benchmark plants, as (expected candidate or None
+# for undeclared, lo, hi, apply(text, k) -> text, csv edit or None), k drawn
+# log-uniformly in [lo, hi]. Each is written in a form of its own, never the
+# declared fault's parameter.
+def piston_leak(cyl, lo, hi):
+    """A laminar-ish throttle (b 0.05) of C = k dm3/(s*bar) across the piston."""
+    return ("%s.piston_seal_leak" % cyl, lo, hi, lambda t, k: add_components(
+        t, ["seal_gap: {type: iso6358_throttle, C: %g dm3/(s*bar), b: 0.05}" % k],
+        ["[%s.cap, seal_gap.a]" % cyl, "[seal_gap.b, %s.rod]" % cyl]), None)
+
+
+def rod_leak(cyl, lo, hi):
+    """A nozzle of k mm from the rod side to the atmosphere."""
+    return ("%s.rod_seal_leak" % cyl, lo, hi, lambda t, k: add_components(
+        t, ["rod_gap: {type: nozzle, d: %g mm}" % k, "rod_air: {type: atmosphere}"],
+        ["[%s.rod, rod_gap.a]" % cyl, "[rod_gap.b, rod_air.port]"]), None)
+
+
+def needle(flow, C, b, lo, hi):
+    """The flow control's needle turned: C k times its C (dm3/(s*bar)), another b."""
+    return ("%s.misadjusted" % flow, lo, hi, lambda t, k: set_param(
+        set_param(t, flow, "C", "%g dm3/(s*bar)" % (C * k)), flow, "b", str(b)), None)
+
+
+def heavier(load, m, lo, hi):
+    """The load k times its mass m (kg)."""
+    return ("%s.mass_off" % load, lo, hi, lambda t, k: set_param(t, load, "m", "%g kg" % (m * k)), None)
+
+
+def sluggish(valve, t_ms, lo, hi):
+    """The valve's switching time k times t_ms."""
+    return ("%s.slow_switching" % valve, lo, hi, lambda t, k: set_param(
+        t, valve, "t_switch_time", "%g ms" % (t_ms * k)), None)
+
+
+def seal_friction(cyl, load, F, kv, lo, hi):
+    """A seal running dry: a second friction on the rod with a Stribeck hump
+    and a speed law |v|^0.6 of its own - not the cylinder's law rescaled:
+    (k - 1) x (F N, 0.4 F N at rest, kv N at 1 m/s)."""
+    return ("%s.friction_running" % cyl, lo, hi, lambda t, k: add_components(
+        t, ["seal_drag: {type: friction_element, friction: custom, friction_b0: %g N, friction_FS0: %g N, "
+            "friction_vS: 20 mm/s, friction_kv0: %g N, friction_a: 0.6}" % (F * (k - 1), 0.4 * F * (k - 1), kv * (k - 1))],
+        ["[%s.flange, seal_drag.flange]" % load]), None)
+
+
+def zero_offset(signal, lo, hi):
+    """k (SI) added to the signal in the CSV: the transducer's zero."""
+    return ("%s.offset" % signal, lo, hi, lambda t, k: t, (signal, "offset"))
+
+
+def process_force(load, lo, hi):
+    """Undeclared: k N against the stroke on the load."""
+    return (None, lo, hi, lambda t, k: add_components(
+        t, ["push: {type: force_source, F: %g N}" % -k], ["[%s.flange, push.flange]" % load]), None)
+
+
 FORMS = {
-    "piston_leak_laminar": ("cyl.piston_seal_leak", 0.003, 0.03, lambda t, k: add_components(
-        t, ["seal_gap: {type: iso6358_throttle, C: %g dm3/(s*bar), b: 0.05}" % k], ["[cyl.cap, seal_gap.a]", "[seal_gap.b, cyl.rod]"]), None),
-    "rod_leak_nozzle": ("cyl.rod_seal_leak", 0.05, 0.4, lambda t, k: add_components(
-        t, ["rod_gap: {type: nozzle, d: %g mm}" % k, "rod_air: {type: atmosphere}"], ["[cyl.rod, rod_gap.a]", "[rod_gap.b, rod_air.port]"]), None),
-    "needle_turned": ("flow_cap.misadjusted", 0.5, 1.8, lambda t, k: set_param(set_param(t, "flow_cap", "C", "%g dm3/(s*bar)" % (0.1 * k)), "flow_cap", "b", "0.4"), None),
+    "piston_leak_laminar": piston_leak("cyl", 0.003, 0.03),
+    "rod_leak_nozzle": rod_leak("cyl", 0.05, 0.4),
+    "needle_turned": needle("flow_cap", 0.1, 0.4, 0.5, 1.8),
     "silencer_dirt": ("silencer.misadjusted", 0.3, 2.0, lambda t, k: add_components(
         set_param(t, "silencer", "b", "0.4"), ["dirt: {type: iso6358_throttle, C: %g dm3/(s*bar), b: 0.2}" % k], []).replace(
         "  - [silencer.b, air.port]", "  - [silencer.b, dirt.a]\n  - [dirt.b, air.port]"), None),
     "supply_line": ("supply.supply_sag", 0.3, 1.5, lambda t, k: add_components(
         t, ["line_S: {type: iso6358_throttle, C: %g dm3/(s*bar), b: 0.3}" % k, "tank_S: {type: volume, V: 20 cm3, p0: 6 bar g}"], []).replace(
         "  - [supply.port, valve.P]", "  - [supply.port, line_S.a]\n  - [line_S.b, tank_S.port, valve.P]"), None),
-    # a seal running dry: a second friction on the rod with a Stribeck hump
-    # and a speed law |v|^0.6 of its own - not the cylinder's law rescaled
-    "seal_friction": ("cyl.friction_running", 1.4, 3.0, lambda t, k: add_components(
-        t, ["seal_drag: {type: friction_element, friction: custom, friction_b0: %g N, friction_FS0: %g N, "
-            "friction_vS: 20 mm/s, friction_kv0: %g N, friction_a: 0.6}" % (20 * (k - 1), 8 * (k - 1), 60 * (k - 1))],
-        ["[load.flange, seal_drag.flange]"]), None),
-    "heavier_tool": ("load.mass_off", 2.0, 6.0, lambda t, k: set_param(t, "load", "m", "%g kg" % (2 * k)), None),
-    "sluggish_spool": ("valve.slow_switching", 3.0, 12.0, lambda t, k: set_param(t, "valve", "t_switch_time", "%g ms" % (10 * k)), None),
-    "transducer_zero": ("p_cap.offset", 0.05e5, 0.3e5, lambda t, k: t, ("p_cap", "offset")),
+    "seal_friction": seal_friction("cyl", "load", 20, 60, 1.4, 3.0),
+    "heavier_tool": heavier("load", 2, 2.0, 6.0),
+    "sluggish_spool": sluggish("valve", 10, 3.0, 12.0),
+    "transducer_zero": zero_offset("p_cap", 0.05e5, 0.3e5),
     # undeclared: a load force on the rod (a spring-back, a process force)
-    "process_force": (None, 15.0, 60.0, lambda t, k: add_components(
-        t, ["push: {type: force_source, F: %g N}" % -k], ["[load.flange, push.flange]"]), None),
+    "process_force": process_force("load", 15.0, 60.0),
 }
 
 

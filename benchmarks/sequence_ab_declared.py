@@ -20,7 +20,8 @@ import argparse
 import random
 from pathlib import Path
 
-from meter_out_declared import add_components, diagnose_case, new_case, planted_excess, set_param, write_runs
+from meter_out_declared import (diagnose_case, heavier, needle, new_case, piston_leak, planted_excess, process_force,
+                                rod_leak, seal_friction, set_param, sluggish, write_runs, zero_offset)
 
 ROOT = Path(__file__).resolve().parent.parent
 # Outputs every 5 ms (1 ms in the netlist): the fit's rows.
@@ -29,30 +30,19 @@ SIGNALS = ["x_A", "x_B", "p_cap_A", "p_cap_B"]
 NOISE = {"x_A": 5e-5, "x_B": 5e-5, "p_cap_A": 3e3, "p_cap_B": 3e3}
 INTERVAL = 5e-3
 
-# name: (expected candidate or None for undeclared, lo, hi, apply(text, k) -> text, csv edit or None)
+# The withheld forms (meter_out_declared.py's builders): name -> (expected
+# candidate or None for undeclared, lo, hi, apply, csv edit).
 FORMS = {
-    "piston_leak_B": ("cyl_B.piston_seal_leak", 0.005, 0.03, lambda t, k: add_components(
-        t, ["seal_gap: {type: iso6358_throttle, C: %g dm3/(s*bar), b: 0.05}" % k],
-        ["[cyl_B.cap, seal_gap.a]", "[seal_gap.b, cyl_B.rod]"]), None),
-    "rod_leak_A": ("cyl_A.rod_seal_leak", 0.1, 0.4, lambda t, k: add_components(
-        t, ["rod_gap: {type: nozzle, d: %g mm}" % k, "rod_air: {type: atmosphere}"],
-        ["[cyl_A.rod, rod_gap.a]", "[rod_gap.b, rod_air.port]"]), None),
-    "needle_A_rod": ("flow_A_rod.misadjusted", 0.4, 0.8, lambda t, k: set_param(
-        set_param(t, "flow_A_rod", "C", "%g dm3/(s*bar)" % (0.3 * k)), "flow_A_rod", "b", "0.35"), None),
-    "heavier_B": ("load_B.mass_off", 2.0, 5.0, lambda t, k: set_param(t, "load_B", "m", "%g kg" % (2 * k)), None),
-    "sluggish_A": ("valve_A.slow_switching", 3.0, 10.0, lambda t, k: set_param(
-        t, "valve_A", "t_switch_time", "%g ms" % (15 * k)), None),
-    # a seal running dry: a second friction on A's rod, its own law
-    "seal_friction_A": ("cyl_A.friction_running", 1.5, 3.0, lambda t, k: add_components(
-        t, ["seal_drag: {type: friction_element, friction: custom, friction_b0: %g N, friction_FS0: %g N, "
-            "friction_vS: 20 mm/s, friction_kv0: %g N, friction_a: 0.6}" % (20 * (k - 1), 8 * (k - 1), 30 * (k - 1))],
-        ["[load_A.flange, seal_drag.flange]"]), None),
-    "x_B_zero": ("x_B.offset", 0.3e-3, 2e-3, lambda t, k: t, ("x_B", "offset")),
+    "piston_leak_B": piston_leak("cyl_B", 0.005, 0.03),
+    "rod_leak_A": rod_leak("cyl_A", 0.1, 0.4),
+    "needle_A_rod": needle("flow_A_rod", 0.3, 0.35, 0.4, 0.8),
+    "heavier_B": heavier("load_B", 2, 2.0, 5.0),
+    "sluggish_A": sluggish("valve_A", 15, 3.0, 10.0),
+    "seal_friction_A": seal_friction("cyl_A", "load_A", 20, 30, 1.5, 3.0),
+    "x_B_zero": zero_offset("x_B", 0.3e-3, 2e-3),
     # undeclared: no component declares a misplaced limit switch
     "switch_a1_early": (None, 3.0, 10.0, lambda t, k: set_param(t, "a1", "position", "%g mm" % (100 - k)), None),
-    # undeclared: a process force against B's stroke
-    "process_force_B": (None, 10.0, 40.0, lambda t, k: add_components(
-        t, ["push: {type: force_source, F: %g N}" % -k], ["[load_B.flange, push.flange]"]), None),
+    "process_force_B": process_force("load_B", 10.0, 40.0),
 }
 
 # Two faults planted together, in different cylinders: both must be named.
