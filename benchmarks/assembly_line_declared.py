@@ -15,13 +15,12 @@ candidate). Run by hand, not in CI:
 
     python3 benchmarks/assembly_line_declared.py [--seed N] [--cases K] [--threads T] [--pneumo build/pneumo]
 """
-import argparse
 import json
 import random
 from pathlib import Path
 
-from meter_out_declared import (diagnose_case, heavier, needle, new_case, piston_leak, process_force, rod_leak,
-                                sluggish, write_runs, zero_offset)
+from meter_out_declared import (common_arguments, heavier, needle, piston_leak, process_force, rod_leak, run_plan,
+                                sluggish, zero_offset)
 
 ROOT = Path(__file__).resolve().parent.parent
 # The line's outputs every 5 ms (1 ms in the netlist): the fit's rows.
@@ -54,36 +53,22 @@ def candidates(report):
 
 
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--seed", type=int, default=1)
-    ap.add_argument("--cases", type=int, default=0, help="first K cases only (0: all)")
+    ap = common_arguments("/tmp/pneumo_assembly_line_declared")
     ap.add_argument("--only", help="diagnose only the cases that plant this form (the others' runs are still drawn)")
     ap.add_argument("--threads", type=int, default=2)
-    ap.add_argument("--pneumo", default=str(ROOT / "build" / "pneumo"))
-    ap.add_argument("--work", default="/tmp/pneumo_assembly_line_declared")
     a = ap.parse_args()
     rng = random.Random(a.seed)
-    work = Path(a.work)
-    work.mkdir(parents=True, exist_ok=True)
-    (work / "model.yaml").write_text(MODEL)
     plan = [(f,) for f in FORMS] + DOUBLES + [("null",)]
     rng.shuffle(plan)
-    if a.cases:
-        plan = plan[:a.cases]
-    stats = {"single": [0, 0], "double": [0, 0], "undeclared": [0, 0], "null": [0, 0]}
-    for i, forms in enumerate(plan):
-        case, form, expected, k, truth, edit, ek = new_case(work, a.seed, i, forms, MODEL, FORMS, rng)
-        write_runs(a.pneumo, truth, case / "runs", rng, edit, ek, SIGNALS, NOISE, INTERVAL)
-        if a.only and a.only not in forms:
-            continue
-        secs = diagnose_case(a.pneumo, work / "model.yaml", case, form, expected, k, stats,
-                             ("--threads", str(a.threads)))
+
+    def cost(case, secs):
         if (case / "report" / "report.json").exists():
             n = candidates(case / "report")
             print("    %d candidates, %.0f s wall on %d threads: %.2f s per candidate" % (n, secs, a.threads, secs / max(n, 1)),
                   flush=True)
-    for kind, (ok, n) in stats.items():
-        print("%-11s %d of %d" % (kind, ok, n))
+
+    run_plan(a, rng, plan, MODEL, FORMS, SIGNALS, NOISE, INTERVAL, measure=False, only=a.only,
+             extra=("--threads", str(a.threads)), after=cost)
 
 
 if __name__ == "__main__":

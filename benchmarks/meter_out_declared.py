@@ -307,32 +307,51 @@ def diagnose_case(pneumo, model, case, form, expected, k, stats, extra=(), exces
     return secs
 
 
-def main():
+def common_arguments(work):
+    """The options every catalogue-free benchmark takes; WORK the default folder."""
     ap = argparse.ArgumentParser()
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--cases", type=int, default=0, help="first K cases only (0: all)")
     ap.add_argument("--pneumo", default=str(ROOT / "build" / "pneumo"))
-    ap.add_argument("--work", default="/tmp/pneumo_meter_out_declared")
+    ap.add_argument("--work", default=work)
+    return ap
+
+
+def run_plan(a, rng, plan, model, forms, signals=SIGNALS, noise=NOISE, interval=OUTPUT_INTERVAL, measure=True,
+             only=None, extra=(), after=None):
+    """Plants, runs and diagnoses each case of PLAN (tuples of FORMS names,
+    ("null",) for none) in A.work, the first A.cases only if given, and
+    prints the scores. MEASURE: each case's size in noise units too (three
+    simulations more). ONLY: diagnose only the cases planting that form (the
+    others' runs are still drawn). AFTER(case, seconds) runs after each
+    diagnosis."""
+    work = Path(a.work)
+    work.mkdir(parents=True, exist_ok=True)
+    (work / "model.yaml").write_text(model)
+    stats = {"single": [0, 0], "double": [0, 0], "undeclared": [0, 0], "null": [0, 0]}
+    for i, case_forms in enumerate(plan[:a.cases] if a.cases else plan):
+        case, form, expected, k, truth, edit, ek = new_case(work, a.seed, i, case_forms, model, forms, rng)
+        clean = write_runs(a.pneumo, truth, case / "runs", rng, edit, ek, signals, noise, interval)
+        if only and only not in case_forms:
+            continue
+        excess = planted_excess(a.pneumo, model, clean, case, signals, noise, interval) if measure and form != "null" else None
+        secs = diagnose_case(a.pneumo, work / "model.yaml", case, form, expected, k, stats, extra, excess)
+        if after:
+            after(case, secs)
+    for kind, (ok, n) in stats.items():
+        print("%-11s %d of %d" % (kind, ok, n))
+
+
+def main():
+    ap = common_arguments("/tmp/pneumo_meter_out_declared")
     ap.add_argument("--doubles", action="store_true", help="also the cases of two faults planted together")
     a = ap.parse_args()
     rng = random.Random(a.seed)
-    work = Path(a.work)
-    work.mkdir(parents=True, exist_ok=True)
-    (work / "model.yaml").write_text(MODEL)
     plan = [(f,) for f in FORMS] + [("null",), ("null",)]
     rng.shuffle(plan)
     if a.doubles:
         plan += DOUBLES
-    if a.cases:
-        plan = plan[:a.cases]
-    stats = {"single": [0, 0], "undeclared": [0, 0], "null": [0, 0]}
-    for i, forms in enumerate(plan):
-        case, form, expected, k, truth, edit, ek = new_case(work, a.seed, i, forms, MODEL, FORMS, rng)
-        clean = write_runs(a.pneumo, truth, case / "runs", rng, edit, ek)
-        excess = planted_excess(a.pneumo, MODEL, clean, case) if form != "null" else None
-        diagnose_case(a.pneumo, work / "model.yaml", case, form, expected, k, stats, excess=excess)
-    for kind, (ok, n) in stats.items():
-        print("%-11s %d of %d" % (kind, ok, n))
+    run_plan(a, rng, plan, MODEL, FORMS)
 
 
 if __name__ == "__main__":

@@ -16,12 +16,11 @@ flagged, nulls clean, invisible cases apart). Run by hand, not in CI:
 
     python3 benchmarks/sequence_ab_declared.py [--seed N] [--cases K] [--pneumo build/pneumo] [--work DIR]
 """
-import argparse
 import random
 from pathlib import Path
 
-from meter_out_declared import (diagnose_case, heavier, needle, new_case, piston_leak, planted_excess, process_force,
-                                rod_leak, seal_friction, set_param, sluggish, write_runs, zero_offset)
+from meter_out_declared import (common_arguments, heavier, needle, piston_leak, process_force, rod_leak, run_plan,
+                                seal_friction, set_param, sluggish, zero_offset)
 
 ROOT = Path(__file__).resolve().parent.parent
 # Outputs every 5 ms (1 ms in the netlist): the fit's rows.
@@ -50,28 +49,11 @@ DOUBLES = [("piston_leak_B", "sluggish_A"), ("heavier_B", "needle_A_rod")]
 
 
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--seed", type=int, default=1)
-    ap.add_argument("--cases", type=int, default=0, help="first K cases only (0: all)")
-    ap.add_argument("--pneumo", default=str(ROOT / "build" / "pneumo"))
-    ap.add_argument("--work", default="/tmp/pneumo_sequence_ab_declared")
-    a = ap.parse_args()
+    a = common_arguments("/tmp/pneumo_sequence_ab_declared").parse_args()
     rng = random.Random(a.seed)
-    work = Path(a.work)
-    work.mkdir(parents=True, exist_ok=True)
-    (work / "model.yaml").write_text(MODEL)
     plan = [(f,) for f in FORMS] + DOUBLES + [("null",), ("null",)]
     rng.shuffle(plan)
-    if a.cases:
-        plan = plan[:a.cases]
-    stats = {"single": [0, 0], "double": [0, 0], "undeclared": [0, 0], "null": [0, 0]}
-    for i, forms in enumerate(plan):
-        case, form, expected, k, truth, edit, ek = new_case(work, a.seed, i, forms, MODEL, FORMS, rng)
-        clean = write_runs(a.pneumo, truth, case / "runs", rng, edit, ek, SIGNALS, NOISE, INTERVAL)
-        excess = planted_excess(a.pneumo, MODEL, clean, case, SIGNALS, NOISE, INTERVAL) if form != "null" else None
-        diagnose_case(a.pneumo, work / "model.yaml", case, form, expected, k, stats, excess=excess)
-    for kind, (ok, n) in stats.items():
-        print("%-11s %d of %d" % (kind, ok, n))
+    run_plan(a, rng, plan, MODEL, FORMS, SIGNALS, NOISE, INTERVAL)
 
 
 if __name__ == "__main__":
