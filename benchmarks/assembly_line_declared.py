@@ -54,7 +54,6 @@ def candidates(report):
 
 def main():
     ap = common_arguments("/tmp/pneumo_assembly_line_declared")
-    ap.add_argument("--only", help="diagnose only the cases that plant this form (the others' runs are still drawn)")
     ap.add_argument("--threads", type=int, default=2)
     a = ap.parse_args()
     rng = random.Random(a.seed)

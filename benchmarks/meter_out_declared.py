@@ -314,6 +314,7 @@ def common_arguments(work):
     ap.add_argument("--cases", type=int, default=0, help="first K cases only (0: all)")
     ap.add_argument("--pneumo", default=str(ROOT / "build" / "pneumo"))
     ap.add_argument("--work", default=work)
+    ap.add_argument("--only", help="diagnose only the cases that plant this form (the others' runs are still drawn)")
     return ap
 
 
@@ -351,7 +352,7 @@ def main():
     rng.shuffle(plan)
     if a.doubles:
         plan += DOUBLES
-    run_plan(a, rng, plan, MODEL, FORMS)
+    run_plan(a, rng, plan, MODEL, FORMS, only=a.only)
 
 
 if __name__ == "__main__":

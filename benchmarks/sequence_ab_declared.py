@@ -53,7 +53,7 @@ def main():
     rng = random.Random(a.seed)
     plan = [(f,) for f in FORMS] + DOUBLES + [("null",), ("null",)]
     rng.shuffle(plan)
-    run_plan(a, rng, plan, MODEL, FORMS, SIGNALS, NOISE, INTERVAL)
+    run_plan(a, rng, plan, MODEL, FORMS, SIGNALS, NOISE, INTERVAL, only=a.only)
 
 
 if __name__ == "__main__":

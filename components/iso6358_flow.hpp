@@ -25,6 +25,28 @@ T iso6358_phi(const T& r, double b, double r_lam) {
   return select_lazy<T>(value(r) <= r_lam, subsonic, laminar);
 }
 
+// The pressure ratio r = p_down/p_up at which the flow function is x, the
+// inverse of iso6358_phi: for a flow imposed on a resistance (a supply line
+// fed by a source). x >= 1 (more than the choked flow) has no ratio; past
+// x_c the ratio falls on exponentially with the slope it has there, so that
+// the downstream pressure, and with it the demand, falls instead of the
+// equations having no solution. x < 0 (reverse flow) continues the laminar
+// line above 1.
+template <class T>
+T iso6358_ratio_for_flow(const T& x, double b, double r_lam) {
+  constexpr double x_c = 0.995;
+  const double x_lam = (r_lam - b) / (1.0 - b);
+  const double phi_lam = std::sqrt(1.0 - x_lam * x_lam);
+  const double root_c = std::sqrt(1.0 - x_c * x_c);
+  const double r_c = b + (1.0 - b) * root_c;
+  const double slope_c = (1.0 - b) * x_c / root_c;  // -dr/dx at x_c
+  auto laminar = [&] { return T(1.0 - x * (1.0 - r_lam) / phi_lam); };
+  auto subsonic = [&] { return T(b + (1.0 - b) * sqrt(1.0 - x * x)); };
+  auto beyond = [&] { return T(r_c * exp(-slope_c / r_c * (x - x_c))); };
+  auto above_laminar = [&] { return select_lazy<T>(value(x) <= x_c, subsonic, beyond); };
+  return select_lazy<T>(value(x) <= phi_lam, laminar, above_laminar);
+}
+
 // Mass flow from port a to port b (negative for reverse flow). T_a and T_b are
 // the temperatures of the gas arriving from each side (the upstream one is
 // used). C in m3/(s Pa).

@@ -1,8 +1,12 @@
 // Ideal pressure source: holds its port at a given absolute pressure and
 // delivers gas at a given temperature, whatever the flow. An optional signal
 // input replaces the pressure parameter (e.g. a supply pressure schedule).
+// Its declared fault is a supply line that throttles: an ISO 6358
+// resistance between the source and the port, so the port pressure sags
+// with the square of a small flow and the delivered flow chokes.
 #include "components/builtin.hpp"
 #include "components/faults.hpp"
+#include "components/iso6358_flow.hpp"
 #include "components/signal_watch.hpp"
 #include "components/symbols.hpp"
 
@@ -21,30 +25,45 @@ class PressureSource final : public ComponentT<PressureSource> {
         ParameterSpec::scalar("T", "K", "temperature of the delivered gas; default: ambient")
             .positive()
             .ambient_temperature_by_default(),
-        fault_parameter("fault_resistance", "Pa*s/kg",
-                        "the port's pressure falls by this times the delivered mass flow (a long or throttled supply "
-                        "line, an undersized compressor)")
+        fault_parameter("fault_line_restriction", "Pa*s/m3",
+                        "1/C of a throttling supply line between the source and its port (ISO 6358, critical ratio "
+                        "fault_line_b): write e.g. 2 s*bar/dm3 for a line of C = 0.5 dm3/(s*bar)")
             .non_negative(),
+        ParameterSpec::scalar("fault_line_b", "1", "critical pressure ratio of that supply line", 0.3).range(0.0, 0.99),
     };
     i.ports = {{"port", Domain::pneumatic, Causality::acausal, "gas port"},
                {"p_in", Domain::signal, Causality::input, "pressure in Pa abs; replaces p when connected", true}};
     i.equations = {"pressure", "delivered temperature"};
     SignalWatch::declare(i);
-    i.faults = {fault("supply_sag", "supply pressure sags under flow (resistance of the supply line or compressor)",
-                      {fault_amount("R", "fault_resistance", "Pa*s/kg", 0.0, 3e7, 3e6)})};
+    i.faults = {fault("supply_sag", "supply pressure sags under flow (a long, kinked or undersized supply line)",
+                      {fault_amount("r", "fault_line_restriction", "Pa*s/m3", 0.0, 2e9, 2e8)})};
     return i;
   }
-  explicit PressureSource(const Construction& c) : ComponentT(c), p_(c.params["p"]), T_(c.params["T"]), R_(c.params["fault_resistance"]) {}
+  explicit PressureSource(const Construction& c)
+      : ComponentT(c),
+        p_(c.params["p"]),
+        T_(c.params["T"]),
+        restriction_(c.params["fault_line_restriction"]),
+        line_b_(c.params["fault_line_b"]) {}
 
   template <class T>
   void equations(const Eval<T>& e, T* r) const {
     const auto port = e.gas_port(kPort);
     const T p = e.connected(kPressure) ? e.signal(kPressure) : T(p_);
-    // m_flow is into the source: the delivered flow is -m_flow. Without the
-    // fault the row reads no flow at all: the structure (a source joined to
-    // a source is singular, the port's pressure an alias) stays the sound one.
-    r[0] = R_ > 0 ? T(port.p - (p + R_ * port.m_flow)) : T(port.p - p);
+    // Without the fault the row reads no flow at all: the structure (a source
+    // joined to a source is singular, the port's pressure an alias) stays the
+    // sound one.
+    r[0] = restriction_ > 0 ? T(port.p - p * line_ratio(e, p)) : T(port.p - p);
     r[1] = port.T_out - T_;
+  }
+  // p_port / p of the throttling line at the delivered flow -m_flow (m_flow
+  // is into the source): the flow function the line needs for it, inverted.
+  template <class T>
+  T line_ratio(const Eval<T>& e, const T& p) const {
+    const auto port = e.gas_port(kPort);
+    const GasModel& gas = e.gas();
+    const T x = -port.m_flow * restriction_ / (gas.rho_ref * p * std::sqrt(gas.T_ref / T_));
+    return iso6358_ratio_for_flow(x, line_b_, 0.999);
   }
   void start(StartValues& s, const GasModel&) const override {
     s.guess_pressure(kPort, p_);
@@ -58,7 +77,7 @@ class PressureSource final : public ComponentT<PressureSource> {
   EventResult on_inputs_changed(const Eval<double>& e, double*) const override { return watch_.check(e); }
 
  private:
-  double p_, T_, R_;
+  double p_, T_, restriction_, line_b_;
   // No absolute pressure is 0 or negative; flows toward such a "pressure"
   // are those into a vacuum (choked), whatever the value.
   const SignalWatch watch_{kPressure, "p_in", "Pa", 1.0, "an absolute pressure, at least 1 Pa",
