@@ -220,6 +220,7 @@ ComponentInfo describe() {
   for (auto& f : FrictionLaw::parameters(true)) i.parameters.push_back(std::move(f));
   for (auto& s : initial_parameters()) i.parameters.push_back(std::move(s));
   for (auto& f : FrictionFaults::parameters()) i.parameters.push_back(std::move(f));
+  for (auto& f : ChamberFaults::parameters()) i.parameters.push_back(std::move(f));
   DoubleActingCylinder::add_parts(layout(), i, true, true, true, true);
   i.faults = {
       FrictionFaults::running_friction_fault(),
@@ -243,6 +244,7 @@ ComponentInfo describe() {
               {"rod_bore_closing", "the rod-end bore opening starts to close (rod cushioning)"},
               {"rod_bore_open", "the rod-end bore opening is fully open (rod cushioning)"}};
   for (auto& f : FrictionFaults::faults()) i.faults.push_back(std::move(f));
+  for (auto& f : ChamberFaults::faults()) i.faults.push_back(std::move(f));
   for (const char* v : {"dead_volume_rod_side", "dead_volume_cushion", "dead_volume_channel"})
     i.faults.push_back({std::string(v) + "_off", std::string("volume ") + v + " off (fittings, machining)",
                         {{"k", v, "1", true, 1.0, 0.3, 3.0, 1.5, true}}});

@@ -640,6 +640,34 @@ struct ChamberFaults {
         wall_kA(declared(p, "fault_wall_kA")) {}
   static double declared(const ParameterValues& p, const char* name) { return p.has(name) ? p[name] : 0.0; }
 
+  // Their parameters and the faults a diagnosis names by them.
+  static std::vector<ParameterSpec> parameters() {
+    using P = ParameterSpec;
+    return {
+        P::scalar("fault_piston_leak_C", "m3/(s*Pa)",
+                  "fault (diagnosis): conductance of a leak across the piston seal, cap <-> rod side; 0 = none", 0.0)
+            .non_negative(),
+        P::scalar("fault_rod_leak_C", "m3/(s*Pa)",
+                  "fault (diagnosis): conductance of a leak past the rod seal to the atmosphere; 0 = none", 0.0)
+            .non_negative(),
+        P::scalar("fault_wall_kA", "W/K",
+                  "fault (diagnosis): heat exchange of each chamber's gas with surroundings at ambient temperature; "
+                  "0 = none",
+                  0.0)
+            .non_negative(),
+    };
+  }
+  static std::vector<FaultSpec> faults() {
+    return {
+        {"piston_seal_leak", "leak across the piston seal between the chambers (worn or damaged seal)",
+         {{"C", "fault_piston_leak_C", "m3/(s*Pa)", false, 0.0, 0.0, 2e-9, 1e-10, false}}},
+        {"rod_seal_leak", "leak past the rod seal to the atmosphere (worn rod seal, scored rod)",
+         {{"C", "fault_rod_leak_C", "m3/(s*Pa)", false, 0.0, 0.0, 2e-9, 1e-10, false}}},
+        {"wall_heat", "heat exchange of the chamber gas with the walls and surroundings (unmodelled)",
+         {{"kA", "fault_wall_kA", "W/K", false, 0.0, 0.0, 2.0, 0.1, false}}},
+    };
+  }
+
   // The fault flows into each chamber: the piston-seal leak between them
   // (`rod` null: a vented spring side, where the leak goes to the
   // atmosphere), the rod-seal leak from the rod side and the wall heat.
@@ -733,20 +761,7 @@ struct Piston {
         P::scalar("T0", "K", "initial gas temperature; default: ambient").positive().ambient_temperature_by_default(),
     };
     out.insert(out.end(), initial.begin(), initial.end());
-    const std::vector<ParameterSpec> faults = {
-        P::scalar("fault_piston_leak_C", "m3/(s*Pa)",
-                  "fault (diagnosis): conductance of a leak across the piston seal, cap <-> rod side; 0 = none", 0.0)
-            .non_negative(),
-        P::scalar("fault_rod_leak_C", "m3/(s*Pa)",
-                  "fault (diagnosis): conductance of a leak past the rod seal to the atmosphere; 0 = none", 0.0)
-            .non_negative(),
-        P::scalar("fault_wall_kA", "W/K",
-                  "fault (diagnosis): heat exchange of each chamber's gas with surroundings at ambient temperature; "
-                  "0 = none",
-                  0.0)
-            .non_negative(),
-    };
-    out.insert(out.end(), faults.begin(), faults.end());
+    for (auto& f : ChamberFaults::parameters()) out.push_back(std::move(f));
     for (auto& f : FrictionFaults::parameters()) out.push_back(std::move(f));
     return out;
   }
@@ -754,15 +769,8 @@ struct Piston {
   // What can fail in a piston (an FMEA of the seals, friction and walls);
   // `volumes`: the dead-volume parameters, a factor each.
   static std::vector<FaultSpec> faults(const std::vector<std::string>& volumes) {
-    std::vector<FaultSpec> out = {
-        {"piston_seal_leak", "leak across the piston seal between the chambers (worn or damaged seal)",
-         {{"C", "fault_piston_leak_C", "m3/(s*Pa)", false, 0.0, 0.0, 2e-9, 1e-10, false}}},
-        {"rod_seal_leak", "leak past the rod seal to the atmosphere (worn rod seal, scored rod)",
-         {{"C", "fault_rod_leak_C", "m3/(s*Pa)", false, 0.0, 0.0, 2e-9, 1e-10, false}}},
-        FrictionFaults::running_friction_fault(),
-        {"wall_heat", "heat exchange of the chamber gas with the walls and surroundings (unmodelled)",
-         {{"kA", "fault_wall_kA", "W/K", false, 0.0, 0.0, 2.0, 0.1, false}}},
-    };
+    std::vector<FaultSpec> out = ChamberFaults::faults();
+    out.insert(out.begin() + 2, FrictionFaults::running_friction_fault());  // before the wall heat, as listed
     for (auto& f : FrictionFaults::faults()) out.push_back(std::move(f));
     for (const auto& v : volumes)
       out.push_back({v + "_off", "dead volume " + v + " off (other fittings, tubing inside the end cap)",

@@ -22,11 +22,12 @@ double sum_of_squares(const std::vector<double>& r) {
   return s;
 }
 
-// The iterate: point, residuals, cost, damping.
+// The iterate: point, residuals, cost, damping, the last step taken.
 struct State {
   Eigen::VectorXd u;
   std::vector<double> r;
   double cost = 0, lambda = 1e-2;
+  Eigen::VectorXd last_step;
 };
 
 // Forward differences of the residuals; a step that would leave [0, 1]
@@ -48,6 +49,26 @@ Eigen::MatrixXd jacobian(const BatchResiduals& residuals, const State& s, int& e
   for (long k = 0; k < np; ++k)
     for (std::size_t i = 0; i < s.r.size(); ++i) J(i, k) = (rp[k][i] - s.r[i]) / steps[k];
   return J;
+}
+
+// Two steps in a row the same way: the linearisation underestimates how far
+// the minimum lies (a residual that saturates - a stroke time far from the
+// fit - has a small slope far out), and one step an iteration crawls.
+// Strides of 1, 2, 4 and 8 more such steps, each taken while it lowers the
+// cost.
+void stride(const BatchResiduals& residuals, State& s, BoundedLmResult& out, Eigen::VectorXd step) {
+  for (int k = 0; k < 4; ++k) {
+    const Eigen::VectorXd un = (s.u + step).cwiseMax(0.0).cwiseMin(1.0);
+    if ((un - s.u).norm() < 1e-7) return;
+    auto rn = residuals({un})[0];
+    out.evaluations += 1;
+    const double cn = sum_of_squares(rn);
+    if (cn >= s.cost) return;
+    s.u = un;
+    s.r = std::move(rn);
+    s.cost = cn;
+    step *= 2;
+  }
 }
 
 // One iteration: up to six damped steps, the first that lowers the cost is
@@ -85,10 +106,14 @@ bool lm_step(const BatchResiduals& residuals, State& s, BoundedLmResult& out, bo
     const double cn = sum_of_squares(rn);
     if (cn < s.cost) {
       const double gain = (s.cost - cn) / s.cost;
+      const Eigen::VectorXd step = un - s.u;
+      const bool crawling = s.last_step.size() == np && step.dot(s.last_step) > 0.9 * step.norm() * s.last_step.norm();
       s.u = un;
       s.r = std::move(rn);
       s.cost = cn;
       s.lambda = std::max(s.lambda / 4, 1e-7);
+      s.last_step = step;
+      if (crawling) stride(residuals, s, out, step);
       return gain >= 1e-4;  // below: converged
     }
     s.lambda *= 8;

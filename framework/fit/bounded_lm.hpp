@@ -45,6 +45,9 @@ struct BoundedLmResult {
 // Minimises |r(u)|^2 over the unit box from `u0` (its residuals `r0`, or
 // empty to evaluate them). `starts`: further starting points against local
 // minima, evaluated together; the best, if better than u0, replaces it.
+// After two accepted steps in about one direction it strides on along it
+// (1, 2, 4, 8 steps more, each while the cost falls): far from the fit of a
+// moving front the linearisation predicts steps of the front's width.
 // Stops after max_iterations, when an accepted step lowers the cost by less
 // than 1e-4 of it, when a step moves u by less than 1e-7, or when six
 // damped steps in a row fail to lower the cost.
