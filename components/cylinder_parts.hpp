@@ -770,7 +770,7 @@ struct Piston {
   // `volumes`: the dead-volume parameters, a factor each.
   static std::vector<FaultSpec> faults(const std::vector<std::string>& volumes) {
     std::vector<FaultSpec> out = ChamberFaults::faults();
-    out.insert(out.begin() + 2, FrictionFaults::running_friction_fault());  // before the wall heat, as listed
+    out.insert(out.begin() + 2, FrictionFaults::running_friction_fault());  // after the two leaks, as before
     for (auto& f : FrictionFaults::faults()) out.push_back(std::move(f));
     for (const auto& v : volumes)
       out.push_back({v + "_off", "dead volume " + v + " off (other fittings, tubing inside the end cap)",

@@ -53,16 +53,14 @@ class PressureSource final : public ComponentT<PressureSource> {
     // Without the fault the row reads no flow at all: the structure (a source
     // joined to a source is singular, the port's pressure an alias) stays the
     // sound one.
-    r[0] = restriction_ > 0 ? T(port.p - p * line_ratio(e, p)) : T(port.p - p);
+    r[0] = restriction_ > 0 ? T(port.p - p * line_ratio(T(-port.m_flow), p, e.gas())) : T(port.p - p);
     r[1] = port.T_out - T_;
   }
-  // p_port / p of the throttling line at the delivered flow -m_flow (m_flow
-  // is into the source): the flow function the line needs for it, inverted.
+  // p_port / p of the throttling line at the delivered flow (m_flow is into
+  // the source): the flow function the line needs for it, inverted.
   template <class T>
-  T line_ratio(const Eval<T>& e, const T& p) const {
-    const auto port = e.gas_port(kPort);
-    const GasModel& gas = e.gas();
-    const T x = -port.m_flow * restriction_ / (gas.rho_ref * p * std::sqrt(gas.T_ref / T_));
+  T line_ratio(const T& delivered, const T& p, const GasModel& gas) const {
+    const T x = delivered * restriction_ / (gas.rho_ref * p * std::sqrt(gas.T_ref / T_));
     return iso6358_ratio_for_flow(x, line_b_, 0.999);
   }
   void start(StartValues& s, const GasModel&) const override {

@@ -51,22 +51,27 @@ Eigen::MatrixXd jacobian(const BatchResiduals& residuals, const State& s, int& e
   return J;
 }
 
+// Evaluates `un` and moves there if its cost is lower; false: it is not.
+bool move_if_lower(const BatchResiduals& residuals, State& s, BoundedLmResult& out, const Eigen::VectorXd& un) {
+  auto rn = residuals({un})[0];
+  out.evaluations += 1;
+  const double cn = sum_of_squares(rn);
+  if (!(cn < s.cost)) return false;  // a NaN cost (a failed run) is never lower
+  s.u = un;
+  s.r = std::move(rn);
+  s.cost = cn;
+  return true;
+}
+
 // Two steps in a row the same way: the linearisation underestimates how far
-// the minimum lies (a residual that saturates - a stroke time far from the
-// fit - has a small slope far out), and one step an iteration crawls.
-// Strides of 1, 2, 4 and 8 more such steps, each taken while it lowers the
-// cost.
+// the minimum lies (far from a fit whose residuals are a moving front - a
+// stroke's end - it sees only the front's width), and one step an iteration
+// crawls. Strides of 1, 2, 4 and 8 more such steps, each taken while it
+// lowers the cost.
 void stride(const BatchResiduals& residuals, State& s, BoundedLmResult& out, Eigen::VectorXd step) {
   for (int k = 0; k < 4; ++k) {
     const Eigen::VectorXd un = (s.u + step).cwiseMax(0.0).cwiseMin(1.0);
-    if ((un - s.u).norm() < 1e-7) return;
-    auto rn = residuals({un})[0];
-    out.evaluations += 1;
-    const double cn = sum_of_squares(rn);
-    if (cn >= s.cost) return;
-    s.u = un;
-    s.r = std::move(rn);
-    s.cost = cn;
+    if ((un - s.u).norm() < 1e-7 || !move_if_lower(residuals, s, out, un)) return;
     step *= 2;
   }
 }
@@ -99,18 +104,13 @@ bool lm_step(const BatchResiduals& residuals, State& s, BoundedLmResult& out, bo
     Eigen::MatrixXd M = A;
     for (long k = 0; k < np; ++k) M(k, k) += s.lambda * std::max(A(k, k), 1e-12) + 1e-12;
     const Eigen::VectorXd d = M.ldlt().solve(-g);
-    Eigen::VectorXd un = (s.u + d).cwiseMax(0.0).cwiseMin(1.0);
+    const Eigen::VectorXd un = (s.u + d).cwiseMax(0.0).cwiseMin(1.0);
     if ((un - s.u).norm() < 1e-7) return false;
-    auto rn = residuals({un})[0];
-    out.evaluations += 1;
-    const double cn = sum_of_squares(rn);
-    if (cn < s.cost) {
-      const double gain = (s.cost - cn) / s.cost;
-      const Eigen::VectorXd step = un - s.u;
+    const Eigen::VectorXd step = un - s.u;
+    const double cost = s.cost;
+    if (move_if_lower(residuals, s, out, un)) {
+      const double gain = (cost - s.cost) / cost;
       const bool crawling = s.last_step.size() == np && step.dot(s.last_step) > 0.9 * step.norm() * s.last_step.norm();
-      s.u = un;
-      s.r = std::move(rn);
-      s.cost = cn;
       s.lambda = std::max(s.lambda / 4, 1e-7);
       s.last_step = step;
       if (crawling) stride(residuals, s, out, step);
