@@ -74,7 +74,9 @@ const std::map<std::string, std::string> kDeclaredAs = {
     {"cylinder.friction_pressure", "friction_pressure"}, {"cylinder.friction_running", "friction_pressure"},
     {"cylinder.friction_breakaway", "friction_pressure"}, {"T_EC.lag", "sensor_lag_T"},
     {"p_A.lag", "sensor_lag_p"},                       {"p_EC.lag", "sensor_lag_p"},
-    {"p_ch.lag", "sensor_lag_p"}};
+    {"p_ch.lag", "sensor_lag_p"},                      {"cylinder.cushion_seal_leak", "leakage_cushion_seal"},
+    {"cylinder.cushion_seal_friction", "friction_cushion_zone"}, {"valve_PA.opening_late", "valve_timing"},
+    {"valve_BR.opening_late", "valve_timing"}};
 // Four out-of-catalogue forms are declared physics without a catalogue:
 // named first, they are found, not stood in for.
 const std::map<std::string, std::vector<std::string>> kOocDeclared = {

@@ -189,6 +189,7 @@ Cushion read_cushion(const ParameterValues& p, const std::string& prefix) {
   c.b_check = get("check_b");
   c.crack = get("check_cracking");
   c.check_ramp = get("check_ramp");
+  CushionFaults::read(p, prefix, c);
   return c;
 }
 
@@ -221,6 +222,8 @@ ComponentInfo describe() {
   for (auto& s : initial_parameters()) i.parameters.push_back(std::move(s));
   for (auto& f : FrictionFaults::parameters()) i.parameters.push_back(std::move(f));
   for (auto& f : ChamberFaults::parameters()) i.parameters.push_back(std::move(f));
+  for (const char* end : {"", "rod_"})
+    for (auto& f : CushionFaults::parameters(end)) i.parameters.push_back(std::move(f));
   DoubleActingCylinder::add_parts(layout(), i, true, true, true, true);
   i.faults = {
       FrictionFaults::running_friction_fault(),
@@ -245,6 +248,8 @@ ComponentInfo describe() {
               {"rod_bore_open", "the rod-end bore opening is fully open (rod cushioning)"}};
   for (auto& f : FrictionFaults::faults()) i.faults.push_back(std::move(f));
   for (auto& f : ChamberFaults::faults()) i.faults.push_back(std::move(f));
+  for (auto& f : CushionFaults::faults("", "")) i.faults.push_back(std::move(f));
+  for (auto& f : CushionFaults::faults("rod_", "rod_plug_diameter")) i.faults.push_back(std::move(f));
   for (const char* v : {"dead_volume_rod_side", "dead_volume_cushion", "dead_volume_channel"})
     i.faults.push_back({std::string(v) + "_off", std::string("volume ") + v + " off (fittings, machining)",
                         {{"k", v, "1", true, 1.0, 0.3, 3.0, 1.5, true}}});

@@ -63,8 +63,10 @@ ComponentInfo describe() {
                 1e-6)
           .positive(),
   };
-  for (const char* end : {"cap", "rod"})
+  for (const std::string end : {"cap", "rod"}) {
     for (auto& s : CylinderSide::cushion_parameters(end)) i.parameters.push_back(std::move(s));
+    for (auto& s : CushionFaults::parameters(end + "_")) i.parameters.push_back(std::move(s));
+  }
   for (auto& s : Piston::parameters("rod-side")) i.parameters.push_back(std::move(s));
   DoubleActingCylinder::add_parts(layout(), i, true, true, true, true);
   i.faults = Piston::faults({"dead_volume_cap", "dead_volume_rod"});
@@ -79,6 +81,8 @@ ComponentInfo describe() {
     i.faults.push_back({std::string(end) + "_cushion_misadjusted",
                         std::string("cushion needle at the ") + end + " end off its setting (turned, clogged)",
                         {{"k", std::string(end) + "_cushion_C", "1", true, 1.0, 0.1, 10.0, 1.5, true}}});
+  for (const std::string end : {"cap", "rod"})
+    for (auto& f : CushionFaults::faults(end + "_", end + "_cushion_length")) i.faults.push_back(std::move(f));
   return i;
 }
 

@@ -182,6 +182,9 @@ struct EndStops {
 // between the cushion volume EC and the channel ch behind the port.
 struct Cushion {
   double C_bore, b_bore, ramp, C_cushion, b_cushion, C_check, b_check, crack, check_ramp;
+  // Faults (diagnosis; 0 in a sound cylinder, CushionFaults below): a leak
+  // past the cushion seal beside the needle, the seal's drag on the plug.
+  double C_seal_leak = 0, F_seal = 0;
 };
 
 // Flow EC -> ch; `gap` is the travel left before the plug engages, `open`
@@ -204,8 +207,47 @@ T cushion_flow(const Cushion& c, const T& gap, const T& p_EC, const T& p_ch, con
   const T m_throttle = path(T(c.C_cushion + 0.0 * x), c.b_cushion);
   const T check_open = min(max(T((p_ch - p_EC - c.crack) / c.check_ramp), T(0.0)), T(1.0));
   const T m_check = structural || value(check_open) > 0.0 ? path(T(c.C_check * check_open), c.b_check) : zero;
+  if (c.C_seal_leak > 0) return m_bore + m_throttle + m_check + path(T(c.C_seal_leak + 0.0 * x), 0.3);
   return m_bore + m_throttle + m_check;
 }
+
+// The faults of one end's cushioning (diagnosis), 0 in a sound cylinder: a
+// worn or damaged cushion seal lets the cushion volume leak into the channel
+// beside the needle (the cushion pressure builds less and later), and a
+// tight or dry one drags on the plug while it is engaged (weighted by the
+// closed share of the bore opening, so it starts over the same ramp). The
+// parameters of the end whose names start with `prefix` ("" for
+// cushioned_cylinder's cap end, "rod_", "cap_").
+struct CushionFaults {
+  static std::vector<ParameterSpec> parameters(const std::string& prefix) {
+    using P = ParameterSpec;
+    return {
+        P::scalar(prefix + "fault_cushion_seal_leak_C", "m3/(s*Pa)",
+                  "fault (diagnosis): conductance of a leak past the cushion seal, cushion volume <-> channel "
+                  "(beside the needle); 0 = none",
+                  0.0)
+            .non_negative(),
+        P::scalar(prefix + "fault_cushion_seal_F", "N",
+                  "fault (diagnosis): drag of the cushion seal on the plug while it is engaged; 0 = none", 0.0)
+            .non_negative(),
+    };
+  }
+  // The faults a diagnosis names by them; `needs`: the parameter that gives
+  // this end its cushioning ("" when it always has one).
+  static std::vector<FaultSpec> faults(const std::string& prefix, const std::string& needs) {
+    return {{prefix + "cushion_seal_leak", "leak past the cushion seal into the channel (worn or damaged seal)",
+             {{"C", prefix + "fault_cushion_seal_leak_C", "m3/(s*Pa)", false, 0.0, 0.0, 2e-9, 1e-10, false}},
+             needs},
+            {prefix + "cushion_seal_friction", "drag of the cushion seal on the plug while cushioning (tight, dry seal)",
+             {{"F", prefix + "fault_cushion_seal_F", "N", false, 0.0, 0.0, 200.0, 10.0, false}},
+             needs}};
+  }
+  static void read(const ParameterValues& p, const std::string& prefix, Cushion& c) {
+    const std::string leak = prefix + "fault_cushion_seal_leak_C", drag = prefix + "fault_cushion_seal_F";
+    c.C_seal_leak = p.has(leak) ? p[leak] : 0.0;
+    c.F_seal = p.has(drag) ? p[drag] : 0.0;
+  }
+};
 
 // Friction on the piston (+x) of a cylinder without a separate cushioning
 // set: the preset's eq. 4/7/8 with the chamber pressures p_A (for pAB-/pAB+
@@ -218,11 +260,14 @@ T piston_friction(const FrictionLaw& law, const T& v, const T& z, const T& p_A, 
   return law.force(law.main, v, z, T(0.0 * v));
 }
 
-// Mass and energy flowing into a chamber besides its port's (a fault's
-// leaks and wall heat; components/faults.hpp): H includes heat.
+// Mass and energy flowing into a side's gas besides its port's (a fault's
+// leaks and wall heat; components/faults.hpp): H includes heat. Into the
+// gas behind the port and into the gas at the piston - with cushioning the
+// channel and the cushion annulus, without it one chamber.
 template <class T>
 struct ExtraInflow {
   T m, H;
+  T m_piston = T(0.0), H_piston = T(0.0);
 };
 
 // Where CylinderSide::equations() writes its rows, from the pointer it is
@@ -341,10 +386,11 @@ class CylinderSide {
     const double A_plug = circle_area(p[e + "plug_diameter"]);
     if (!(A_plug > A_rod && A_plug - A_rod < A))
       throw ParameterError(e + "plug_diameter", "the plug diameter must lie between the rod's and the bore's");
-    const Cushioning k{p[e + "cushion_length"], A_plug - A_rod, p[e + "dead_volume_cushion"],
+    Cushioning k{p[e + "cushion_length"], A_plug - A_rod, p[e + "dead_volume_cushion"],
                        Cushion{p[e + "bore_opening_C"], p[e + "bore_opening_b"], p[e + "bore_opening_ramp"],
                                p[e + "cushion_C"], p[e + "cushion_b"], p[e + "check_C"], p[e + "check_b"],
                                p[e + "check_cracking"], p[e + "check_ramp"]}};
+    CushionFaults::read(p, e, k.paths);
     if (k.length + k.paths.ramp >= stroke)
       throw ParameterError(e + "cushion_length",
                            "the cushioning length (with its ramp) must be shorter than the stroke");
@@ -371,6 +417,14 @@ class CylinderSide {
 
   bool cushioned() const { return cushioned_; }
   double cushion_length() const { return L_; }
+  // The cushion seal's drag on the piston while the plug is engaged (a
+  // fault; 0 without), opposing v.
+  bool has_seal_drag() const { return cushioned_ && c_.F_seal > 0; }
+  template <class T>
+  T cushion_seal_drag(const Gas<T>& g, const T& v, double v_reg) const {
+    if (!has_seal_drag()) return 0.0 * v;
+    return -c_.F_seal * (1.0 - g.open) * tanh(v / v_reg);
+  }
   double ramp() const { return c_.ramp; }
   int variables() const { return cushioned_ ? 4 : 2; }
   // The side's internal variables start at `first`: m, U (channel with
@@ -456,11 +510,11 @@ class CylinderSide {
     T* c = r + at.chamber;
     if (!cushioned_) {
       c[0] = e.der(k_) - port.m_flow;
-      if (extra) c[0] -= extra->m;
+      if (extra) c[0] -= extra->m + extra->m_piston;
       // p dV/dt with the port's pressure, which the gas-law row below makes
       // U's: the form the cushion rig's solver figures are measured with.
       c[1] = e.der(k_ + 1) - H_port + port.p * A_ * d_dot - heat.Q;
-      if (extra) c[1] -= extra->H;
+      if (extra) c[1] -= extra->H + extra->H_piston;
       c[2] = port.p - g.p;
       // With the heat port at the gas temperature the port's T_out is its
       // alias, which alias elimination folds into one unknown.
@@ -475,6 +529,10 @@ class CylinderSide {
       c[2] = port.p - g.p;
       c[3] = port.T_out - g.T_gas;
       annulus_equations(e, heat, g, d_dot, walls_at_gas_T, r + at.annulus, r + at.tap);
+      if (extra) {
+        r[at.annulus] -= extra->m_piston;
+        r[at.annulus + 1] -= extra->H_piston;
+      }
     }
     if (wall_alpha > 0)
       r[at.wall] = heat.Q - wall_alpha * chamber_wall_area(A_, perimeter_, d, V0_ + V0_EC_) * (heat.T - g.T_piston);
@@ -668,9 +726,12 @@ struct ChamberFaults {
     };
   }
 
-  // The fault flows into each chamber: the piston-seal leak between them
-  // (`rod` null: a vented spring side, where the leak goes to the
-  // atmosphere), the rod-seal leak from the rod side and the wall heat.
+  // The fault flows into each side's gas: the piston-seal leak between the
+  // gases at the piston (the cushion annuli while cushioning; `rod` null: a
+  // vented spring side, where the leak goes to the atmosphere), the
+  // rod-seal leak from the gas behind the rod side's port (at the head, where
+  // the rod seal is) and the wall heat of the gas at the piston (the
+  // chambers whose walls the heat ports are; a channel is adiabatic).
   // Null when the cylinder has none of these faults: the sound cylinder's
   // rows are untouched.
   template <class T>
@@ -681,16 +742,17 @@ struct ChamberFaults {
   template <class T>
   Flows<T> flows(const CylinderSide::Gas<T>& cap, const CylinderSide::Gas<T>* rod, const GasModel& gas) const {
     const T zero = 0.0 * cap.p;
-    Flows<T> f{{zero, zero}, {zero, zero}};
+    Flows<T> f{{zero, zero, zero, zero}, {zero, zero, zero, zero}};
     const T p_amb = zero + gas.p_ambient, T_amb = zero + gas.T_ambient;
-    const T& p_other = rod ? rod->p : p_amb;
-    const T& T_other = rod ? rod->T_gas : T_amb;
+    const T& p_other = rod ? rod->p_piston : p_amb;
+    const T& T_other = rod ? rod->T_piston : T_amb;
     if (leak_piston_C > 0) {
-      const T m = iso6358_mass_flow(cap.p, p_other, cap.T_gas, T_other, T(zero + leak_piston_C), 0.3, 0.999, gas);
-      f.cap.m -= m;
-      f.cap.H += enthalpy_inflow(T(-m), T_other, cap.T_gas, gas);
-      f.rod.m += m;
-      f.rod.H += enthalpy_inflow(m, cap.T_gas, T_other, gas);
+      const T m =
+          iso6358_mass_flow(cap.p_piston, p_other, cap.T_piston, T_other, T(zero + leak_piston_C), 0.3, 0.999, gas);
+      f.cap.m_piston -= m;
+      f.cap.H_piston += enthalpy_inflow(T(-m), T_other, cap.T_piston, gas);
+      f.rod.m_piston += m;
+      f.rod.H_piston += enthalpy_inflow(m, cap.T_piston, T_other, gas);
     }
     if (rod && leak_rod_C > 0) {
       const T m = iso6358_mass_flow(rod->p, p_amb, rod->T_gas, T_amb, T(zero + leak_rod_C), 0.3, 0.999, gas);
@@ -698,8 +760,8 @@ struct ChamberFaults {
       f.rod.H += enthalpy_inflow(T(-m), T_amb, rod->T_gas, gas);
     }
     if (wall_kA > 0) {
-      f.cap.H += wall_kA * (T_amb - cap.T_gas);
-      if (rod) f.rod.H += wall_kA * (T_amb - rod->T_gas);
+      f.cap.H_piston += wall_kA * (T_amb - cap.T_piston);
+      if (rod) f.rod.H_piston += wall_kA * (T_amb - rod->T_piston);
     }
     return f;
   }

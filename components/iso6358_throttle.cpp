@@ -3,6 +3,14 @@
 // ratio `laminar_ratio` the flow function is continued linearly in (1 - r),
 // so the mass flow is a smooth function of p_a - p_b through zero and the
 // Jacobian stays finite there.
+//
+// Fault opening_late (diagnosis): a path driven by a command that opens and
+// closes late - a slow solenoid or pilot, a sticky spool. The opening then
+// follows the command through four equal first-order lags of d/4 each: a
+// command step reaches the path as the S-curve 1 - e^-s (1 + s + s^2/2 +
+// s^3/6), s = 4 t / d, half open after 0.92 d, its mean delay d. (A pure
+// dead time has no state a DAE could carry; the lag chain is its smooth
+// stand-in.) The chain starts closed: a command open at t = 0 opens late too.
 #include "components/builtin.hpp"
 #include "components/faults.hpp"
 #include "components/iso6358_flow.hpp"
@@ -28,6 +36,8 @@ class Iso6358Throttle final : public ComponentT<Iso6358Throttle> {
         ParameterSpec::scalar("laminar_ratio", "1",
                               "pressure ratio above which the flow is linear in (1 - p2/p1)", 0.999)
             .open_range(0.0, 1.0),
+        fault_parameter("fault_opening_delay", "s",
+                        "mean delay of the opening behind its command (four lags of d/4; needs 'opening' connected)"),
     };
     i.ports = {{"a", Domain::pneumatic, Causality::acausal, "port a"},
                {"b", Domain::pneumatic, Causality::acausal, "port b"},
@@ -37,11 +47,31 @@ class Iso6358Throttle final : public ComponentT<Iso6358Throttle> {
     SignalWatch::declare(i);
     i.faults = {fault("misadjusted", "conductance off its setting (throttle misadjusted, silencer or filter clogged)",
                       {fault_factor("C", 0.1, 4.0, 0.7)})};
+    FaultSpec late = fault("opening_late",
+                           "the path opens and closes late behind its command (slow solenoid or pilot, sticky spool)",
+                           {fault_amount("d", "fault_opening_delay", "s", 0.0, 0.1, 0.005)});
+    late.needs_port = "opening";
+    i.faults.push_back(std::move(late));
+    return i;
+  }
+
+  // The late opening's lag chain: its stages are states.
+  static constexpr int kStages = 4;
+  static ComponentInfo instance_info(ComponentInfo i, const ParameterValues& p) {
+    if (!(p["fault_opening_delay"] > 0)) return i;
+    for (int k = 1; k <= kStages; ++k) {
+      i.variables.push_back({"opening_" + std::to_string(k), "1", "opening after lag stage " + std::to_string(k), 1.0});
+      i.equations.push_back("opening lag " + std::to_string(k));
+    }
     return i;
   }
 
   explicit Iso6358Throttle(const Construction& c)
-      : ComponentT(c), C_(c.params["C"]), b_(c.params["b"]), laminar_(c.params["laminar_ratio"]) {
+      : ComponentT(c),
+        C_(c.params["C"]),
+        b_(c.params["b"]),
+        laminar_(c.params["laminar_ratio"]),
+        tau_(c.params["fault_opening_delay"] / kStages) {
     if (laminar_ <= b_) throw ParameterError("laminar_ratio", "laminar_ratio must be larger than b");
   }
 
@@ -49,12 +79,19 @@ class Iso6358Throttle final : public ComponentT<Iso6358Throttle> {
   void equations(const Eval<T>& e, T* r) const {
     const auto a = e.gas_port(kA);
     const auto b = e.gas_port(kB);
-    const T opening = max(e.signal(kOpening), T(0.0));
+    const T command = max(e.signal(kOpening), T(0.0));
+    const T opening = tau_ > 0 ? max(e.var(kStages - 1), T(0.0)) : command;
     const T m = iso6358_mass_flow(a.p, b.p, a.T_in, b.T_in, T(C_ * opening), b_, laminar_, e.gas());
     r[0] = a.m_flow - m;
     r[1] = a.m_flow + b.m_flow;
     r[2] = a.T_out - b.T_in;  // throttling of an ideal gas keeps its temperature
     r[3] = b.T_out - a.T_in;
+    for (int k = 0; tau_ > 0 && k < kStages; ++k)
+      r[4 + k] = e.der(k) - ((k == 0 ? command : e.var(k - 1)) - e.var(k)) / tau_;
+  }
+
+  void start(StartValues& s, const GasModel&) const override {
+    for (int k = 0; tau_ > 0 && k < kStages; ++k) s.fix_var(k, 0.0);
   }
 
   double observe(int, const Eval<double>& e) const override { return e.gas_port(kA).m_flow; }
@@ -68,6 +105,7 @@ class Iso6358Throttle final : public ComponentT<Iso6358Throttle> {
 
  private:
   double C_, b_, laminar_;
+  double tau_;  // of each lag stage of a late opening (0: none)
   // Negative openings are taken as closed.
   const SignalWatch watch_{kOpening, "opening", "", -1e-6, ">= 0", "taken as 0 (closed) while below 0"};
 };

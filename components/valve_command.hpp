@@ -67,10 +67,13 @@ class SpoolDrive {
 
   // The spool's faults: late switching per direction, a slow stroke.
   static std::vector<FaultSpec> faults() {
+    // The delays act on a schedule's commands: a valve without one has none.
     return {{"delay_actuate", "switches late when actuated (sticky spool, slow pilot, solenoid)",
-             {{"delay", "fault_delay_actuate", "s", false, 0.0, 0.0, 0.1, 0.01, false}}},
+             {{"delay", "fault_delay_actuate", "s", false, 0.0, 0.0, 0.1, 0.01, false}},
+             "schedule"},
             {"delay_release", "switches late when released (weak return spring, sticky spool)",
-             {{"delay", "fault_delay_release", "s", false, 0.0, 0.0, 0.1, 0.01, false}}},
+             {{"delay", "fault_delay_release", "s", false, 0.0, 0.0, 0.1, 0.01, false}},
+             "schedule"},
             {"slow_switching", "spool stroke slower (or faster) than its data sheet",
              {{"k", "t_switch_time", "1", true, 1.0, 0.25, 20.0, 2.0, true}}}};
   }

@@ -41,12 +41,12 @@ TEST(DeclaredFaults, EachComponentTypeListsWhatCanFailInIt) {
         "dead_volume_cap_off", "dead_volume_rod_off"}},
       {"cushioned_cylinder",
        {"piston_seal_leak", "rod_seal_leak", "friction_running", "friction_breakaway", "wall_heat",
-        "cushion_needle_misadjusted", "cushion_check_off"}},
+        "cushion_needle_misadjusted", "cushion_check_off", "cushion_seal_leak", "cushion_seal_friction"}},
       {"single_acting_cylinder", {"piston_seal_leak", "friction_breakaway", "spring_weak"}},
       {"directional_valve_32", {"delay_actuate", "delay_release", "slow_switching", "internal_leak"}},
       {"directional_valve_52", {"delay_actuate", "delay_release", "slow_switching", "internal_leak"}},
       {"directional_valve_53", {"delay_actuate", "delay_release", "slow_switching", "internal_leak"}},
-      {"iso6358_throttle", {"misadjusted"}},
+      {"iso6358_throttle", {"misadjusted", "opening_late"}},
       {"one_way_flow_control", {"misadjusted", "check_leak"}},
       {"nozzle", {"clogged"}},
       {"check_valve", {"leak"}},
@@ -155,6 +155,169 @@ TEST(DeclaredFaults, CushionedCylinderLeaksAcrossItsPistonAndPastItsRod) {
   const RunResult rod = run(", fault_rod_leak_C: 0.1 dm3/(s*bar)", "6 bar");
   EXPECT_LT(std::abs(column(rod.table, "p_A").back() - 101325.0), 500.0);
   EXPECT_NEAR(column(rod.table, "p_ch").back(), 6e5, 1.0);
+}
+
+// The rig's cushioned cylinder with the plug engaged (x = 95 mm of a 100 mm
+// stroke, cushioning over the last 20 mm), cushion volume and channel at
+// `p0`, port B vented through a throttle; `extra` adds parameters.
+std::string cushion_held(const std::string& extra, const std::string& outputs, const std::string& p0 = "6 bar") {
+  return "components:\n"
+         "  cyl: {type: cushioned_cylinder, bore: 32 mm, rod: 12 mm, stroke: 100 mm, plug_diameter: 16 mm,\n"
+         "        cushion_length: 20 mm, dead_volume_rod_side: 3 cm3, dead_volume_cushion: 2 cm3,\n"
+         "        dead_volume_channel: 1 cm3, bore_opening_C: 5 dm3/(s*bar), cushion_b0: 0.3,\n"
+         "        cushion_C_of_z: [[0, 0], [6, 0.6 dm3/(s*bar)]], friction: annexB_5.14, x0: 95 mm,\n"
+         "        p0_cap: " + p0 + ", p0_A: 1 bar" + extra + "}\n"
+         "  hold: {type: fixed_position, s0: 95 mm}\n"
+         "  vent: {type: iso6358_throttle, C: 1 dm3/(s*bar), b: 0.3}\n"
+         "  air: {type: atmosphere}\n"
+         "connections:\n  - [cyl.flange, hold.flange]\n  - [cyl.B, vent.a]\n  - [vent.b, air.port]\n"
+         "outputs: {" + outputs + "}\n"
+         "simulation: {t_end: 1 s, output_interval: 10 ms}\n";
+}
+
+// A leak past the cushion seal is a conductance between the cushion volume
+// and the channel beside the needle: with the needle shut, a leak of C
+// (b 0.3) empties the cushion volume exactly as a needle of C at b 0.3
+// does; without either, the cushion volume holds its pressure.
+TEST(DeclaredFaults, CushionSealLeakIsAConductanceBesideTheNeedle) {
+  const std::string out = "p_EC: cyl.p_EC, p_ch: cyl.p_ch";
+  const RunResult shut = run_text(cushion_held(", z_EC: 0", out), "shut.yaml");
+  EXPECT_NEAR(column(shut.table, "p_EC").back(), 6e5, 1.0);
+  const RunResult needle = run_text(cushion_held(", z_EC: 1", out), "needle.yaml");
+  const RunResult leak =
+      run_text(cushion_held(", z_EC: 0, fault_cushion_seal_leak_C: 0.1 dm3/(s*bar)", out), "leak.yaml");
+  const auto a = column(needle.table, "p_EC"), b = column(leak.table, "p_EC");
+  ASSERT_EQ(a.size(), b.size());
+  EXPECT_LT(b.back(), 2e5);
+  for (std::size_t i = 0; i < a.size(); ++i) EXPECT_LT(rel_err(b[i], a[i]), 1e-6) << i;
+}
+
+// The cushion seal's drag acts on the plug only: a piston driven at 50 mm/s
+// from mid-stroke into the cushioning zone meets the same friction as the
+// sound cylinder's in the main stroke and F more (against the motion) once
+// the plug is in; the gas is the same in both (the motion is imposed).
+TEST(DeclaredFaults, CushionSealFrictionActsOnlyWhileThePlugIsIn) {
+  auto run = [](const std::string& fault) {
+    return run_text(
+        "components:\n"
+        "  cyl: {type: cushioned_cylinder, bore: 32 mm, rod: 12 mm, stroke: 100 mm, plug_diameter: 16 mm,\n"
+        "        cushion_length: 20 mm, dead_volume_rod_side: 3 cm3, dead_volume_cushion: 2 cm3,\n"
+        "        dead_volume_channel: 1 cm3, bore_opening_C: 5 dm3/(s*bar), z_EC: 1.5 rev,\n"
+        "        cushion_C_of_z: [[0, 0], [6, 0.4 dm3/(s*bar)]], friction: annexB_5.14, x0: 50 mm" +
+            fault + "}\n"
+            "  drive: {type: velocity_source, v: 0.05, s0: 50 mm}\n"
+            "  vent_A: {type: iso6358_throttle, C: 1 dm3/(s*bar), b: 0.3}\n"
+            "  vent_B: {type: iso6358_throttle, C: 1 dm3/(s*bar), b: 0.3}\n"
+            "  air: {type: atmosphere}\n"
+            "connections:\n  - [cyl.flange, drive.flange]\n  - [cyl.A, vent_A.a]\n  - [cyl.B, vent_B.a]\n"
+            "  - [vent_A.b, vent_B.b, air.port]\n"
+            "outputs: {x: cyl.x, F: cyl.F_friction}\n"
+            "simulation: {t_end: 0.9 s, output_interval: 10 ms}\n",
+        "drag.yaml");
+  };
+  const RunResult sound = run(""), tight = run(", fault_cushion_seal_F: 15 N");
+  const auto x = column(sound.table, "x"), F0 = column(sound.table, "F"), F1 = column(tight.table, "F");
+  int main_stroke = 0, cushioning = 0;
+  for (std::size_t i = 1; i < x.size(); ++i) {
+    if (x[i] < 0.0795) {
+      ++main_stroke;
+      EXPECT_NEAR(F1[i] - F0[i], 0.0, 1e-9) << "x = " << x[i];
+    } else if (x[i] > 0.0805) {
+      ++cushioning;
+      EXPECT_NEAR(F1[i] - F0[i], -15.0, 1e-6) << "x = " << x[i];
+    }
+  }
+  EXPECT_GT(main_stroke, 50);
+  EXPECT_GT(cushioning, 20);
+}
+
+// Wall heat of the cylinder's gas goes to the gas at the piston - with the
+// plug in, the cushion volume, whose wall the heat port is - and not to the
+// adiabatic channel. The cushion volume closed (needle and check valve
+// shut) at 350 K cools at constant volume as T_amb + (T0 - T_amb)
+// exp(-kA t / (m c_v)).
+TEST(DeclaredFaults, WallHeatCoolsTheCushionVolumeNotTheChannel) {
+  const std::string fault = ", z_EC: 0, check_C: 0, T0: 350 K, fault_wall_kA: 0.02 W/K";
+  const RunResult r = run_text(cushion_held(fault, "T_EC: cyl.T_EC, m_EC: cyl.m_EC, T_ch: cyl.T_ch"), "wall.yaml");
+  const double T0 = 350, T_amb = 293.15, cv = 287.05 / 0.4;  // the default gas
+  const double m = column(r.table, "m_EC").front();
+  EXPECT_LT(rel_err(column(r.table, "m_EC").back(), m), 1e-9);
+  const auto t = column(r.table, "t"), T = column(r.table, "T_EC");
+  for (std::size_t i = 10; i < t.size(); i += 30)
+    EXPECT_LT(std::abs(T[i] - (T_amb + (T0 - T_amb) * std::exp(-0.02 * t[i] / (m * cv)))), 0.01) << t[i];
+  EXPECT_LT(T.back(), T0 - 5);
+  const RunResult adiabatic = run_text(cushion_held(", z_EC: 0, check_C: 0, T0: 350 K", "T_ch: cyl.T_ch"), "a.yaml");
+  const auto T_ch = column(r.table, "T_ch"), T_ch0 = column(adiabatic.table, "T_ch");
+  ASSERT_EQ(T_ch.size(), T_ch0.size());
+  for (std::size_t i = 0; i < T_ch.size(); ++i) EXPECT_LT(rel_err(T_ch[i], T_ch0[i]), 1e-6) << i;
+}
+
+// A path whose opening is commanded opens late through four lags of d/4:
+// a choked throttle's flow after a command step at t0 is its full flow
+// times 1 - e^-s (1 + s + s^2/2 + s^3/6), s = 4 (t - t0) / d.
+TEST(DeclaredFaults, ALateOpeningFollowsItsCommandThroughFourLags) {
+  const RunResult r = run_text(
+      "components:\n"
+      "  supply: {type: pressure_source, p: 6 bar}\n"
+      "  cmd: {type: signal_source, kind: step, value: 0, height: 1, t_start: 0.1 s}\n"
+      "  path: {type: iso6358_throttle, C: 0.5 dm3/(s*bar), b: 0.3, fault_opening_delay: 20 ms}\n"
+      "  air: {type: atmosphere}\n"
+      "connections:\n  - [supply.port, path.a]\n  - [path.b, air.port]\n  - [cmd.y, path.opening]\n"
+      "outputs: {m: path.m_flow}\n"
+      "simulation: {t_end: 0.3 s, output_interval: 1 ms}\n",
+      "late.yaml");
+  const auto t = column(r.table, "t"), m = column(r.table, "m");
+  const double full = m.back(), d = 0.02;
+  EXPECT_GT(full, 0.0);
+  int checked = 0;
+  for (std::size_t i = 0; i < t.size(); ++i) {
+    const double s = std::max(0.0, 4 * (t[i] - 0.1) / d);
+    const double expected = full * (1 - std::exp(-s) * (1 + s + s * s / 2 + s * s * s / 6));
+    EXPECT_NEAR(m[i], expected, 2e-4 * full) << "t = " << t[i];
+    checked += s > 0 && s < 12;
+  }
+  EXPECT_GT(checked, 50);
+}
+
+// A fault of a part the instance lacks is no candidate: rod-end cushioning
+// on a cushioned cylinder without it, cushioning on a plain cylinder's
+// ends, a late opening on a throttle whose opening no signal drives, a
+// valve delay without a schedule to delay.
+TEST(DeclaredFaults, AFaultOfAnAbsentPartIsNoCandidate) {
+  const Netlist nl = parse_netlist(
+      "components:\n"
+      "  rig: {type: cushioned_cylinder, bore: 32 mm, rod: 12 mm, stroke: 100 mm, plug_diameter: 16 mm,\n"
+      "        cushion_length: 20 mm, dead_volume_rod_side: 3 cm3, dead_volume_cushion: 2 cm3,\n"
+      "        dead_volume_channel: 1 cm3, bore_opening_C: 5 dm3/(s*bar), z_EC: 1.5 rev,\n"
+      "        cushion_C_of_z: [[0, 0], [6, 0.4 dm3/(s*bar)]], friction: annexB_5.14}\n"
+      "  cyl: {type: cylinder, bore: 32 mm, rod: 12 mm, stroke: 100 mm, rod_cushion_length: 15 mm,\n"
+      "        rod_plug_diameter: 20 mm, rod_cushion_C: 0.1 dm3/(s*bar)}\n"
+      "  cmd: {type: signal_source, kind: step, value: 0, height: 1, t_start: 0.1 s}\n"
+      "  driven: {type: iso6358_throttle, C: 0.5 dm3/(s*bar)}\n"
+      "  fixed: {type: iso6358_throttle, C: 0.5 dm3/(s*bar)}\n"
+      "  valve: {type: directional_valve_32, C: 0.3 dm3/(s*bar)}\n"
+      "  supply: {type: pressure_source, p: 6 bar}\n"
+      "  tank: {type: volume, V: 0.5 L}\n"
+      "  air: {type: atmosphere}\n"
+      "  load_rig: {type: translational_mass, m: 1 kg}\n"
+      "  load_cyl: {type: translational_mass, m: 1 kg}\n"
+      "connections:\n  - [cmd.y, driven.opening, valve.command]\n  - [supply.port, driven.a, fixed.a, valve.P]\n"
+      "  - [driven.b, fixed.b, valve.R, air.port]\n  - [valve.A, tank.port]\n  - [rig.flange, load_rig.flange]\n"
+      "  - [cyl.flange, load_cyl.flange]\n",
+      "parts.yaml");
+  const auto cat = diagnose::declared_faults(nl, builtin_registry(), {}, {});
+  auto available = [&](const std::string& name) {
+    const auto* e = cat.find(name);
+    EXPECT_NE(e, nullptr) << name;
+    return e && e->unavailable.empty();
+  };
+  for (const char* yes : {"rig.cushion_seal_leak", "rig.cushion_seal_friction", "cyl.rod_cushion_seal_leak",
+                          "cyl.rod_cushion_seal_friction", "driven.opening_late", "valve.slow_switching"})
+    EXPECT_TRUE(available(yes)) << yes;
+  for (const char* no : {"rig.rod_cushion_seal_leak", "rig.rod_cushion_seal_friction", "cyl.cap_cushion_seal_leak",
+                         "cyl.cap_cushion_seal_friction", "fixed.opening_late", "valve.delay_actuate",
+                         "valve.delay_release"})
+    EXPECT_FALSE(available(no)) << no;
 }
 
 // The rod-seal leak vents the rod side to the atmosphere (and only it).

@@ -784,6 +784,19 @@ void add_fault_parameter(Effect& e, const FaultParameterSpec& fp, const Paramete
   e.parameters.push_back(ep);
 }
 
+// Why the optional part a fault belongs to is absent from this instance
+// ("" when present): the parameter that gives the part is not written, or
+// the port that drives it is not connected.
+std::string missing_part(const Netlist& nl, const ComponentDecl& decl, const FaultSpec& f) {
+  if (!f.needs_parameter.empty() && !decl.written(f.needs_parameter))
+    return "the netlist gives no " + f.needs_parameter + " (the part this fault belongs to)";
+  if (f.needs_port.empty()) return "";
+  for (const auto& c : nl.connections)
+    for (const auto& p : c.ports)
+      if (p.component == decl.name && p.port == f.needs_port) return "";
+  return "port " + f.needs_port + " is not connected (the fault acts on what it carries)";
+}
+
 Effect component_fault(const Netlist& nl, const ComponentDecl& decl, const ComponentInfo& info, const FaultSpec& f,
                        const std::vector<std::string>& per_run) {
   Effect e;
@@ -792,6 +805,7 @@ Effect component_fault(const Netlist& nl, const ComponentDecl& decl, const Compo
   e.where = decl.where;
   e.component = decl.name;
   e.fault = f.name;
+  if (const std::string why = missing_part(nl, decl, f); !why.empty()) e.unavailable = "unavailable: " + why;
   for (const auto& fp : f.parameters) {
     const ParameterSpec* spec = info.parameter(fp.parameter);
     std::string why;

@@ -212,6 +212,12 @@ struct FaultSpec {
   std::string name;         // e.g. "piston_seal_leak"; diagnosis names it COMPONENT.FAULT
   std::string description;  // what fails, in the words of a maintenance list
   std::vector<FaultParameterSpec> parameters;
+  // A fault of an optional part exists only where the part does: where the
+  // instance is given this parameter (rod-end cushioning's plug), or where
+  // this port of it is connected (a valve path's opening signal). Empty:
+  // always.
+  std::string needs_parameter = {};
+  std::string needs_port = {};
 };
 
 // A tagged event a component raises (EventResult::tag), which metrics,
