@@ -72,7 +72,7 @@ const std::map<std::string, std::string> kDeclaredAs = {
     {"cylinder.wall_heat", "heat_transfer"},           {"cylinder.piston_seal_leak", "leakage_piston_seal"},
     {"line_B.volume_off", "line_volume"},              {"supply.supply_sag", "supply_droop"},
     {"cylinder.friction_pressure", "friction_pressure"}, {"cylinder.friction_running", "friction_pressure"},
-    {"cylinder.friction_breakaway", "friction_pressure"}, {"T_EC.lag", "sensor_lag_T"},
+    {"cylinder.friction_breakaway", "friction_pressure"}, {"cylinder.friction_chamber_pressure", "friction_pressure"}, {"T_EC.lag", "sensor_lag_T"},
     {"p_A.lag", "sensor_lag_p"},                       {"p_EC.lag", "sensor_lag_p"},
     {"p_ch.lag", "sensor_lag_p"},                      {"cylinder.cushion_seal_leak", "leakage_cushion_seal"},
     {"cylinder.cushion_seal_friction", "friction_cushion_zone"}, {"valve_PA.opening_late", "valve_timing"},

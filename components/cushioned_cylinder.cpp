@@ -247,6 +247,7 @@ ComponentInfo describe() {
               {"rod_bore_closing", "the rod-end bore opening starts to close (rod cushioning)"},
               {"rod_bore_open", "the rod-end bore opening is fully open (rod cushioning)"}};
   for (auto& f : FrictionFaults::faults()) i.faults.push_back(std::move(f));
+  i.faults.push_back(FrictionFaults::chamber_pressure_fault());
   for (auto& f : ChamberFaults::faults()) i.faults.push_back(std::move(f));
   for (auto& f : CushionFaults::faults("", "")) i.faults.push_back(std::move(f));
   for (auto& f : CushionFaults::faults("rod_", "rod_plug_diameter")) i.faults.push_back(std::move(f));

@@ -70,6 +70,7 @@ ComponentInfo describe() {
   for (auto& s : Piston::parameters("rod-side")) i.parameters.push_back(std::move(s));
   DoubleActingCylinder::add_parts(layout(), i, true, true, true, true);
   i.faults = Piston::faults({"dead_volume_cap", "dead_volume_rod"});
+  i.faults.push_back(FrictionFaults::chamber_pressure_fault());
   i.events = Piston::stop_events();
   for (const std::string end : {"cap", "rod"}) {
     i.events.push_back({end + "_cushion_entry", "enters the " + end + "-end cushioning zone (cushioned ends)"});

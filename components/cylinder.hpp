@@ -393,8 +393,10 @@ class DoubleActingCylinder final : public ComponentT<DoubleActingCylinder> {
     s.rod = side_gas(e, End::rod, s.x);
     s.z = friction_.has_state() ? e.var(z_var_) : T(0.0 * s.x);
     s.F_fric = friction(s, gas.p_ambient);
+    if (friction_faults_.per_chamber_pressure > 0)
+      s.F_fric *= friction_faults_.law_factor(s.cap.p_piston, s.rod.p_piston, gas.p_ambient);
     if (friction_faults_.any())
-      s.F_fric += friction_faults_.force(s.v, T(s.cap.p_piston - s.rod.p_piston), friction_.v_reg);
+      s.F_fric += friction_faults_.force(s.v, s.cap.p_piston, s.rod.p_piston, friction_.v_reg);
     if (cap_.has_seal_drag() || rod_.has_seal_drag())
       s.F_fric += cap_.cushion_seal_drag(s.cap, s.v, friction_.v_reg) + rod_.cushion_seal_drag(s.rod, s.v, friction_.v_reg);
     s.F_stop = stops_.force(s.x, s.v, stroke_);

@@ -607,10 +607,12 @@ class CylinderSide {
 // 5 mm/s, and a friction growing with the pressure difference across the
 // piston seal (the pressure term of the end-cushioning paper's eq. 8).
 struct FrictionFaults {
-  double breakaway_F = 0, per_pressure = 0;
+  double breakaway_F = 0, per_pressure = 0, per_chamber_pressure = 0;
 
   explicit FrictionFaults(const ParameterValues& p)
-      : breakaway_F(p["fault_breakaway_F"]), per_pressure(p["fault_friction_per_pressure"]) {}
+      : breakaway_F(p["fault_breakaway_F"]),
+        per_pressure(p["fault_friction_per_pressure"]),
+        per_chamber_pressure(p["fault_friction_per_chamber_pressure"]) {}
 
   static std::vector<ParameterSpec> parameters() {
     using P = ParameterSpec;
@@ -621,6 +623,11 @@ struct FrictionFaults {
         P::scalar("fault_friction_per_pressure", "N/Pa",
                   "fault (diagnosis): running friction beyond the law per pascal across the piston seal "
                   "(e.g. 1e-5 N/Pa = 1 N/bar); 0 = none",
+                  0.0)
+            .non_negative(),
+        P::scalar("fault_friction_per_chamber_pressure", "1/Pa",
+                  "fault (diagnosis): the friction law's force grows by this share per pascal of the two chambers' "
+                  "summed gauge pressure (pAB+; e.g. 1e-6 1/Pa = 10 % per bar); 0 = none",
                   0.0)
             .non_negative(),
     };
@@ -653,14 +660,37 @@ struct FrictionFaults {
     };
   }
 
-  bool any() const { return breakaway_F > 0 || per_pressure > 0; }
-  // On the piston (+x), opposing v; `dp` the pressure across the seal
-  // (|dp| smoothed over 1 Pa). A fault at 0 adds no term.
+  // A double-acting piston's seal may be two lips, each pressed against
+  // the bore by its own chamber: the pressures then press the whole seal
+  // harder, and every part of its friction (dry, Stribeck, viscous) grows
+  // with the sum of the chambers' gauge pressures - eq. 8 on pAB+ with each
+  // coefficient c0 (1 + m pAB+), as the end-cushioning paper's Annex C set
+  // has it - not with their difference (the piston's other pressure fault).
+  static FaultSpec chamber_pressure_fault() {
+    return {"friction_chamber_pressure",
+            "seal friction growing in proportion with the chambers' own pressures beyond the law (lip seals "
+            "pressed by their chambers: eq. 8 of the end-cushioning paper on pAB+), with the law's level rescaled",
+            {{"m", "fault_friction_per_chamber_pressure", "1/Pa", false, 0.0, 0.0, 5e-6, 5e-7, false},
+             {"scale", "friction_scale", "1", true, 1.0, 0.25, 4.0, 1.0, true}}};
+  }
+  // The law's force times this (1 without the fault).
   template <class T>
-  T force(const T& v, const T& dp, double v_reg) const {
+  T law_factor(const T& p_a, const T& p_b, double p_ambient) const {
+    return 1.0 + per_chamber_pressure * (p_a + p_b - 2.0 * p_ambient);
+  }
+
+  bool any() const { return breakaway_F > 0 || per_pressure > 0; }
+  // On the piston (+x), opposing v; p_a and p_b the pressures on either
+  // side of the seal (|p_a - p_b| smoothed over 1 Pa). A fault at 0 adds no
+  // term.
+  template <class T>
+  T force(const T& v, const T& p_a, const T& p_b, double v_reg) const {
     T F = 0.0 * v;
     if (breakaway_F > 0) F -= breakaway_F * exp(-(v / 5e-3) * (v / 5e-3)) * tanh(v / v_reg);
-    if (per_pressure > 0) F -= per_pressure * sqrt(dp * dp + 1.0) * tanh(v / v_reg);
+    if (per_pressure > 0) {
+      const T dp = p_a - p_b;
+      F -= per_pressure * sqrt(dp * dp + 1.0) * tanh(v / v_reg);
+    }
     return F;
   }
 };

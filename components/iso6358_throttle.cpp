@@ -37,7 +37,8 @@ class Iso6358Throttle final : public ComponentT<Iso6358Throttle> {
                               "pressure ratio above which the flow is linear in (1 - p2/p1)", 0.999)
             .open_range(0.0, 1.0),
         fault_parameter("fault_opening_delay", "s",
-                        "mean delay of the opening behind its command (four lags of d/4; needs 'opening' connected)"),
+                        "mean delay of the opening behind its command (four lags of d/4; needs 'opening' connected)")
+            .non_negative(),
     };
     i.ports = {{"a", Domain::pneumatic, Causality::acausal, "port a"},
                {"b", Domain::pneumatic, Causality::acausal, "port b"},

@@ -127,9 +127,9 @@ class SingleActingCylinder final : public ComponentT<SingleActingCylinder> {
     const T z = p_.friction.has_state() ? e.var(z_var_) : T(0.0 * fl.v);
     const T& p_rod = closed_ ? s.rod.p_piston : spring_side;
     s.F_fric = piston_friction(p_.friction, fl.v, z, p_rod, s.cap.p, s.cap.p, p_amb);
-    if (p_.friction_faults.any())
-      s.F_fric += p_.friction_faults.force(fl.v, T(s.cap.p - (closed_ ? s.rod.p : T(0.0 * fl.s + p_amb))),
-                                           p_.friction.v_reg);
+    const T other = closed_ ? s.rod.p : T(0.0 * fl.s + p_amb);
+    if (p_.friction_faults.per_chamber_pressure > 0) s.F_fric *= p_.friction_faults.law_factor(s.cap.p, other, p_amb);
+    if (p_.friction_faults.any()) s.F_fric += p_.friction_faults.force(fl.v, s.cap.p, other, p_.friction.v_reg);
     s.F_stop = p_.stops.force(fl.s, fl.v, p_.stroke);
     return s;
   }

@@ -38,10 +38,11 @@ TEST(DeclaredFaults, EachComponentTypeListsWhatCanFailInIt) {
   const std::map<std::string, std::vector<std::string>> want = {
       {"cylinder",
        {"piston_seal_leak", "rod_seal_leak", "friction_running", "friction_breakaway", "wall_heat",
-        "dead_volume_cap_off", "dead_volume_rod_off"}},
+        "dead_volume_cap_off", "dead_volume_rod_off", "friction_chamber_pressure"}},
       {"cushioned_cylinder",
        {"piston_seal_leak", "rod_seal_leak", "friction_running", "friction_breakaway", "wall_heat",
-        "cushion_needle_misadjusted", "cushion_check_off", "cushion_seal_leak", "cushion_seal_friction"}},
+        "cushion_needle_misadjusted", "cushion_check_off", "cushion_seal_leak", "cushion_seal_friction",
+        "friction_chamber_pressure"}},
       {"single_acting_cylinder", {"piston_seal_leak", "friction_breakaway", "spring_weak"}},
       {"directional_valve_32", {"delay_actuate", "delay_release", "slow_switching", "internal_leak"}},
       {"directional_valve_52", {"delay_actuate", "delay_release", "slow_switching", "internal_leak"}},

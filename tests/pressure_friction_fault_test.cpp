@@ -54,6 +54,47 @@ TEST(PressureFrictionFault, AddsKTimesThePressureAcrossTheSealAgainstTheMotion) 
   }
 }
 
+// A double-acting cylinder's seal of two lips (friction_chamber_pressure,
+// 1/Pa): the whole law's force grows with the chambers' summed gauge
+// pressure, not their difference. Coulomb 20 N + viscous 100 N*s/m, cap side
+// 5 bar g, rod side 2 bar g, driven at 20 mm/s either way: m = 1e-6 1/Pa
+// (10 % per bar) makes the friction 1 + m (5 + 2) bar = 1.7 times the law's.
+std::string two_chambers(double v, const std::string& fault) {
+  return R"(components:
+  supply_cap: {type: pressure_source, p: 5 barg}
+  supply_rod: {type: pressure_source, p: 2 barg}
+  port_cap: {type: iso6358_throttle, C: 5 dm3/(s*bar), b: 0.3}
+  port_rod: {type: iso6358_throttle, C: 5 dm3/(s*bar), b: 0.3}
+  cyl: {type: cylinder, bore: 25 mm, rod: 8 mm, stroke: 50 mm, x0: 20 mm, p0_cap: 5 barg, p0_rod: 2 barg,
+        friction_model: coulomb_viscous, friction_FC: 20 N, friction_viscous: 100 N*s/m)" +
+         fault + R"(}
+  drive: {type: velocity_source, v: )" + test_support::num(v) + R"(, s0: 20 mm}
+connections:
+  - [supply_cap.port, port_cap.a]
+  - [port_cap.b, cyl.cap]
+  - [supply_rod.port, port_rod.a]
+  - [port_rod.b, cyl.rod]
+  - [drive.flange, cyl.flange]
+outputs: {F: cyl.F_friction, p_cap: cyl.p_cap, p_rod: cyl.p_rod}
+simulation: {t_end: 0.5 s, output_interval: 10 ms}
+)";
+}
+
+TEST(PressureFrictionFault, LipSealsScaleTheLawWithTheChambersSummedGaugePressure) {
+  for (double v : {0.02, -0.02}) {
+    const RunResult sound = test_support::run_text(two_chambers(v, ""), "lips.yaml");
+    const RunResult lips =
+        test_support::run_text(two_chambers(v, ", fault_friction_per_chamber_pressure: 1e-6"), "lips.yaml");
+    ASSERT_TRUE(sound.solver.ok && lips.solver.ok);
+    const double sum = test_support::at(sound.table, "p_cap", 0.5) + test_support::at(sound.table, "p_rod", 0.5) -
+                       2 * 101325.0;
+    const double F0 = test_support::at(sound.table, "F", 0.5);
+    EXPECT_NEAR(std::abs(F0), 22.0, 0.01) << v;  // 20 N + 100 N*s/m x 20 mm/s
+    EXPECT_NEAR(test_support::at(lips.table, "F", 0.5) / F0, 1 + 1e-6 * sum, 1e-6) << v;
+    EXPECT_NEAR(1e-6 * sum, 0.7, 0.02);
+  }
+}
+
 // The cushioned cylinder declares the same friction faults. On the cushion
 // rig, 1 N/bar of pressure friction slows the stroke, dissipates more in the
 // cushioning phase's friction, and the energy audit - which counts friction
