@@ -398,7 +398,8 @@ class DoubleActingCylinder final : public ComponentT<DoubleActingCylinder> {
     if (friction_faults_.any())
       s.F_fric += friction_faults_.force(s.v, s.cap.p_piston, s.rod.p_piston, friction_.v_reg);
     if (cap_.has_seal_drag() || rod_.has_seal_drag())
-      s.F_fric += cap_.cushion_seal_drag(s.cap, s.v, friction_.v_reg) + rod_.cushion_seal_drag(s.rod, s.v, friction_.v_reg);
+      s.F_fric += cap_.cushion_seal_drag(s.cap, s.v, friction_.v_reg) +
+                  rod_.cushion_seal_drag(s.rod, s.v, friction_.v_reg);
     s.F_stop = stops_.force(s.x, s.v, stroke_);
     s.F_pressure = toward_far(cap_.annulus_force(s.cap), cap_.port_force(s.cap), rod_.force(s.rod),
                               gas.p_ambient * A_rod_);

@@ -387,9 +387,9 @@ class CylinderSide {
     if (!(A_plug > A_rod && A_plug - A_rod < A))
       throw ParameterError(e + "plug_diameter", "the plug diameter must lie between the rod's and the bore's");
     Cushioning k{p[e + "cushion_length"], A_plug - A_rod, p[e + "dead_volume_cushion"],
-                       Cushion{p[e + "bore_opening_C"], p[e + "bore_opening_b"], p[e + "bore_opening_ramp"],
-                               p[e + "cushion_C"], p[e + "cushion_b"], p[e + "check_C"], p[e + "check_b"],
-                               p[e + "check_cracking"], p[e + "check_ramp"]}};
+                 Cushion{p[e + "bore_opening_C"], p[e + "bore_opening_b"], p[e + "bore_opening_ramp"],
+                         p[e + "cushion_C"], p[e + "cushion_b"], p[e + "check_C"], p[e + "check_b"],
+                         p[e + "check_cracking"], p[e + "check_ramp"]}};
     CushionFaults::read(p, e, k.paths);
     if (k.length + k.paths.ramp >= stroke)
       throw ParameterError(e + "cushion_length",
@@ -605,7 +605,9 @@ class CylinderSide {
 // The friction faults every piston declares (diagnosis), 0 in a sound
 // cylinder: a breakaway force apart from the running friction, fading above
 // 5 mm/s, and a friction growing with the pressure difference across the
-// piston seal (the pressure term of the end-cushioning paper's eq. 8).
+// piston seal (the pressure term of the end-cushioning paper's eq. 8); a
+// double-acting piston also declares the law growing with its chambers'
+// own pressures (chamber_pressure_fault()).
 struct FrictionFaults {
   double breakaway_F = 0, per_pressure = 0, per_chamber_pressure = 0;
 
