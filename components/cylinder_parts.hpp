@@ -30,6 +30,10 @@ inline constexpr double kCylinderPi = 3.14159265358979323846;
 
 inline double circle_area(double d) { return kCylinderPi * d * d / 4; }
 
+// A fault parameter's value, its null 0 where the instance's type does not
+// declare it (a cylinder without the part the fault belongs to).
+inline double fault_or_none(const ParameterValues& p, const std::string& name) { return p.has(name) ? p[name] : 0.0; }
+
 // The cushion paths' pressure ratio above which their flow is continued
 // linearly in (1 - p2/p1) (iso6358_phi's r_lam): keeps the flow's slope
 // finite at zero pressure drop, as the stand-alone throttles' default does.
@@ -243,9 +247,8 @@ struct CushionFaults {
              needs}};
   }
   static void read(const ParameterValues& p, const std::string& prefix, Cushion& c) {
-    const std::string leak = prefix + "fault_cushion_seal_leak_C", drag = prefix + "fault_cushion_seal_F";
-    c.C_seal_leak = p.has(leak) ? p[leak] : 0.0;
-    c.F_seal = p.has(drag) ? p[drag] : 0.0;
+    c.C_seal_leak = fault_or_none(p, prefix + "fault_cushion_seal_leak_C");
+    c.F_seal = fault_or_none(p, prefix + "fault_cushion_seal_F");
   }
 };
 
@@ -725,10 +728,9 @@ struct ChamberFaults {
   double leak_piston_C = 0, leak_rod_C = 0, wall_kA = 0;
 
   explicit ChamberFaults(const ParameterValues& p)
-      : leak_piston_C(declared(p, "fault_piston_leak_C")),
-        leak_rod_C(declared(p, "fault_rod_leak_C")),
-        wall_kA(declared(p, "fault_wall_kA")) {}
-  static double declared(const ParameterValues& p, const char* name) { return p.has(name) ? p[name] : 0.0; }
+      : leak_piston_C(fault_or_none(p, "fault_piston_leak_C")),
+        leak_rod_C(fault_or_none(p, "fault_rod_leak_C")),
+        wall_kA(fault_or_none(p, "fault_wall_kA")) {}
 
   // Their parameters and the faults a diagnosis names by them.
   static std::vector<ParameterSpec> parameters() {
