@@ -102,6 +102,15 @@ ExplicitOrder choose_explicit(const ExplicitRows& rows) {
   o.used.assign(m, 0);
   o.level.assign(m, 0);
   for (int v = 0; v < m; ++v) o.known[v] = (*rows.id)[v] != 0.0;
+  // An unknown no row gives explicitly (a mixing temperature, a pressure
+  // between two throttles) stays with IDA whatever is torn: torn first, it
+  // unlocks its rows before the greedy tear below spends a tear on an
+  // unknown that a row could have given (a hose's flow at a junction).
+  for (int v = 0; v < m; ++v) {
+    bool explicit_somewhere = false;
+    for (int q = 0; q < m && !explicit_somewhere; ++q) explicit_somewhere = rows.dy[q].count(v) && rows.usable(q, v);
+    if (!explicit_somewhere) o.known[v] = 1;
+  }
   for (;;) {
     propagate(rows, o, o.known, o.used, true);
     const int best = tear(rows, o);
@@ -399,14 +408,18 @@ std::vector<int> System::explicit_root_inputs(const Block& b) const {
   if (!b.component || b.component->info().roots == 0) return out;
   bool invalid = false;
   std::vector<double> g(b.component->info().roots);
-  double ly[kMaxLocal], lyp[kMaxLocal];
+  // The three points' locals, drawn once: every unknown is poisoned at the
+  // same points.
+  double points[3][kMaxLocal], lyp[kMaxLocal];
+  std::mt19937 rng(13579);
+  for (int pass = 0; pass < 3; ++pass) poisoned_locals(b, pass, rng, false, false, points[pass], lyp);
+  double ly[kMaxLocal];
   for (std::size_t i = 0; i < b.vars.size(); ++i) {
     const int v = b.vars[i];
     if (v < 0 || plan_.of_m[v] < 0) continue;
-    std::mt19937 rng(13579);
     bool reads = false;
     for (int pass = 0; pass < 3 && !reads; ++pass) {
-      poisoned_locals(b, pass, rng, false, false, ly, lyp);
+      std::copy(points[pass], points[pass] + b.vars.size(), ly);
       ly[i] = std::numeric_limits<double>::quiet_NaN();
       Eval<double> e(*b.component, 0.1 * pass, ly, lyp, modes_.data() + b.mode0, b.connected.get(), circuit_.gas,
                      &invalid);
