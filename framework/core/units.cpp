@@ -8,6 +8,8 @@
 #include <map>
 #include <numbers>
 #include <optional>
+#include <string>
+#include <unordered_map>
 #include <system_error>
 #include <utility>
 
@@ -558,13 +560,27 @@ class Parser {
   Unit special_unit_;
 };
 
+// The unit that `text` names from `pos` on. Each run of a study elaborates
+// its netlist again and meets the same few unit texts thousands of times:
+// what parsed is remembered per thread (an error is thrown each time, with
+// its column in `text`).
+Unit whole_unit_from(std::string_view text, std::size_t pos) {
+  thread_local std::unordered_map<std::string, Unit> parsed;
+  const std::string key(text.substr(pos));
+  if (const auto it = parsed.find(key); it != parsed.end()) return it->second;
+  const Unit unit = Parser(text, pos).parse_whole_unit();
+  constexpr std::size_t kMaxRemembered = 4096;  // a bound for hostile inputs
+  if (parsed.size() < kMaxRemembered) parsed.emplace(key, unit);
+  return unit;
+}
+
 }  // namespace
 
 // ---------------------------------------------------------------------------
 // Public API
 // ---------------------------------------------------------------------------
 
-Unit parse_unit(std::string_view text) { return Parser(text, 0).parse_whole_unit(); }
+Unit parse_unit(std::string_view text) { return whole_unit_from(text, 0); }
 
 Dimension dimension_of(std::string_view unit_text) { return parse_unit(unit_text).dim; }
 
@@ -629,7 +645,7 @@ Quantity parse_quantity(std::string_view text, double ambient_pressure_pa) {
   while (unit_begin < text.size() && is_space(text[unit_begin])) ++unit_begin;
   Quantity q{value, {}, false, false};
   if (unit_begin < text.size()) {
-    const Unit unit = Parser(text, pos).parse_whole_unit();
+    const Unit unit = whole_unit_from(text, pos);
     q.si_value = to_si(unit, value, ambient_pressure_pa);
     q.dim = unit.dim;
     q.had_unit = true;
