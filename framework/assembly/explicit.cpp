@@ -106,11 +106,10 @@ ExplicitOrder choose_explicit(const ExplicitRows& rows) {
   // between two throttles) stays with IDA whatever is torn: torn first, it
   // unlocks its rows before the greedy tear below spends a tear on an
   // unknown that a row could have given (a hose's flow at a junction).
-  for (int v = 0; v < m; ++v) {
-    bool explicit_somewhere = false;
-    for (int q = 0; q < m && !explicit_somewhere; ++q) explicit_somewhere = rows.dy[q].count(v) && rows.usable(q, v);
-    if (!explicit_somewhere) o.known[v] = 1;
-  }
+  std::vector<char> explicit_somewhere(m, 0);
+  for (int q = 0; q < m; ++q)
+    for (int v : rows.dy[q]) explicit_somewhere[v] |= rows.usable(q, v);
+  for (int v = 0; v < m; ++v) o.known[v] |= !explicit_somewhere[v];
   for (;;) {
     propagate(rows, o, o.known, o.used, true);
     const int best = tear(rows, o);

@@ -9,8 +9,8 @@
 #include <numbers>
 #include <optional>
 #include <string>
-#include <unordered_map>
 #include <system_error>
+#include <unordered_map>
 #include <utility>
 
 namespace pneumo::units {
