@@ -462,6 +462,44 @@ TEST(DeclaredFaults, CircuitCandidatesAreItsComponentsFaultsAndMeasurementFaults
   EXPECT_THROW(diagnose::narrow_catalogue(cat, {"cly"}), InputError);
 }
 
+// A fault at its null is the sound component: every declared fault of the
+// meter-out cylinder, set at its null, leaves every number of the run as it
+// was - which is what lets a diagnosis take the unpatched model's runs for
+// each candidate at its null (vanishes_at_null). A null that is not the
+// netlist's value, or a patch that adds a component, does not vanish.
+TEST(DeclaredFaults, AFaultAtItsNullLeavesEveryBitOfTheRun) {
+  Netlist nl = meter_out();
+  nl.simulation.t_end = 1.0;
+  const auto cat = diagnose::declared_faults(nl, builtin_registry(), {{"x", 0.1, "m"}, {"p_cap", 6e5, "Pa"}}, {});
+  const RunResult sound = run_simulation(nl, builtin_registry());
+  ASSERT_TRUE(sound.solver.ok);
+  int patched = 0;
+  for (const auto& e : cat.effects) {
+    if (!e.unavailable.empty()) continue;
+    EXPECT_TRUE(diagnose::vanishes_at_null(e, nl, builtin_registry())) << e.name;
+    if (!e.patches_netlist()) continue;
+    diagnose::MeasurementModel mm;
+    const RunResult at_null =
+        run_simulation(diagnose::apply_effects(nl, {{&e, e.null_values()}}, &mm), builtin_registry());
+    EXPECT_TRUE(at_null.solver.ok) << e.name;
+    EXPECT_EQ(at_null.table.rows, sound.table.rows) << e.name;
+    ++patched;
+  }
+  EXPECT_GT(patched, 20);
+
+  diagnose::Effect needle = *cat.find("flow_cap.misadjusted");
+  needle.parameters[0].null_value = 1.5;
+  EXPECT_FALSE(diagnose::vanishes_at_null(needle, nl, builtin_registry()));
+  diagnose::Effect leak = *cat.find("cyl.piston_seal_leak");
+  leak.add_components.push_back(*nl.component("flow_cap"));
+  leak.add_components.back().name = "extra";
+  EXPECT_FALSE(diagnose::vanishes_at_null(leak, nl, builtin_registry()));
+  const auto* offset = cat.find("x.offset");
+  diagnose::Effect shifted = *offset;
+  shifted.parameters[0].null_value = 1e-3;
+  EXPECT_FALSE(diagnose::vanishes_at_null(shifted, nl, builtin_registry()));
+}
+
 // `measure:` takes an offset and a gain besides the lag.
 TEST(DeclaredFaults, CatalogueMeasureTakesOffsetAndGain) {
   TempDir dir;

@@ -292,6 +292,36 @@ bool effects_conflict(const Effect& a, const Effect& b) {
   return false;
 }
 
+bool vanishes_at_null(const Effect& e, const Netlist& model, const Registry& registry) {
+  const auto null = e.null_values();
+  if (null.size() != e.parameters.size() || !e.add_components.empty() || !e.replace_components.empty() ||
+      !e.connect.empty() || !e.disconnect.empty())
+    return false;
+  MeasurementModel mm;
+  const Netlist at_null = apply_effects(model, {EffectInstance{&e, null}}, &mm);
+  for (const auto& [signal, lag] : mm.lag)
+    if (lag > 0) return false;
+  for (const auto& [signal, offset] : mm.offset)
+    if (offset != 0.0) return false;
+  for (const auto& [signal, gain] : mm.gain)
+    if (gain != 1.0) return false;
+  for (const auto& s : e.set) try {
+    const auto dot = s.target.find('.');
+    const std::string comp = s.target.substr(0, dot), name = s.target.substr(dot + 1);
+    if (comp == "parameters") {
+      if (at_null.parameter(name)->si_value != model.parameter(name)->si_value) return false;
+      continue;
+    }
+    const ComponentDecl *now = at_null.component(comp), *before = model.component(comp);
+    if (!now || !before || now->type != before->type ||
+        !resolved_parameters(at_null, *now, registry).same_bits(resolved_parameters(model, *before, registry)))
+      return false;  // a simulation setting, another type or other values
+  } catch (const std::exception&) {
+    return false;  // a null the component refuses is no null to leave out
+  }
+  return true;
+}
+
 namespace {
 
 // A phase starting at COMPONENT.TAG: the component's type must raise TAG,

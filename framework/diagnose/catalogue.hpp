@@ -192,4 +192,12 @@ Netlist apply_effects(const Netlist& model, const std::vector<EffectInstance>& e
 // The parameter names two effects both `set`, replace or disconnect (a conflict for combining them).
 bool effects_conflict(const Effect& a, const Effect& b);
 
+// Whether effect `e` at its null leaves `model` exactly as it is: it adds,
+// replaces and reconnects nothing, every component it sets is built with the
+// same parameter values as before (a declared fault's null is its
+// parameter's default), every top-level value it sets is unchanged, and its
+// measurement is the identity. Such an instance can be left out of a model
+// without changing a single bit of its runs.
+bool vanishes_at_null(const Effect& e, const Netlist& model, const Registry& registry);
+
 }  // namespace pneumo::diagnose

@@ -157,6 +157,7 @@ class Diagnosis {
       : opt_(opt), eng_(model_file, base, opt) {
     eng_.runs = load_runs(runs_dir, eng_.base(), eng_.base_probes(), eng_.registry());
     cat_ = candidates(catalogue_file, eng_.registry());
+    eng_.learn_nulls(cat_.effects);
     refuse_recalibrating_operating_points();
     axes_ = experiment_axes();
     rep_.model_file = model_file;
@@ -793,7 +794,8 @@ class Diagnosis {
     std::string v;
     for (const auto& n : rep_.verdict) v += (v.empty() ? "" : ", ") + n;
     log(fmt("verdict: [", 0) + v + fmt("]; validation gap %.3g -> %.3g; %.1f s", rep_.validation_before.total.rms,
-                                       rep_.validation_after.total.rms, rep_.seconds));
+                                       rep_.validation_after.total.rms, rep_.seconds) +
+        fmt("; %.0f simulations", rep_.simulations) + fmt(", %.0f runs remembered", eng_.memo_hits()));
   }
 
   // Candidates the data cannot tell apart, each with the effects it was

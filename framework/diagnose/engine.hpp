@@ -6,11 +6,14 @@
 
 #include <atomic>
 #include <mutex>
+#include <optional>
+#include <set>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "framework/diagnose/diagnose.hpp"
+#include "framework/diagnose/memo.hpp"
 #include "framework/diagnose/phases.hpp"
 #include "framework/run/model.hpp"
 #include "framework/solver/ida_solver.hpp"
@@ -18,7 +21,8 @@
 namespace pneumo::diagnose::engine {
 
 constexpr long kDisturbedMaxSteps = 20000;  // a disturbed run's step budget (the cushion rig's nominal run takes 1225)
-constexpr double kFailedResidual = 1e4;  // per sample, for a run the solver could not finish
+constexpr double kFailedResidual = 1e4;
+constexpr std::size_t kMemoValues = std::size_t{1} << 23;  // remembered signal values (64 MB)  // per sample, for a run the solver could not finish
 
 // One measured signal of one run inside a concatenated residual vector.
 struct Segment {
@@ -38,6 +42,8 @@ using Setting = std::vector<std::pair<std::string, double>>;
 struct Model {  // a patched model ready to run
   Netlist netlist;
   MeasurementModel measurement;
+  // Its effects' instances as the memo names them; none: not remembered.
+  std::optional<std::string> memo_key;
 };
 
 class Engine {
@@ -59,6 +65,13 @@ class Engine {
   double screen_cutoff_ = -1;  // fits stop after the screening figure below this; < 0: never
 
   Model model(const std::vector<EffectInstance>& effects) const;
+
+  // Learns which of the candidates leave the model exactly as it is at
+  // their null (vanishes_at_null): model() leaves such instances out of the
+  // memo's name, so that the unpatched model's runs serve every candidate
+  // at its null. Before the first run.
+  void learn_nulls(const std::vector<Effect>& effects);
+  std::size_t memo_hits() const { return memo_.hits(); }
 
   // The model at run `k`'s operating point over its measured span; `at`
   // (top-level parameter, SI value) set on top: an operating point no run has.
@@ -126,6 +139,8 @@ class Engine {
   std::vector<Probe> base_probes_;
   std::vector<PhaseDecl> declared_phases_;
   std::vector<PhaseStarts> phase_starts_;  // per measured run
+  std::set<const Effect*> vanishing_;       // learn_nulls()
+  SignalMemo memo_{kMemoValues};
 };
 
 }  // namespace pneumo::diagnose::engine

@@ -1,7 +1,9 @@
 #include "framework/model/component.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <sstream>
 #include <vector>
 
@@ -161,6 +163,27 @@ std::string ComponentInfo::event_list() const {
   std::string s;
   for (const auto& e : events) s += (s.empty() ? "" : ", ") + e.tag;
   return s.empty() ? "none" : s;
+}
+
+namespace {
+bool same_bits(double a, double b) { return std::bit_cast<std::uint64_t>(a) == std::bit_cast<std::uint64_t>(b); }
+bool same_bits(const std::vector<double>& a, const std::vector<double>& b) {
+  return std::equal(a.begin(), a.end(), b.begin(), b.end(), [](double x, double y) { return same_bits(x, y); });
+}
+bool same_bits(const Table& a, const Table& b) {
+  return std::equal(a.begin(), a.end(), b.begin(), b.end(),
+                    [](const auto& x, const auto& y) { return same_bits(x, y); });
+}
+template <class V>
+bool same_bits(const std::map<std::string, V>& a, const std::map<std::string, V>& b) {
+  return std::equal(a.begin(), a.end(), b.begin(), b.end(),
+                    [](const auto& x, const auto& y) { return x.first == y.first && same_bits(x.second, y.second); });
+}
+}  // namespace
+
+bool ParameterValues::same_bits(const ParameterValues& other) const {
+  return pneumo::same_bits(scalars_, other.scalars_) && pneumo::same_bits(tables_, other.tables_) &&
+         texts_ == other.texts_;
 }
 
 double ParameterValues::scalar(const std::string& name) const {

@@ -268,6 +268,8 @@ class ParameterValues {
   void set_scalar(const std::string& name, double v) { scalars_[name] = v; }
   void set_table(const std::string& name, Table t) { tables_[name] = std::move(t); }
   void set_text(const std::string& name, std::string t) { texts_[name] = std::move(t); }
+  // Every value the same, bit for bit (a NaN "not given" equals itself).
+  bool same_bits(const ParameterValues& other) const;
 
  private:
   std::map<std::string, double> scalars_;

@@ -195,13 +195,19 @@ void default_parameters(const Netlist& nl, const ComponentDecl& c, const Compone
   }
 }
 
+ParameterValues resolved(const Reader& r, const Netlist& nl, const ComponentDecl& c, const ComponentInfo& info) {
+  ParameterValues values;
+  const auto given = given_parameters(r, nl, c, info, values);
+  default_parameters(nl, c, info, given, values);
+  return values;
+}
+
 std::unique_ptr<Component> make_component(const Reader& r, const Netlist& nl, const ComponentDecl& c,
                                           const Registry& registry) {
   const Registry::Entry& entry = entry_of(registry, c);
   Construction k;
   k.name = c.name;
-  const auto given = given_parameters(r, nl, c, *entry.info, k.params);
-  default_parameters(nl, c, *entry.info, given, k.params);
+  k.params = resolved(r, nl, c, *entry.info);
   try {
     k.info = entry.instance_info(k.params);
     return entry.make(k);
@@ -313,6 +319,10 @@ void check_named_events(const Netlist& nl, const Circuit& circuit, const std::ma
 }
 
 }  // namespace
+
+ParameterValues resolved_parameters(const Netlist& nl, const ComponentDecl& c, const Registry& registry) {
+  return resolved(Reader(nl.file), nl, c, *entry_of(registry, c).info);
+}
 
 Circuit elaborate(const Netlist& nl, const Registry& registry) {
   const Reader r(nl.file);

@@ -217,6 +217,9 @@ void apply_override(Netlist& netlist, const std::string& assignment);
 // Instantiate the components (parameters converted, defaulted and range
 // checked) and resolve the connections.
 Circuit elaborate(const Netlist& netlist, const Registry& registry);
+// The parameter values component `c` of `netlist` is built with (converted,
+// defaulted, range checked), as elaborate() gives them to its constructor.
+ParameterValues resolved_parameters(const Netlist& netlist, const ComponentDecl& c, const Registry& registry);
 // Add one more output to a circuit elaborated from `netlist`, as if it had
 // been declared last under its `outputs:` (an analysis that learns from the
 // circuit which columns it needs adds them so, without elaborating again).
