@@ -21,8 +21,8 @@
 namespace pneumo::diagnose::engine {
 
 constexpr long kDisturbedMaxSteps = 20000;  // a disturbed run's step budget (the cushion rig's nominal run takes 1225)
-constexpr double kFailedResidual = 1e4;
-constexpr std::size_t kMemoValues = std::size_t{1} << 23;  // remembered signal values (64 MB)  // per sample, for a run the solver could not finish
+constexpr double kFailedResidual = 1e4;  // per sample, for a run the solver could not finish
+constexpr std::size_t kMemoValues = std::size_t{1} << 23;  // remembered signal values (64 MB)
 
 // One measured signal of one run inside a concatenated residual vector.
 struct Segment {
