@@ -114,5 +114,34 @@ TEST(BoundedLm, AFarStartOnAMovingFrontIsLeftWithinTwelveIterations) {
   }
 }
 
+// A screen's arithmetic on residuals linear in u, r = A u - b: forward
+// differences are A's columns (a step backwards at the upper face), and the
+// Gauss-Newton share is the closed form 1 - min|r|^2 / |r(u)|^2, with the
+// minimum over the columns taken free (the least-squares projection).
+TEST(BoundedLm, ScreenOfALinearResidualIsItsLeastSquaresProjection) {
+  Eigen::MatrixXd A(4, 3);
+  A << 1, 2, 0, 0, 1, -1, 3, 0, 1, 1, 1, 1;
+  const Eigen::Vector4d b(1, -2, 0.5, 3);
+  const fit::BatchResiduals batch = [&](const std::vector<Eigen::VectorXd>& points) {
+    std::vector<std::vector<double>> out;
+    for (const auto& p : points) {
+      const Eigen::VectorXd r = A * p - b;
+      out.emplace_back(r.data(), r.data() + r.size());
+    }
+    return out;
+  };
+  const Eigen::Vector3d u(0.2, 1.0, 0.5);  // the second on its upper face
+  const auto r = batch({u})[0];
+  const Eigen::MatrixXd J = fit::forward_differences(batch, u, r, {1, 2});
+  ASSERT_EQ(J.cols(), 2);
+  EXPECT_TRUE(J.isApprox(A.rightCols(2), 1e-9));
+  // Free along columns 1 and 2, u[0] held: the least-squares step.
+  const Eigen::Map<const Eigen::VectorXd> rv(r.data(), 4);
+  const Eigen::VectorXd step = A.rightCols(2).colPivHouseholderQr().solve(-rv);
+  const double left = (rv + A.rightCols(2) * step).squaredNorm();
+  EXPECT_NEAR(fit::gauss_newton_share(J, r), 1 - left / rv.squaredNorm(), 1e-9);
+  EXPECT_EQ(fit::gauss_newton_share(Eigen::MatrixXd(4, 0), r), 0.0);
+}
+
 }  // namespace
 }  // namespace pneumo

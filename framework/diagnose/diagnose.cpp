@@ -23,6 +23,7 @@
 #include "framework/diagnose/sensors.hpp"
 #include "framework/diagnose/statistics.hpp"
 #include "framework/diagnose/unexplained.hpp"
+#include "framework/fit/bounded_lm.hpp"
 #include "framework/run/run.hpp"
 
 namespace pneumo::diagnose {
@@ -202,6 +203,11 @@ class Diagnosis {
   static double ssr(const std::vector<double>& r) { return ssr_of(r.data(), r.size()); }
   // Where a linearised screen starts: the initial values, and the null when
   // the effect has one that differs from them.
+  // The share of the misfit `reference` left once the linearised step from
+  // `lin` is taken, taken from 1: a screen's gain.
+  static double linear_gain(const engine::Engine::Linearisation& lin, double reference) {
+    return 1 - ssr(lin.r) * (1 - fit::gauss_newton_share(lin.J, lin.r)) / reference;
+  }
   static std::vector<std::vector<double>> linearisation_starts(const Effect& e) {
     std::vector<std::vector<double>> starts = {e.initial_values()};
     if (auto null = e.null_values(); !null.empty() && null != starts[0]) starts.push_back(std::move(null));
@@ -426,7 +432,6 @@ class Diagnosis {
   // Returns (gain, effect index), best first.
   std::vector<std::pair<double, int>> screen() {
     std::vector<std::pair<double, int>> screened;
-    eng_.screen_cutoff_ = 2.0;  // always stop after the sensitivities
     const double ssr_cal0 = ssr(r_cal0_);
     for (std::size_t k = 0; k < cat_.effects.size(); ++k) {
       const Effect& e = cat_.effects[k];
@@ -438,9 +443,8 @@ class Diagnosis {
       double gain = 0;
       const std::size_t mark = eng_.failure_count();
       for (const auto& start : linearisation_starts(e)) {
-        const auto f = eng_.fit({EffectInstance{&e, start}}, cal_, {}, 1);
-        const double reference = has_null ? ssr_cal0 : ssr(f.r_cal);
-        gain = std::max(gain, 1 - ssr(f.r_cal) * (1 - f.screening) / reference);
+        const auto lin = eng_.linearise({EffectInstance{&e, start}}, cal_);
+        gain = std::max(gain, linear_gain(lin, has_null ? ssr_cal0 : ssr(lin.r)));
       }
       keep_failures(mark, results_[k].failed_runs, results_[k].run_failures, e.name + " (screening)");
       results_[k].screening_improvement = gain;
@@ -449,7 +453,6 @@ class Diagnosis {
           fmt(": linearised improvement %.1f %%  [%.1f s]", 100 * gain, elapsed()));
     }
     std::sort(screened.begin(), screened.end(), std::greater<>());
-    eng_.screen_cutoff_ = -1;
     return screened;
   }
 
@@ -600,13 +603,16 @@ class Diagnosis {
   // the current model: the linearised gain with every parameter free from its
   // null (where the added effect is a small change of the current model) and
   // from its initial values (a far start's step is judged on that start's own
-  // misfit), and the direct gain at its single fit (what one effect improves
+  // misfit; the chosen effects' sensitivities are taken at the null, where
+  // every candidate shares them - the candidate's start moves them to second
+  // order), and the direct gain at its single fit (what one effect improves
   // alone says little about what it adds to another). The best, each with
   // the start that did best.
   std::vector<EffectInstance> rescreen() {
     const double c0 = ssr(r_cal_cur_);
+    int held = 0;  // the chosen effects' parameters: the first columns
+    for (const auto& ch : chosen_) held += static_cast<int>(ch.effect->parameters.size());
     std::vector<std::pair<double, EffectInstance>> gains;
-    eng_.screen_cutoff_ = 2.0;
     for (int k : order_) {
       const Effect* e = cat_.find(results_[k].name);
       bool skip = false;
@@ -615,15 +621,23 @@ class Diagnosis {
         for (const auto& n : g) skip = skip || n == e->name;
       skip = skip || dropped_.count(e->name) > 0;
       if (skip) continue;
-      double gain = -INFINITY;
-      EffectInstance from{e, e->initial_values()};
-      for (const auto& values : linearisation_starts(*e)) {
-        auto start = chosen_;
-        start.push_back({e, values});
-        const auto lin = eng_.fit(start, cal_, {}, 1);
-        const double g = 1 - ssr(lin.r_cal) * (1 - lin.screening) / c0;
-        if (g > gain) gain = g, from = EffectInstance{e, values};
+      const auto with = [&](const std::vector<double>& values) {
+        auto m = chosen_;
+        m.push_back({e, values});
+        return m;
+      };
+      const auto starts = linearisation_starts(*e);  // the initial values, then the null if it differs
+      std::optional<engine::Engine::Linearisation> at_null;
+      if (starts.size() > 1) at_null = eng_.linearise(with(starts[1]), cal_);
+      auto at_start = eng_.linearise(with(starts[0]), cal_, at_null ? held : 0);
+      if (at_null) {
+        Eigen::MatrixXd J(at_start.J.rows(), held + at_start.J.cols());
+        J << at_null->J.leftCols(held), at_start.J;
+        at_start.J = std::move(J);
       }
+      double gain = linear_gain(at_start, c0);
+      EffectInstance from{e, starts[0]};
+      if (at_null && linear_gain(*at_null, c0) > gain) gain = linear_gain(*at_null, c0), from = EffectInstance{e, starts[1]};
       if (const Cand* c = cand_of(e->name)) {
         auto start = chosen_;
         start.push_back(c->fit.effects[0]);
@@ -633,7 +647,6 @@ class Diagnosis {
       log("  re-screening " + e->name + fmt(" against the gap left: %.1f %%", 100 * gain));
       gains.push_back({gain, from});
     }
-    eng_.screen_cutoff_ = -1;
     std::stable_sort(gains.begin(), gains.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
     // A flat screen says little about which candidate adds most: every one
     // within half the best gain is fitted (at least four, at most eight).

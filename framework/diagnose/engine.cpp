@@ -79,6 +79,15 @@ std::vector<Eigen::VectorXd> grid_starts(const ScaledParameters& sp, const Eigen
   return points;
 }
 
+// The residuals on layout `L` of the models at scaled points, evaluated together.
+fit::BatchResiduals batch(Engine& eng, const ScaledParameters& sp, const Layout& L) {
+  return [&eng, &sp, &L](const std::vector<Eigen::VectorXd>& points) {
+    std::vector<Model> models;
+    for (const auto& p : points) models.push_back(eng.model(sp.instances(p)));
+    return eng.residuals(models, L);
+  };
+}
+
 // The reading gain * y + offset of a signal whose measurement model has them.
 void read_through(const MeasurementModel& mm, const std::string& signal, std::vector<double>& ys) {
   const auto g = mm.gain.find(signal), o = mm.offset.find(signal);
@@ -287,23 +296,29 @@ Engine::Significance Engine::significance(const std::vector<double>& r0, const s
 Engine::Fit Engine::fit(std::vector<EffectInstance> start, const Layout& cal, const std::vector<double>& r_start_hint,
                         int max_iterations, bool grid_start) {
   const ScaledParameters sp(std::move(start));
-  const fit::BatchResiduals at = [&](const std::vector<Eigen::VectorXd>& points) {
-    std::vector<Model> models;
-    for (const auto& p : points) models.push_back(model(sp.instances(p)));
-    return residuals(models, cal);
-  };
+  const fit::BatchResiduals at = batch(*this, sp, cal);
   const Eigen::VectorXd u0 = sp.start_point();
   fit::BoundedLmOptions lm_options;
   lm_options.max_iterations = max_iterations;
-  lm_options.screen_cutoff = screen_cutoff_;
   const auto lm =
       fit::bounded_lm(at, u0, r_start_hint, grid_start ? grid_starts(sp, u0) : std::vector<Eigen::VectorXd>{}, lm_options);
   Fit f;
   f.effects = sp.instances(lm.u);
   f.r_cal = lm.r;
-  f.screening = lm.screening;
   f.evaluations = lm.evaluations;
   return f;
+}
+
+Engine::Linearisation Engine::linearise(const std::vector<EffectInstance>& at, const Layout& L, int first) {
+  const ScaledParameters sp(at);
+  const fit::BatchResiduals res = batch(*this, sp, L);
+  const Eigen::VectorXd u = sp.start_point();
+  Linearisation lin;
+  lin.r = res({u})[0];
+  std::vector<long> columns;
+  for (long k = first; k < sp.size(); ++k) columns.push_back(k);
+  lin.J = fit::forward_differences(res, u, lin.r, columns);
+  return lin;
 }
 
 void Engine::compute_phases(const std::vector<PhaseDecl>& declared) {

@@ -4,6 +4,7 @@
 // significance test, the fits (framework/fit/bounded_lm.hpp) and the phases.
 #pragma once
 
+#include <Eigen/Dense>
 #include <atomic>
 #include <mutex>
 #include <optional>
@@ -62,7 +63,6 @@ class Engine {
   std::vector<std::vector<int>> phases;            // per run, per sample
   std::vector<std::vector<double>> phase_times;    // per run: each phase's start, then the run's end
   std::atomic<long> simulations{0};
-  double screen_cutoff_ = -1;  // fits stop after the screening figure below this; < 0: never
 
   Model model(const std::vector<EffectInstance>& effects) const;
 
@@ -102,7 +102,6 @@ class Engine {
   struct Fit {
     std::vector<EffectInstance> effects;
     std::vector<double> r_cal;
-    double screening = 0;  // linearised share of SSR removed at the start
     int evaluations = 0;
   };
   // The effects' parameters fitted on the calibration layout from `start`
@@ -112,6 +111,15 @@ class Engine {
   // others held at their start values) may replace the start.
   Fit fit(std::vector<EffectInstance> start, const Layout& cal, const std::vector<double>& r_start_hint,
           int max_iterations, bool grid_start = false);
+
+  // What a screen linearises: the residuals on layout `L` at `at`, and
+  // their forward differences along its parameters from the `first` on,
+  // in fit()'s scaled coordinates and with its steps.
+  struct Linearisation {
+    std::vector<double> r;
+    Eigen::MatrixXd J;
+  };
+  Linearisation linearise(const std::vector<EffectInstance>& at, const Layout& L, int first = 0);
 
   // What the unpatched model's run at each operating point tells the
   // phases (framework/diagnose/phases.hpp): its events' first times and

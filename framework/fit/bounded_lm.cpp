@@ -30,25 +30,10 @@ struct State {
   Eigen::VectorXd last_step;
 };
 
-// Forward differences of the residuals; a step that would leave [0, 1]
-// goes backwards instead.
-Eigen::MatrixXd jacobian(const BatchResiduals& residuals, const State& s, int& evaluations) {
-  constexpr double h = 3e-3;
-  const long np = s.u.size();
-  std::vector<Eigen::VectorXd> probes;
-  std::vector<double> steps(np);
-  for (long k = 0; k < np; ++k) {
-    Eigen::VectorXd up = s.u;
-    steps[k] = s.u[k] + h <= 1.0 ? h : -h;
-    up[k] += steps[k];
-    probes.push_back(up);
-  }
-  const auto rp = residuals(probes);
-  evaluations += static_cast<int>(np);
-  Eigen::MatrixXd J(s.r.size(), np);
-  for (long k = 0; k < np; ++k)
-    for (std::size_t i = 0; i < s.r.size(); ++i) J(i, k) = (rp[k][i] - s.r[i]) / steps[k];
-  return J;
+std::vector<long> every_column(long n) {
+  std::vector<long> all(n);
+  for (long k = 0; k < n; ++k) all[k] = k;
+  return all;
 }
 
 // Evaluates `un` and moves there if its cost is lower; false: it is not.
@@ -77,20 +62,15 @@ void stride(const BatchResiduals& residuals, State& s, BoundedLmResult& out, Eig
 }
 
 // One iteration: up to six damped steps, the first that lowers the cost is
-// taken. On the first iteration the undamped Gauss-Newton step's predicted
-// share of the cost removed is the screening figure. Returns false when the
-// fit stops: screened out, converged, or no step lowered the cost.
-bool lm_step(const BatchResiduals& residuals, State& s, BoundedLmResult& out, bool first, double screen_cutoff) {
+// taken. Returns false when the fit stops: converged, or no step lowered
+// the cost.
+bool lm_step(const BatchResiduals& residuals, State& s, BoundedLmResult& out) {
   const long np = s.u.size();
-  const Eigen::MatrixXd J = jacobian(residuals, s, out.evaluations);
+  const Eigen::MatrixXd J = forward_differences(residuals, s.u, s.r, every_column(np));
+  out.evaluations += static_cast<int>(np);
   const Eigen::Map<const Eigen::VectorXd> rv(s.r.data(), static_cast<long>(s.r.size()));
   Eigen::MatrixXd A = J.transpose() * J;
   Eigen::VectorXd g = J.transpose() * rv;
-  if (first) {
-    const Eigen::VectorXd d = A.ldlt().solve(-g);
-    out.screening = std::clamp(-(g.dot(d)) / std::max(s.cost, 1e-300), 0.0, 1.0);
-    if (out.screening < screen_cutoff) return false;
-  }
   // A parameter on a bound whose descent points out of the box is held
   // there: the others' step is then the one of the problem without it, not
   // a coupled step cut off at the bound.
@@ -147,11 +127,39 @@ BoundedLmResult bounded_lm(const BatchResiduals& residuals, const Eigen::VectorX
   }
   s.cost = sum_of_squares(s.r);
   for (int it = 0; it < options.max_iterations && s.u.size() > 0; ++it)
-    if (!lm_step(residuals, s, out, it == 0, options.screen_cutoff)) break;
+    if (!lm_step(residuals, s, out)) break;
   out.u = std::move(s.u);
   out.r = std::move(s.r);
   out.cost = s.cost;
   return out;
+}
+
+Eigen::MatrixXd forward_differences(const BatchResiduals& residuals, const Eigen::VectorXd& u,
+                                    const std::vector<double>& r, const std::vector<long>& columns) {
+  constexpr double h = 3e-3;
+  std::vector<Eigen::VectorXd> probes;
+  std::vector<double> steps;
+  for (long k : columns) {
+    Eigen::VectorXd up = u;
+    steps.push_back(u[k] + h <= 1.0 ? h : -h);
+    up[k] += steps.back();
+    probes.push_back(up);
+  }
+  const auto rp = residuals(probes);
+  Eigen::MatrixXd J(r.size(), static_cast<long>(columns.size()));
+  for (std::size_t c = 0; c < columns.size(); ++c)
+    for (std::size_t i = 0; i < r.size(); ++i) J(i, c) = (rp[c][i] - r[i]) / steps[c];
+  return J;
+}
+
+double gauss_newton_share(const Eigen::MatrixXd& J, const std::vector<double>& r) {
+  if (J.cols() == 0) return 0;
+  const Eigen::Map<const Eigen::VectorXd> rv(r.data(), static_cast<long>(r.size()));
+  const Eigen::VectorXd g = J.transpose() * rv;
+  const Eigen::VectorXd d = (J.transpose() * J).ldlt().solve(-g);
+  double cost = 0;
+  for (double x : r) cost += x * x;
+  return std::clamp(-(g.dot(d)) / std::max(cost, 1e-300), 0.0, 1.0);
 }
 
 }  // namespace pneumo::fit

@@ -28,17 +28,12 @@ using BatchResiduals = std::function<std::vector<std::vector<double>>(const std:
 
 struct BoundedLmOptions {
   int max_iterations = 12;
-  // The first iteration's undamped Gauss-Newton step predicts a share of
-  // the cost removed (the screening figure); below this share the fit stops
-  // there. < 0: never.
-  double screen_cutoff = -1;
 };
 
 struct BoundedLmResult {
   Eigen::VectorXd u;
   std::vector<double> r;  // the residuals at u
   double cost = 0;        // their sum of squares
-  double screening = 0;   // the first iteration's predicted share (0 without an iteration)
   int evaluations = 0;    // points evaluated
 };
 
@@ -53,5 +48,16 @@ struct BoundedLmResult {
 // damped steps in a row fail to lower the cost.
 BoundedLmResult bounded_lm(const BatchResiduals& residuals, const Eigen::VectorXd& u0, std::vector<double> r0,
                            const std::vector<Eigen::VectorXd>& starts, const BoundedLmOptions& options);
+
+// The forward differences bounded_lm takes, of the residuals `r` at `u`
+// along the coordinates `columns` (a step of 3e-3, backwards where a
+// forward one would leave the box), the probes evaluated together.
+Eigen::MatrixXd forward_differences(const BatchResiduals& residuals, const Eigen::VectorXd& u,
+                                    const std::vector<double>& r, const std::vector<long>& columns);
+
+// The share of |r|^2 that the undamped Gauss-Newton step of the Jacobian
+// `J` removes in the linearisation, in [0, 1] (0 without a column): what a
+// screen of a candidate's parameters predicts before any fit.
+double gauss_newton_share(const Eigen::MatrixXd& J, const std::vector<double>& r);
 
 }  // namespace pneumo::fit
