@@ -201,13 +201,13 @@ class Diagnosis {
   }
   double elapsed() const { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start_).count(); }
   static double ssr(const std::vector<double>& r) { return ssr_of(r.data(), r.size()); }
-  // Where a linearised screen starts: the initial values, and the null when
-  // the effect has one that differs from them.
-  // The share of the misfit `reference` left once the linearised step from
-  // `lin` is taken, taken from 1: a screen's gain.
-  static double linear_gain(const engine::Engine::Linearisation& lin, double reference) {
+  // A screen's gain: 1 less the share of the misfit `reference` that is
+  // left once the linearised step from `lin` is taken.
+  static double linear_gain(const Engine::Linearisation& lin, double reference) {
     return 1 - ssr(lin.r) * (1 - fit::gauss_newton_share(lin.J, lin.r)) / reference;
   }
+  // Where a linearised screen starts: the initial values, and the null when
+  // the effect has one that differs from them.
   static std::vector<std::vector<double>> linearisation_starts(const Effect& e) {
     std::vector<std::vector<double>> starts = {e.initial_values()};
     if (auto null = e.null_values(); !null.empty() && null != starts[0]) starts.push_back(std::move(null));
@@ -627,7 +627,7 @@ class Diagnosis {
         return m;
       };
       const auto starts = linearisation_starts(*e);  // the initial values, then the null if it differs
-      std::optional<engine::Engine::Linearisation> at_null;
+      std::optional<Engine::Linearisation> at_null;
       if (starts.size() > 1) at_null = eng_.linearise(with(starts[1]), cal_);
       auto at_start = eng_.linearise(with(starts[0]), cal_, at_null ? held : 0);
       if (at_null) {
@@ -637,7 +637,8 @@ class Diagnosis {
       }
       double gain = linear_gain(at_start, c0);
       EffectInstance from{e, starts[0]};
-      if (at_null && linear_gain(*at_null, c0) > gain) gain = linear_gain(*at_null, c0), from = EffectInstance{e, starts[1]};
+      if (const double g = at_null ? linear_gain(*at_null, c0) : -INFINITY; g > gain)
+        gain = g, from = EffectInstance{e, starts[1]};
       if (const Cand* c = cand_of(e->name)) {
         auto start = chosen_;
         start.push_back(c->fit.effects[0]);
