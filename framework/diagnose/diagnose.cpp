@@ -621,7 +621,7 @@ class Diagnosis {
         for (const auto& n : g) skip = skip || n == e->name;
       skip = skip || dropped_.count(e->name) > 0;
       if (skip) continue;
-      const auto with = [&](const std::vector<double>& values) {
+      const auto with = [&](const std::vector<double>& values) {  // the current model and the candidate
         auto m = chosen_;
         m.push_back({e, values});
         return m;
@@ -640,9 +640,7 @@ class Diagnosis {
       if (const double g = at_null ? linear_gain(*at_null, c0) : -INFINITY; g > gain)
         gain = g, from = EffectInstance{e, starts[1]};
       if (const Cand* c = cand_of(e->name)) {
-        auto start = chosen_;
-        start.push_back(c->fit.effects[0]);
-        const double at_fit = ssr(eng_.residuals({eng_.model(start)}, cal_)[0]);
+        const double at_fit = ssr(eng_.residuals({eng_.model(with(c->fit.effects[0].values))}, cal_)[0]);
         if (1 - at_fit / c0 > gain) gain = 1 - at_fit / c0, from = c->fit.effects[0];
       }
       log("  re-screening " + e->name + fmt(" against the gap left: %.1f %%", 100 * gain));

@@ -157,9 +157,7 @@ double gauss_newton_share(const Eigen::MatrixXd& J, const std::vector<double>& r
   const Eigen::Map<const Eigen::VectorXd> rv(r.data(), static_cast<long>(r.size()));
   const Eigen::VectorXd g = J.transpose() * rv;
   const Eigen::VectorXd d = (J.transpose() * J).ldlt().solve(-g);
-  double cost = 0;
-  for (double x : r) cost += x * x;
-  return std::clamp(-(g.dot(d)) / std::max(cost, 1e-300), 0.0, 1.0);
+  return std::clamp(-(g.dot(d)) / std::max(sum_of_squares(r), 1e-300), 0.0, 1.0);
 }
 
 }  // namespace pneumo::fit
