@@ -149,7 +149,8 @@ py::array_t<double> columns_array(const ResultsTable& table) {
 py::dict stats_dict(const SolverStats& s) {
   const std::pair<const char*, long> counts[] = {
       {"steps", s.steps}, {"residual_evals", s.residual_evals}, {"jacobian_evals", s.jacobian_evals},
-      {"jacobian_recombinations", s.jacobian_recombinations}, {"nonlinear_iterations", s.nonlinear_iterations},
+      {"jacobian_recombinations", s.jacobian_recombinations},
+      {"recombined_retries", s.recombined_retries}, {"nonlinear_iterations", s.nonlinear_iterations},
       {"nonlinear_failures", s.nonlinear_failures}, {"error_test_failures", s.error_test_failures},
       {"root_evals", s.root_evals}, {"reinitialisations", s.reinitialisations}, {"variables", s.variables},
       {"netlist_variables", s.netlist_variables}, {"explicit_variables", s.explicit_variables},

@@ -433,8 +433,8 @@ namespace {
 // every matrix evaluated afresh: the same equations at the same tolerance, so
 // the strokes differ by integration error only, which at rtol 1e-6 is far
 // inside the cross-check's bounds against the floor (1 mm, 2 % of peak p_EC):
-// asserted 100 and 40 times tighter (10 um, 0.05 %; measured 0.35 um
-// and 0.012 %). The run with reuse must have
+// asserted 100 and 40 times tighter (10 um, 0.05 %; measured 0.10 um
+// and 0.002 %). The run with reuse must have
 // recombined matrices, or this compares a run with itself.
 TEST(CushionRigNewtonMatrixReuse, SameStrokeAsFreshMatrices) {
   Netlist nl = load_netlist(std::string(PNEUMO_SOURCE_DIR) + "/netlists/cushion_rig.yaml");

@@ -38,7 +38,9 @@ void print_stats(const SolverResult& r, double seconds, std::ostream& out) {
       << " substituted as aliases or constants)\n"
       << "  steps " << s.steps << ", residual evaluations " << s.residual_evals << ", Jacobian evaluations "
       << s.jacobian_evals;
-  if (s.jacobian_recombinations > 0) out << " (and " << s.jacobian_recombinations << " recombined from the last one's parts)";
+  if (s.jacobian_recombinations > 0)
+    out << " (and " << s.jacobian_recombinations << " recombined from the last one's parts; " << s.recombined_retries
+        << " failed a Newton iteration and were evaluated afresh at the same step)";
   out << "\n"
       << "  nonlinear iterations " << s.nonlinear_iterations << ", convergence failures " << s.nonlinear_failures
       << ", error test failures " << s.error_test_failures << "\n"

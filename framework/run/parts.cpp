@@ -30,6 +30,7 @@ void add_stats(SolverStats& sum, const SolverStats& s) {
   sum.residual_evals += s.residual_evals;
   sum.jacobian_evals += s.jacobian_evals;
   sum.jacobian_recombinations += s.jacobian_recombinations;
+  sum.recombined_retries += s.recombined_retries;
   sum.nonlinear_iterations += s.nonlinear_iterations;
   sum.nonlinear_failures += s.nonlinear_failures;
   sum.linear_setups += s.linear_setups;

@@ -12,6 +12,7 @@
 #include <sunnonlinsol/sunnonlinsol_newton.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -69,6 +70,34 @@ struct AlgebraicNewtonTest {
   }
 };
 
+// IDA's Newton matrix setup, wrapped so that the Newton iteration knows a
+// recombined matrix (NewtonMatrixParts) for what it is: IDA reports every
+// setup as a fresh matrix (jcur), and a Newton iteration that fails on a
+// fresh matrix ends in a convergence failure that cuts the step to a
+// quarter. Reported as old, the failure is retried at the same step with
+// the matrix evaluated afresh (jbad), as CVODE does with a saved Jacobian.
+// IDA installs its setup function (the same for every run) at each
+// (re)initialisation, through the solver's setlsetupfn, which this
+// replaces.
+std::atomic<SUNNonlinSolLSetupFn> ida_lsetup{nullptr};
+
+int lsetup_knowing_recombination(booleantype jbad, booleantype* jcur, void* ida_mem) {
+  void* data = nullptr;
+  IDAGetUserData(ida_mem, &data);
+  auto& parts = static_cast<UserData*>(data)->parts;
+  if (jbad) parts.failed_newton();
+  const long recombined = parts.recombined;
+  const int flag = ida_lsetup.load()(jbad, jcur, ida_mem);
+  parts.last_recombined = parts.recombined != recombined;
+  if (parts.last_recombined) *jcur = SUNFALSE;
+  return flag;
+}
+
+int set_lsetup(SUNNonlinearSolver nls, SUNNonlinSolLSetupFn fn) {
+  if (fn) ida_lsetup.store(fn);
+  return SUNNonlinSolSetLSetupFn_Newton(nls, fn ? lsetup_knowing_recombination : nullptr);
+}
+
 }  // namespace
 
 // One run of IDA over [t_start, t_end], in pieces (advance_to): IDA takes
@@ -91,7 +120,7 @@ class IdaRun {
  private:
   void create_vectors();
   void create_ida();
-  void use_algebraic_newton_test();
+  void use_newton_solver(bool algebraic);
   void init_quadratures();
   void find_disturbed();
   UserData::Reader reader(const Disturbance& d, const std::string& name, bool rate) const;
@@ -140,7 +169,7 @@ class IdaRun {
   SolverPtr LS_;
   LinearSolverCounts lu_;
   SolverPtr timed_LS_;  // LS_, counted and timed into lu_
-  NonlinearSolverPtr nls_;  // with algebraic unknowns: IDA's Newton with newton_test_
+  NonlinearSolverPtr nls_;  // IDA's Newton (use_newton_solver)
   AlgebraicNewtonTest newton_test_;
   IdaPtr mem_;
   void* ida_ = nullptr;
@@ -294,7 +323,7 @@ void IdaRun::create_ida() {
   const bool any_algebraic = std::any_of(system_.differential().begin(), system_.differential().end(),
                                          [](double d) { return d == 0.0; });
   check(IDASetSuppressAlg(ida_, any_algebraic ? SUNTRUE : SUNFALSE), "IDASetSuppressAlg");
-  if (any_algebraic) use_algebraic_newton_test();
+  use_newton_solver(any_algebraic);
   // An algebraic row of the Newton matrix has no cj dF/dy' part to dominate
   // it at short steps: it is dF/dy alone, and an old one slows the Newton
   // iteration on the flows and forces more than reuse saves (measured: the
@@ -309,13 +338,16 @@ void IdaRun::create_ida() {
   if (opt_.max_step > 0) check(IDASetMaxStep(ida_, opt_.max_step), "IDASetMaxStep");
 }
 
-// IDA's own Newton solver, its convergence test wrapped in
-// AlgebraicNewtonTest (IDASetNonlinearSolver installs IDA's test, which the
-// wrapper then calls first).
-void IdaRun::use_algebraic_newton_test() {
+// IDA's own Newton solver, its matrix setup wrapped
+// (lsetup_knowing_recombination) and, with algebraic unknowns, its
+// convergence test wrapped in AlgebraicNewtonTest (IDASetNonlinearSolver
+// installs IDA's test, which the wrapper then calls first).
+void IdaRun::use_newton_solver(bool algebraic) {
   nls_.reset(SUNNonlinSol_Newton(y_.get(), context_.ctx));
   if (!nls_) throw std::runtime_error("cannot create the SUNDIALS Newton solver");
+  nls_->ops->setlsetupfn = set_lsetup;
   check(IDASetNonlinearSolver(ida_, nls_.get()), "IDASetNonlinearSolver");
+  if (!algebraic) return;
   const auto* content = static_cast<SUNNonlinearSolverContent_Newton>(nls_->content);
   newton_test_.ida_test = content->CTest;
   newton_test_.ida_data = content->ctest_data;
@@ -834,6 +866,7 @@ void IdaRun::finish() {
   auto& s = result_.stats;
   // IDA counts its requests; those answered by recombining were no evaluation.
   s.jacobian_recombinations = user_.parts.recombined;
+  s.recombined_retries = user_.parts.retried;
   s.jacobian_evals -= user_.parts.recombined;
   s.pattern_misses = system_.pattern_misses();
   s.part_steps_max = s.steps;

@@ -87,6 +87,7 @@ struct SolverStats {
   long residual_evals = 0;
   long jacobian_evals = 0;           // fresh evaluations (of both parts when reused)
   long jacobian_recombinations = 0;  // IDA's requests answered from the last evaluation's parts
+  long recombined_retries = 0;       // Newton iterations that failed on a recombined matrix, retried on a fresh one at the same step
   long nonlinear_iterations = 0;
   long nonlinear_failures = 0;
   long linear_setups = 0;  // Newton matrices IDA asked for (evaluated or recombined), each factorised

@@ -17,7 +17,11 @@ namespace pneumo {
 // after a nonlinear convergence failure, after kMaxAgeSteps steps (CVODE's
 // limit), after an event or a re-initialisation, after KLU rejected a
 // pivot, and throughout IDACalcIC, which starts from far-off values. Used
-// only when IDA integrates no algebraic unknown (see simulate).
+// only when IDA integrates no algebraic unknown (see simulate). IDA's
+// Newton iteration is told a recombined matrix is not current
+// (lsetup_knowing_recombination in ida_solver.cpp), so that one it fails on
+// is evaluated afresh at the same step (failed_newton) instead of cutting
+// the step.
 struct NewtonMatrixParts {
   static constexpr long kMaxAgeSteps = 50;
   bool enabled = true;
@@ -26,11 +30,18 @@ struct NewtonMatrixParts {
   std::vector<double> dFdy, dFdyp;  // in IDA's scaled variables, in the matrix's order
   long steps_at = 0, convergence_failures_at = 0;
   long recombined = 0;  // requests answered without an evaluation
+  bool last_recombined = false;  // the matrix in use
+  long retried = 0;  // Newton iterations failed on a recombined matrix, retried on a fresh one
 
   // Whether a request at IDA's counters now can be answered from the parts.
   bool usable(long steps, long convergence_failures, bool klu_rejected) const {
     return valid && !in_calc_ic && !klu_rejected && convergence_failures == convergence_failures_at &&
            steps >= steps_at && steps - steps_at < kMaxAgeSteps;
+  }
+  // The Newton iteration failed on the matrix in use: the next one is evaluated.
+  void failed_newton() {
+    if (last_recombined) ++retried;
+    valid = false;
   }
   void combine(double cj, double* values) const {
     for (std::size_t k = 0; k < dFdy.size(); ++k) values[k] = dFdy[k] + cj * dFdyp[k];
