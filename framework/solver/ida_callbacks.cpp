@@ -3,7 +3,6 @@
 #include <sunmatrix/sunmatrix_sparse.h>
 
 #include <cstdlib>
-#include <cstring>
 
 namespace pneumo {
 
@@ -80,10 +79,8 @@ int jacobian_cb(realtype t_ida, realtype cj, N_Vector y, N_Vector yp, N_Vector, 
   const double t = u->model_t(t_ida);
   const PhaseTimer timer(u->time_phases, u->seconds_jacobian);
   return guarded(u, [&] {
-    // The whole matrix, pattern and values, every call: IDA's zeroing of it
-    // is left out (keep_matrix in ida_solver.cpp).
-    std::memcpy(SUNSparseMatrix_IndexPointers(J), u->col_ptr.data(), u->col_ptr.size() * sizeof(sunindextype));
-    std::memcpy(SUNSparseMatrix_IndexValues(J), u->row_idx.data(), u->row_idx.size() * sizeof(sunindextype));
+    // Every value, every call; the pattern was written once and IDA's
+    // zeroing of the matrix is left out (keep_matrix in ida_solver.cpp).
     const bool klu_rejected = refresh_rejected_pivots(*u, J);
     double* values = SUNSparseMatrix_Data(J);
     long steps = 0, convergence_failures = 0;
