@@ -371,6 +371,9 @@ void IdaRun::init_quadratures() {
   integrands_ = system_.probe_set(quad_->integrands);
   user_.integrands = &integrands_;
   q_.reset(N_VNew_Serial(n_quad_, context_.ctx));
+  // IDAS clones its quadrature history from q_: the same compiled kernels
+  // as the states' vectors (serial_vector_ops.hpp).
+  use_compiled_serial_ops(q_.get());
   N_VConst(0.0, q_.get());
   check(IDAQuadInit(ida_, quadrature_cb, q_.get()), "IDAQuadInit");
   // Error-controlled like the states: an integral is as accurate as the

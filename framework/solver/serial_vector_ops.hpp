@@ -6,8 +6,9 @@
 // about a third of the run time, although the vectors hold 10 numbers. IDA
 // reaches every vector operation through the function table of its N_Vector,
 // and the vectors IDA and the linear solver clone inherit that table, so
-// replacing the entries of the vectors handed to IDAInit replaces them
-// everywhere. The replacements are written from the operations' definitions
+// replacing the entries of the vectors handed to IDAInit (and of the one
+// handed to IDAQuadInit, which the quadratures' history is cloned from)
+// replaces them everywhere. The replacements are written from the operations' definitions
 // in the SUNDIALS documentation (z = a x + b y, the weighted RMS norm, ...)
 // and work on the serial vector's own data; the vector type, its memory and
 // every other operation stay SUNDIALS'.
