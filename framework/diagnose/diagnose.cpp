@@ -599,6 +599,17 @@ class Diagnosis {
     return true;
   }
 
+  // Whether candidate k may join the current model: not chosen, not in
+  // conflict with a chosen effect, not in a named group, not dropped.
+  bool may_join(int k) const {
+    const Effect* e = &cat_.effects[k];
+    bool skip = false;
+    for (const auto& ch : chosen_) skip = skip || ch.effect == e || effects_conflict(*ch.effect, *e);
+    for (const auto& g : rep_.verdict_groups)
+      for (const auto& n : g) skip = skip || n == e->name;
+    return !skip && dropped_.count(e->name) == 0;
+  }
+
   // The remaining candidates re-screened against the gap left, each added to
   // the current model: the linearised gain with every parameter free from its
   // null (where the added effect is a small change of the current model) and
@@ -608,42 +619,56 @@ class Diagnosis {
   // order), and the direct gain at its single fit (what one effect improves
   // alone says little about what it adds to another). The best, each with
   // the start that did best.
+  //
+  // The null's linearisation is simulated for every candidate; the start's,
+  // which costs as much again, only for those that might need it: the
+  // kRescreened best by the null's gain now, the kRescreened best by the
+  // first screen's gain (whose start carried it there), and those fitted
+  // alone. Both rankings are simulated, none is predicted: a shortlist from
+  // the first screen's sensitivities alone misses effects whose timing the
+  // chosen one moves (docs/benchmarks.md).
   std::vector<EffectInstance> rescreen() {
     const double c0 = ssr(r_cal_cur_);
     int held = 0;  // the chosen effects' parameters: the first columns
     for (const auto& ch : chosen_) held += static_cast<int>(ch.effect->parameters.size());
+    std::vector<int> open;
+    for (int k : order_)
+      if (may_join(k)) open.push_back(k);
+    const auto with = [&](int k, const std::vector<double>& values) {
+      auto m = chosen_;
+      m.push_back({&cat_.effects[k], values});
+      return m;
+    };
+    std::vector<std::optional<Engine::Linearisation>> at_null(open.size());
+    for (std::size_t i = 0; i < open.size(); ++i)
+      if (const auto starts = linearisation_starts(cat_.effects[open[i]]); starts.size() > 1)
+        at_null[i] = eng_.linearise(with(open[i], starts[1]), cal_);
+    const std::set<int> afresh = starts_worth_simulating(open, at_null, c0);
     std::vector<std::pair<double, EffectInstance>> gains;
-    for (int k : order_) {
-      const Effect* e = cat_.find(results_[k].name);
-      bool skip = false;
-      for (const auto& ch : chosen_) skip = skip || ch.effect == e || effects_conflict(*ch.effect, *e);
-      for (const auto& g : rep_.verdict_groups)
-        for (const auto& n : g) skip = skip || n == e->name;
-      skip = skip || dropped_.count(e->name) > 0;
-      if (skip) continue;
-      const auto with = [&](const std::vector<double>& values) {  // the current model and the candidate
-        auto m = chosen_;
-        m.push_back({e, values});
-        return m;
-      };
-      const auto starts = linearisation_starts(*e);  // the initial values, then the null if it differs
-      std::optional<Engine::Linearisation> at_null;
-      if (starts.size() > 1) at_null = eng_.linearise(with(starts[1]), cal_);
-      auto at_start = eng_.linearise(with(starts[0]), cal_, at_null ? held : 0);
-      if (at_null) {
-        Eigen::MatrixXd J(at_start.J.rows(), held + at_start.J.cols());
-        J << at_null->J.leftCols(held), at_start.J;
-        at_start.J = std::move(J);
-      }
-      double gain = linear_gain(at_start, c0);
+    for (std::size_t i = 0; i < open.size(); ++i) {
+      const int k = open[i];
+      const Effect* e = &cat_.effects[k];
+      const auto starts = linearisation_starts(*e);
+      double gain = -INFINITY;
       EffectInstance from{e, starts[0]};
-      if (const double g = at_null ? linear_gain(*at_null, c0) : -INFINITY; g > gain)
+      const bool from_start = !at_null[i] || afresh.count(k) > 0 || cand_of(e->name) != nullptr;
+      if (from_start) {
+        auto at_start = eng_.linearise(with(k, starts[0]), cal_, at_null[i] ? held : 0);
+        if (at_null[i]) {
+          Eigen::MatrixXd J(at_start.J.rows(), held + at_start.J.cols());
+          J << at_null[i]->J.leftCols(held), at_start.J;
+          at_start.J = std::move(J);
+        }
+        gain = linear_gain(at_start, c0);
+      }
+      if (const double g = at_null[i] ? linear_gain(*at_null[i], c0) : -INFINITY; g > gain)
         gain = g, from = EffectInstance{e, starts[1]};
       if (const Cand* c = cand_of(e->name)) {
-        const double at_fit = ssr(eng_.residuals({eng_.model(with(c->fit.effects[0].values))}, cal_)[0]);
+        const double at_fit = ssr(eng_.residuals({eng_.model(with(k, c->fit.effects[0].values))}, cal_)[0]);
         if (1 - at_fit / c0 > gain) gain = 1 - at_fit / c0, from = c->fit.effects[0];
       }
-      log("  re-screening " + e->name + fmt(" against the gap left: %.1f %%", 100 * gain));
+      log("  re-screening " + e->name + fmt(" against the gap left: %.1f %%", 100 * gain) +
+          (from_start ? "" : " (from its null)"));
       gains.push_back({gain, from});
     }
     std::stable_sort(gains.begin(), gains.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
@@ -654,6 +679,29 @@ class Diagnosis {
       if (i < 4 || gains[i].first >= 0.5 * gains[0].first) out.push_back(gains[i].second);
     return out;
   }
+
+  // The candidates (of `open`, with their null's linearisation when they
+  // have a null) whose start is linearised too: the kRescreened best by the
+  // null's gain against the current misfit c0, and the kRescreened best by
+  // the first screen's gain.
+  std::set<int> starts_worth_simulating(const std::vector<int>& open,
+                                        const std::vector<std::optional<Engine::Linearisation>>& at_null,
+                                        double c0) const {
+    std::vector<std::pair<double, int>> by_null, by_first;
+    for (std::size_t i = 0; i < open.size(); ++i) {
+      if (!at_null[i]) continue;
+      const double g = linear_gain(*at_null[i], c0);
+      by_null.push_back({std::isfinite(g) ? g : INFINITY, open[i]});
+      by_first.push_back({results_[open[i]].screening_improvement, open[i]});
+    }
+    std::set<int> out;
+    for (auto* list : {&by_null, &by_first}) {
+      std::stable_sort(list->begin(), list->end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+      for (std::size_t i = 0; i < list->size() && i < kRescreened; ++i) out.insert((*list)[i].second);
+    }
+    return out;
+  }
+  static constexpr std::size_t kRescreened = 24;
 
   // Forward selection: the re-screened candidates fitted jointly with the
   // chosen effects (their parameters free); the one that removes the most of
