@@ -18,6 +18,12 @@ void System::reset_modes() {
   work_.cache_valid = false;
 }
 
+void System::restore_modes(const std::vector<double>& modes) {
+  if (modes.size() != modes_.size()) throw std::invalid_argument("restore_modes: the modes of another system");
+  modes_ = modes;
+  work_.cache_valid = false;
+}
+
 void System::roots(double t, const double* y, const double* yp, double* g) const {
   if (plan_.any_roots_read_explicit) {
     expand_part(t, y, yp, plan_.root_stages);

@@ -167,6 +167,8 @@ class System {
   std::vector<double>& modes() { return modes_; }
   const std::vector<double>& modes() const { return modes_; }
   void reset_modes();
+  // The modes a run had at one instant (a checkpoint another run resumes from).
+  void restore_modes(const std::vector<double>& modes);
   int n_roots() const { return n_roots_; }
   void roots(double t, const double* y, const double* yp, double* g) const;
   std::vector<double> time_events() const;

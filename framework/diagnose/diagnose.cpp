@@ -92,7 +92,18 @@ Unexplained leftover(Engine& eng, const Model& verdict, const DiagnosisReport& r
                       [&](int k, const std::vector<Disturbance>& d, std::string* why) {
                         return eng.simulate(verdict, k, d, {}, why);
                       },
-                      log, [&](int k) { return eng.netlist_of(verdict, k); }};
+                      log, [&](int k) { return eng.netlist_of(verdict, k); },
+                      [&](int k, const std::vector<double>& times) {
+                        KeptRun r;
+                        const auto kept = eng.keep(verdict, k, times);
+                        if (!kept) return r;
+                        r.signals = eng.signals_of(verdict, k, *kept, nullptr);
+                        r.from = [&eng, &verdict, k, kept](std::size_t j, const std::vector<Disturbance>& d,
+                                                          std::string* why) {
+                          return eng.simulate_from(verdict, k, *kept, j, d, why);
+                        };
+                        return r;
+                      }};
   explain_by_balances(in, eng.options(), u);
   return u;
 }

@@ -168,9 +168,16 @@ std::vector<std::vector<double>> Engine::simulate(const Model& m, int k, const s
   const std::string key = remembered ? *m.memo_key + "@" + std::to_string(k) : "";
   if (remembered)
     if (auto signals = memo_.find(key)) return std::move(*signals);
+  const auto res = run(m, k, disturbances, at, {}, why);
+  if (!res) return {};
+  auto out = signals_of(m, k, *res, why);
+  if (remembered && !out.empty()) memo_.keep(key, out);
+  return out;
+}
+
+std::optional<RunResult> Engine::run(const Model& m, int k, const std::vector<Disturbance>& disturbances,
+                                     const Setting& at, const Resumption& resumption, std::string* why) {
   ++simulations;
-  const MeasuredRun& run = runs[k];
-  RunResult res;
   try {
     const Netlist nl = netlist_of(m, k, at);
     SolverOptions so = solver_options(nl.simulation);
@@ -178,12 +185,16 @@ std::vector<std::vector<double>> Engine::simulate(const Model& m, int k, const s
     // A disturbance that drives a state out of its domain (a chamber's
     // mass below zero) leaves the solver crawling: such a run fails.
     if (!disturbances.empty()) so.max_steps = kDisturbedMaxSteps;
-    res = run_circuit(elaborate(nl, loaded_.registry), so);
+    return run_circuit(elaborate(nl, loaded_.registry), so, resumption);
   } catch (const std::exception& ex) {
-    note_failure(run.name, ex.what());
+    note_failure(runs[k].name, ex.what());
     if (why) *why = ex.what();
-    return {};
+    return std::nullopt;
   }
+}
+
+std::vector<std::vector<double>> Engine::signals_of(const Model& m, int k, const RunResult& res, std::string* why) {
+  const MeasuredRun& run = runs[k];
   if (!res.solver.ok || res.table.rows.size() < 2) {
     const std::string reason = res.solver.ok ? "fewer than two output rows" : res.solver.message;
     note_failure(run.name, reason);
@@ -206,8 +217,20 @@ std::vector<std::vector<double>> Engine::simulate(const Model& m, int k, const s
     for (double t : run.t) at_t.push_back(interp(ts, ys, t));
     out.push_back(std::move(at_t));
   }
-  if (remembered) memo_.keep(key, out);
   return out;
+}
+
+std::shared_ptr<const RunResult> Engine::keep(const Model& m, int k, const std::vector<double>& times, std::string* why) {
+  auto res = run(m, k, {}, {}, {times, nullptr}, why);
+  return res ? std::make_shared<const RunResult>(std::move(*res)) : nullptr;
+}
+
+std::vector<std::vector<double>> Engine::simulate_from(const Model& m, int k, const RunResult& kept, std::size_t j,
+                                                       const std::vector<Disturbance>& disturbances, std::string* why) {
+  if (j >= kept.checkpoints.size()) return simulate(m, k, disturbances, {}, why);
+  const RunCheckpoint& from = kept.checkpoints[j];
+  const auto res = run(m, k, disturbances, {}, {{}, &from, &kept.table}, why);
+  return res ? signals_of(m, k, *res, why) : std::vector<std::vector<double>>{};
 }
 
 Layout Engine::layout(Role role) const {

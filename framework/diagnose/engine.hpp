@@ -6,6 +6,7 @@
 
 #include <Eigen/Dense>
 #include <atomic>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <set>
@@ -17,6 +18,7 @@
 #include "framework/diagnose/memo.hpp"
 #include "framework/diagnose/phases.hpp"
 #include "framework/run/model.hpp"
+#include "framework/run/run.hpp"
 #include "framework/solver/ida_solver.hpp"
 
 namespace pneumo::diagnose::engine {
@@ -82,6 +84,20 @@ class Engine {
   std::vector<std::vector<double>> simulate(const Model& m, int k, const std::vector<Disturbance>& disturbances = {},
                                            const Setting& at = {}, std::string* why = nullptr);
 
+  // Run `k` of the model kept at `times` (run/run.hpp: Resumption), for
+  // simulate_from; null if it failed (the reason in `why`). Its signals:
+  // signals_of().
+  std::shared_ptr<const RunResult> keep(const Model& m, int k, const std::vector<double>& times,
+                                        std::string* why = nullptr);
+  // Signals of run `k` with disturbances that are zero up to the kept run's
+  // checkpoint j, resumed there: its rows before it are the kept run's (a
+  // run from the start when the kept run did not get that far).
+  std::vector<std::vector<double>> simulate_from(const Model& m, int k, const RunResult& kept, std::size_t j,
+                                                 const std::vector<Disturbance>& disturbances, std::string* why);
+  // A run's table as signals at run k's measurement times, through the
+  // model's measurement (lag, offset, gain); empty if the run failed.
+  std::vector<std::vector<double>> signals_of(const Model& m, int k, const RunResult& res, std::string* why);
+
   Layout layout(Role role) const;
 
   // Normalised residuals (measured - simulated)/sigma for several models at
@@ -138,6 +154,8 @@ class Engine {
 
  private:
   PhaseStarts phase_starts(int k, const Setting& at);
+  std::optional<RunResult> run(const Model& m, int k, const std::vector<Disturbance>& disturbances, const Setting& at,
+                               const Resumption& resumption, std::string* why);
   void note_failure(const std::string& run, const std::string& why);
 
   pneumo::Model loaded_;  // the model file with its plugins

@@ -176,8 +176,17 @@ class Search {
  public:
   Search(const UnexplainedInput& in, const DiagnoseOptions& opt) : in_(in), opt_(opt), runs_(*in.runs) {
     std::vector<std::vector<std::vector<double>>> sim(runs_.size());
+    kept_.resize(runs_.size());
     parallel_for(static_cast<long>(runs_.size()), opt.threads, [&](int, long k) {
-      sim[k] = in.simulate(static_cast<int>(k), {}, nullptr);
+      if (in.keep) {
+        // Kept at every knot but the last: a hat is zero up to the knot
+        // before its first (at the first knot, the start's state).
+        const auto at = knots_of(runs_[k].t);
+        kept_[k] = in.keep(static_cast<int>(k), std::vector<double>(at.begin(), at.end() - 1));
+        sim[k] = kept_[k].signals;
+      } else {
+        sim[k] = in.simulate(static_cast<int>(k), {}, nullptr);
+      }
       ++simulations;
     });
     for (int k = 0; k < static_cast<int>(runs_.size()); ++k) {
@@ -293,11 +302,31 @@ class Search {
       const long i = job / (nr * H), q = (job / H) % nr, j = job % H;
       Candidate& c = *cs[i];
       std::vector<double> rate(kDisturbanceKnots);
-      for (int k = 0; k < kDisturbanceKnots; ++k) rate[k] = shapes(k, j) * c.scale[q];
-      const auto sim = in_.simulate(used[q], {disturbance(c, q, std::move(rate))}, nullptr);
+      int first = kDisturbanceKnots;  // the hat's first knot not zero
+      for (int k = kDisturbanceKnots - 1; k >= 0; --k) {
+        rate[k] = shapes(k, j) * c.scale[q];
+        if (shapes(k, j) != 0.0) first = k;
+      }
+      const auto sim = simulate_hat(q, first, disturbance(c, q, std::move(rate)));
       ++simulations;
       if (!sim.empty()) c.J[q].col(j) = residual(used[q], sim) - r0[q];  // a failed run leaves the hat unused
     });
+  }
+
+  // Used run q with a disturbance that is zero up to the knot before
+  // `first`: from the kept run's checkpoint there (knot i is checkpoint i).
+  // Every hat goes on from the kept run, the first ones from its start: a
+  // part of the circuit the disturbance does not reach is then the kept
+  // run's row for row, its response exactly zero.
+  std::vector<std::vector<double>> simulate_hat(std::size_t q, int first, Disturbance d) const {
+    return simulate_from(used[q], std::max(first - 1, 0), {std::move(d)}, nullptr);
+  }
+  // Run k with disturbances that are zero up to knot j, from the kept run's
+  // checkpoint there (the other disturbed runs - confirmations, forms -
+  // from its start, on the same terms as the hats).
+  std::vector<std::vector<double>> simulate_from(int k, int j, const std::vector<Disturbance>& d, std::string* why) const {
+    if (kept_[k].from) return kept_[k].from(static_cast<std::size_t>(j), d, why);
+    return in_.simulate(k, d, why);
   }
 
   // The sensors: a smooth offset (in noise units) and a gain per run, exactly linear.
@@ -363,7 +392,7 @@ class Search {
     t.r.resize(nr);
     std::vector<std::string> why(nr);
     parallel_for(static_cast<long>(nr), opt_.threads, [&](int, long q) {
-      const auto sim = in_.simulate(used[q], {disturbance_of(c, q, &coef[q])}, &why[q]);
+      const auto sim = simulate_from(used[q], 0, {disturbance_of(c, q, &coef[q])}, &why[q]);
       ++simulations;
       if (!sim.empty()) t.r[q] = residual(used[q], sim);
     });
@@ -415,7 +444,8 @@ class Search {
   // The missing term's form on the best state balance, and on the next
   // best when the first's does not beat its time-shaped correction.
   std::optional<FormFinding> form_of(const std::vector<Candidate>& cands) const {
-    FormInput f{&runs_, used, r0, in_.netlist_of, in_.registry, in_.simulate,
+    FormInput f{&runs_, used, r0, in_.netlist_of, in_.registry,
+                [&](int k, const std::vector<Disturbance>& d, std::string* why) { return simulate_from(k, 0, d, why); },
                 [&](int k, const std::vector<std::vector<double>>& sim) { return residual(k, sim); }, in_.log, opt_.threads};
     std::optional<FormFinding> best;
     int tried = 0;
@@ -451,6 +481,7 @@ class Search {
   const UnexplainedInput& in_;
   const DiagnoseOptions& opt_;
   const std::vector<MeasuredRun>& runs_;
+  std::vector<KeptRun> kept_;                                   // per run (UnexplainedInput::keep)
   std::vector<std::vector<double>> held_t;                    // per used run: the output times
   std::vector<std::map<std::string, std::vector<double>>> held;  // per used run: each content state there
 

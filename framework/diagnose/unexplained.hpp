@@ -27,6 +27,16 @@ namespace pneumo::diagnose {
 using DisturbedSimulation = std::function<std::vector<std::vector<double>>(
     int run, const std::vector<Disturbance>& disturbances, std::string* why)>;
 
+// A run of the verdict model kept at some times (Engine::keep): its signals
+// (empty: it failed) and the same run with disturbances that are zero up to
+// times[j], resumed there - what comes before is not integrated again.
+struct KeptRun {
+  std::vector<std::vector<double>> signals;
+  std::function<std::vector<std::vector<double>>(std::size_t j, const std::vector<Disturbance>& disturbances,
+                                                 std::string* why)>
+      from;
+};
+
 struct UnexplainedInput {
   const std::vector<MeasuredRun>* runs = nullptr;
   const std::vector<std::string>* phase_names = nullptr;
@@ -36,6 +46,9 @@ struct UnexplainedInput {
   DisturbedSimulation simulate;
   std::function<void(const std::string&)> log;
   std::function<Netlist(int run)> netlist_of;  // the verdict model at a run's operating point (the form's variables)
+  // Optional: run `run` kept at `times` - a hat that starts at a later knot
+  // is simulated from there.
+  std::function<KeptRun(int run, const std::vector<double>& times)> keep = {};
 };
 
 // Fills `u`'s balances, shape and sentence (its gap, signal, phase and

@@ -1,6 +1,8 @@
 #include "framework/run/run.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <cstdint>
 #include <exception>
 #include <memory>
 #include <numeric>
@@ -9,6 +11,7 @@
 
 #include "framework/core/parallel.hpp"
 #include "framework/run/parts.hpp"
+#include "framework/solver/integration.hpp"
 
 namespace pneumo {
 
@@ -34,9 +37,71 @@ ResultsTable table_header(const Circuit& circuit) {
   return t;
 }
 
+// The parts' checkpoints (each of one part) at each time all of them reached.
+std::vector<RunCheckpoint> merge_checkpoints(std::vector<std::vector<RunCheckpoint>>& kept) {
+  std::size_t n = SIZE_MAX;
+  for (const auto& k : kept) n = std::min(n, k.size());
+  std::vector<RunCheckpoint> out(kept.empty() ? 0 : n);
+  for (std::size_t j = 0; j < out.size(); ++j) {
+    out[j].t = kept[0][j].t;
+    for (auto& k : kept) out[j].parts.push_back(std::move(k[j].parts[0]));
+  }
+  return out;
+}
+
+// Part `p`'s columns (column_of: split_circuit's) of a whole circuit's
+// rows; those after `t` left out.
+std::vector<std::vector<double>> part_rows(const ResultsTable& whole, const std::vector<int>& column_of, double t) {
+  std::vector<std::vector<double>> out;
+  for (const auto& row : whole.rows) {
+    if (row[0] > t) break;
+    std::vector<double> r(column_of.size());
+    for (std::size_t c = 0; c < column_of.size(); ++c) r[c] = row[column_of[c]];
+    out.push_back(std::move(r));
+  }
+  return out;
+}
+
+// A run resumed with the kept run's table: the kept rows up to the
+// checkpoint (these columns of them), then its own.
+void kept_rows_first(const Resumption& r, const std::vector<int>& columns, std::vector<std::vector<double>>& rows) {
+  if (!r.from || !r.kept) return;
+  auto out = part_rows(*r.kept, columns, r.from->t);
+  out.insert(out.end(), std::make_move_iterator(rows.begin()), std::make_move_iterator(rows.end()));
+  rows = std::move(out);
+}
+
+// Part p's run on its System (its disturbances already picked out): a
+// resumed part no disturbance reaches is the kept run's rows.
+PartRun run_part(System& system, const SolverOptions& options, const Resumption& resumption, std::size_t p,
+                 std::vector<int> column_of, std::vector<RunCheckpoint>& kept) {
+  PartRun out;
+  if (resumption.from && resumption.kept && options.disturbances.empty()) {
+    out.table.rows = part_rows(*resumption.kept, column_of, INFINITY);
+    out.solver.ok = true;
+    out.solver.t_reached = out.table.rows.empty() ? resumption.from->t : out.table.rows.back()[0];
+  } else {
+    Resumption own{resumption.keep_at, nullptr};
+    RunCheckpoint from;
+    if (resumption.from) {
+      from = {resumption.from->t, {resumption.from->parts[p]}};
+      own.from = &from;
+    }
+    RunResult r = run_system(system, options, own);
+    kept_rows_first(resumption, column_of, r.table.rows);
+    out.solver = std::move(r.solver);
+    out.table = std::move(r.table);
+    kept = std::move(r.checkpoints);
+  }
+  out.column_of = std::move(column_of);
+  return out;
+}
+
 }  // namespace
 
-RunResult run_system(System& system, const SolverOptions& options) {
+RunResult run_system(System& system, const SolverOptions& options, const Resumption& resumption) {
+  if (resumption.from && resumption.from->parts.size() != 1)
+    throw std::invalid_argument("run_system: a checkpoint of " + std::to_string(resumption.from->parts.size()) + " parts");
   RunResult out;
   const auto& probes = system.circuit().probes;
   out.table = table_header(system.circuit());
@@ -77,19 +142,36 @@ RunResult run_system(System& system, const SolverOptions& options) {
   };
   SolverOptions opt = options;
   opt.outputs_read_yp = sampled_set.reads_yp;
-  out.solver = simulate(system, opt, output, quad.integrands.empty() ? nullptr : &quad);
+  Integration integration(system, opt, output, quad.integrands.empty() ? nullptr : &quad);
+  bool ok = resumption.from ? integration.resume(resumption.from->parts[0]) : integration.start();
+  // One checkpoint a time kept (one at or before the start: the start's).
+  for (double t : resumption.keep_at) {
+    if (!ok || t > opt.t_end) break;
+    ok = t <= integration.time() || integration.advance_to(t);
+    if (!ok) break;
+    out.checkpoints.push_back({integration.time(), {integration.checkpoint()}});
+  }
+  if (ok) integration.advance_to(opt.t_end);
+  out.solver = integration.finish();
   return out;
 }
 
 
-RunResult run_circuit(Circuit circuit, const SolverOptions& options) {
+RunResult run_circuit(Circuit circuit, const SolverOptions& options, const Resumption& resumption) {
   const std::vector<std::vector<int>> parts = independent_parts(circuit);
   // A steady start's settling needs the rest-heat rows (System::set_resting).
   const AssemblyOptions assembly{.rest_heat = options.steady_start};
   if (parts.size() <= 1) {
+    std::vector<int> columns(circuit.probes.size() + 1);
+    std::iota(columns.begin(), columns.end(), 0);
     System system(std::move(circuit), assembly);
-    return run_system(system, options);
+    RunResult r = run_system(system, options, resumption);
+    kept_rows_first(resumption, columns, r.table.rows);
+    return r;
   }
+  if (resumption.from && resumption.from->parts.size() != parts.size())
+    throw std::invalid_argument("run_circuit: a checkpoint of " + std::to_string(resumption.from->parts.size()) +
+                                " parts for a circuit of " + std::to_string(parts.size()));
   const ResultsTable header = table_header(circuit);
   std::vector<std::vector<int>> column_of;
   std::vector<Circuit> circuits = split_circuit(std::move(circuit), parts, column_of);
@@ -98,6 +180,7 @@ RunResult run_circuit(Circuit circuit, const SolverOptions& options) {
   // depend on the threads' timing.
   std::vector<std::exception_ptr> errors(parts.size());
   std::vector<std::size_t> disturbed(parts.size(), 0);
+  std::vector<std::vector<RunCheckpoint>> kept(parts.size());
   const int threads = options.threads > 0 ? options.threads
                                           : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
   parallel_for(static_cast<long>(parts.size()), threads, [&](int, long p) {
@@ -115,10 +198,7 @@ RunResult run_circuit(Circuit circuit, const SolverOptions& options) {
       return std::find(names.begin(), names.end(), d.variable) == names.end();
     });
     disturbed[p] = part_options.disturbances.size();
-    RunResult r = run_system(*system, part_options);
-    runs[p].solver = std::move(r.solver);
-    runs[p].table = std::move(r.table);
-    runs[p].column_of = std::move(column_of[p]);
+    runs[p] = run_part(*system, part_options, resumption, p, std::move(column_of[p]), kept[p]);
   });
   for (const auto& e : errors)
     if (e) std::rethrow_exception(e);
@@ -126,6 +206,7 @@ RunResult run_circuit(Circuit circuit, const SolverOptions& options) {
     throw std::invalid_argument("a disturbance names an unknown that no part of the circuit has");
   RunResult out;
   merge_parts(runs, header, out.solver, out.table);
+  out.checkpoints = merge_checkpoints(kept);
   return out;
 }
 

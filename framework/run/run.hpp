@@ -11,9 +11,30 @@
 
 namespace pneumo {
 
+// A run's state at one instant, part by part (run_circuit's independent
+// parts; one for a System).
+struct RunCheckpoint {
+  double t = 0.0;
+  std::vector<Checkpoint> parts;
+};
+
 struct RunResult {
   SolverResult solver;
   ResultsTable table;
+  std::vector<RunCheckpoint> checkpoints;  // at Resumption::keep_at, as far as the run got
+};
+
+// A run kept at some times, or resumed from where one of the same circuit
+// was kept. A program's (the diagnosis: a disturbance that is zero until
+// some time need not integrate what comes before it again).
+struct Resumption {
+  std::vector<double> keep_at;  // ascending
+  const RunCheckpoint* from = nullptr;
+  // The kept run's table (same options but the disturbances): given, the
+  // resumed run's table is whole - the kept rows up to the checkpoint, then
+  // its own - and a part no disturbance reaches is not integrated again,
+  // its rows all the kept run's. Without it, the rows start after `from`.
+  const ResultsTable* kept = nullptr;
 };
 
 SolverOptions solver_options(const SimulationSettings& s);
@@ -21,13 +42,13 @@ SolverOptions solver_options(const SimulationSettings& s);
 // Throws InputError / StructureError for bad input; solver failures are
 // reported in RunResult::solver (ok == false) with the rows computed so far.
 RunResult run_simulation(const Netlist& netlist, const Registry& registry);
-RunResult run_system(System& system, const SolverOptions& options);
+RunResult run_system(System& system, const SolverOptions& options, const Resumption& resumption = {});
 // A circuit of one part: as run_system on its System. Of several
 // independent parts (framework/run/parts.hpp): each part assembled and
 // integrated by a System and an IDA of its own, on options.threads threads,
 // the results merged (merge_parts; the table's columns as the whole
 // circuit's: "t", then its probes in order). Assembly errors of the parts
 // are thrown as the first part's in component order.
-RunResult run_circuit(Circuit circuit, const SolverOptions& options);
+RunResult run_circuit(Circuit circuit, const SolverOptions& options, const Resumption& resumption = {});
 
 }  // namespace pneumo

@@ -115,6 +115,8 @@ class IdaRun {
  public:
   IdaRun(System& system, const SolverOptions& opt, OutputFn output, const Quadratures* quad);
   bool start();
+  bool resume(const Checkpoint& from);
+  Checkpoint checkpoint();
   bool advance_to(double target);
   bool inputs_changed();
   SolverResult finish_run();
@@ -126,6 +128,7 @@ class IdaRun {
  private:
   void create_vectors();
   void create_ida();
+  void prepare_run();
   void use_newton_solver(bool algebraic);
   void init_quadratures();
   void find_disturbed();
@@ -625,6 +628,63 @@ void IdaRun::emit_at(double t_out, N_Vector yy, N_Vector yyp) {
 // Events at t_start, consistent values (a steady start's settling), the
 // first output row. False on failure (result().message).
 bool IdaRun::start() {
+  prepare_run();
+  // Events at (or before) t_start set the initial modes.
+  while (next_event_ < events_.size() && events_[next_event_] <= opt_.t_start + eps_t_) {
+    system_.handle_time_event(events_[next_event_], user_.physical_y(y_.get()), user_.physical_yp(yp_.get()),
+                              result_.events);
+    ++next_event_;
+  }
+  if (!consistent_ic() || !settle()) return false;
+  if (opt_.steady_start && !rest_start()) return false;
+  emit();
+  restart_roots(nullptr);
+  return true;
+}
+
+// The rows up to the checkpoint are its run's: this one's start after it.
+bool IdaRun::resume(const Checkpoint& from) {
+  if (from.y.size() != static_cast<std::size_t>(n_) || from.yp.size() != from.y.size() ||
+      from.integrals.size() != static_cast<std::size_t>(n_quad_))
+    throw std::invalid_argument("resume: a checkpoint of another system");
+  prepare_run();
+  t_ = from.t;
+  next_event_ = std::upper_bound(events_.begin(), events_.end(), t_ + eps_t_) - events_.begin();
+  while (grid_.pending() && grid_.next() <= t_ + eps_t_) ++grid_.k;
+  system_.restore_modes(from.modes);
+  for (int i = 0; i < n_; ++i) {
+    N_VGetArrayPointer(y_.get())[i] = from.y[i] / user_.nominal[i];
+    N_VGetArrayPointer(yp_.get())[i] = from.yp[i] / user_.nominal[i];
+  }
+  check(IDAReInit(ida_, t_, y_.get(), yp_.get()), "IDAReInit");
+  if (n_quad_ > 0) {
+    std::copy(from.integrals.begin(), from.integrals.end(), N_VGetArrayPointer(q_.get()));
+    *quad_->values = from.integrals;
+    check(IDAQuadReInit(ida_, q_.get()), "IDAQuadReInit");
+  }
+  if (!consistent_ic() || !settle()) return false;
+  restart_roots(nullptr);
+  return true;
+}
+
+Checkpoint IdaRun::checkpoint() {
+  Checkpoint c;
+  c.t = t_;
+  const double* y = user_.physical_y(y_.get());
+  c.y.assign(y, y + n_);
+  const double* yp = user_.physical_yp(yp_.get());
+  c.yp.assign(yp, yp + n_);
+  c.modes = system_.modes();
+  if (n_quad_ > 0) {
+    check(IDAGetQuadDky(ida_, t_, 0, q_.get()), "IDAGetQuadDky");
+    c.integrals.assign(N_VGetArrayPointer(q_.get()), N_VGetArrayPointer(q_.get()) + n_quad_);
+  }
+  return c;
+}
+
+// The time events up to t_end and the vectors a run's rows and events are
+// read into.
+void IdaRun::prepare_run() {
   start_clock_ = std::chrono::steady_clock::now();
   events_ = system_.time_events();
   // A disturbance's knots are stops too: no step straddles a kink of d(t)
@@ -636,12 +696,6 @@ bool IdaRun::start() {
   }
   events_.erase(std::remove_if(events_.begin(), events_.end(), [&](double te) { return te > opt_.t_end; }),
                 events_.end());
-  // Events at (or before) t_start set the initial modes.
-  while (next_event_ < events_.size() && events_[next_event_] <= opt_.t_start + eps_t_) {
-    system_.handle_time_event(events_[next_event_], user_.physical_y(y_.get()), user_.physical_yp(yp_.get()),
-                              result_.events);
-    ++next_event_;
-  }
   // Output rows in a step are read off IDA's interpolant: with IDA_NORMAL
   // every output time would also cost a root-function evaluation (IDA
   // checks the roots up to each tout), for outputs every ms about as many as
@@ -651,11 +705,6 @@ bool IdaRun::start() {
   N_VConst(0.0, yp_out_.get());  // stays 0 when the outputs read no y'
   y_ev_.reset(N_VClone(y_.get()));
   yp_ev_.reset(N_VClone(y_.get()));
-  if (!consistent_ic() || !settle()) return false;
-  if (opt_.steady_start && !rest_start()) return false;
-  emit();
-  restart_roots(nullptr);
-  return true;
 }
 
 // Integrate on to min(target, t_end); false once the run failed (the
@@ -929,6 +978,8 @@ Integration::Integration(System& system, const SolverOptions& options, OutputFn 
     : run_(std::make_unique<IdaRun>(system, options, std::move(output), quad)) {}
 Integration::~Integration() = default;
 bool Integration::start() { return run_->start(); }
+bool Integration::resume(const Checkpoint& from) { return run_->resume(from); }
+Checkpoint Integration::checkpoint() { return run_->checkpoint(); }
 bool Integration::advance_to(double t) { return run_->advance_to(t); }
 bool Integration::inputs_changed() { return run_->inputs_changed(); }
 double Integration::time() const { return run_->time(); }

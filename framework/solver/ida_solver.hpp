@@ -122,6 +122,16 @@ struct SolverResult {
   std::vector<std::string> warnings;
 };
 
+// A run's state at one instant (Integration::checkpoint): the time, the
+// physical y and y', the System's modes and the integrals so far. Another
+// run of the same System - with other disturbances - resumes from it
+// (Integration::resume) as after an event: consistent values recomputed
+// there, nothing before it integrated again.
+struct Checkpoint {
+  double t = 0.0;
+  std::vector<double> y, yp, modes, integrals;
+};
+
 // Called at t_start, at every output time, and after every event.
 using OutputFn = std::function<void(double t, const double* y, const double* yp)>;
 

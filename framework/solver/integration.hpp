@@ -25,6 +25,10 @@ class Integration {
   // These return false once the run failed: result().message says why; the
   // state stays where the failure left it.
   bool start();
+  // Instead of start(): go on from a checkpoint of a run of the same System
+  // (its time events after it, output rows after it, its modes and
+  // integrals; consistent values and the event iteration there).
+  bool resume(const Checkpoint& from);
   // Integrate to min(t, t_end): time() is then t.
   bool advance_to(double t);
   // The System's external inputs were changed at time(): a discontinuity,
@@ -35,6 +39,8 @@ class Integration {
   // The physical y, y' at time() (valid until the next call).
   const double* y();
   const double* yp();
+  // The state at time() (after start(), resume() or advance_to()).
+  Checkpoint checkpoint();
   const SolverResult& result() const;
   // The statistics, warnings and outcome; once, at the end.
   SolverResult finish();

@@ -1,0 +1,97 @@
+// A run kept at some times and another resumed from one of its checkpoints
+// (run/run.hpp: Resumption): the resumed run is the same trajectory from
+// there on - the same events in the same order at the same times, the same
+// positions within the integration's error - and carries the integrals
+// over: on the sequence A+ B+ B- A- (netlists/sequence_ab.yaml, whose
+// sequencer and limit switches hold modes across the checkpoint), the
+// integral of cylinder A's velocity from t_start stays its displacement
+// x_A - x_A(0).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "components/builtin.hpp"
+#include "framework/netlist/netlist.hpp"
+#include "framework/run/run.hpp"
+
+namespace pneumo {
+namespace {
+
+Netlist sequence_with_travel() {
+  const std::string file = std::string(PNEUMO_SOURCE_DIR) + "/netlists/sequence_ab.yaml";
+  std::ifstream in(file);
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string s = text.str();
+  const auto at = s.find("\noutputs:\n");
+  s.insert(at + 10, "  travel_A: {integral: cyl_A.v}\n");
+  return parse_netlist(s, file);
+}
+
+RunResult run(const Netlist& nl, const Resumption& r = {}) {
+  SolverOptions o = solver_options(nl.simulation);
+  o.threads = 1;
+  return run_circuit(elaborate(nl, builtin_registry()), o, r);
+}
+
+// The value of column c at time t, linear between rows.
+double at(const RunResult& r, int c, double t) {
+  const auto& rows = r.table.rows;
+  for (std::size_t i = 1; i < rows.size(); ++i)
+    if (rows[i][0] >= t) {
+      const double w = rows[i][0] > rows[i - 1][0] ? (t - rows[i - 1][0]) / (rows[i][0] - rows[i - 1][0]) : 1.0;
+      return rows[i - 1][c] + w * (rows[i][c] - rows[i - 1][c]);
+    }
+  return rows.back()[c];
+}
+
+TEST(Resume, ACheckpointedRunGoesOnAsTheWholeRunWithItsModesAndIntegrals) {
+  const Netlist nl = sequence_with_travel();
+  const RunResult whole = run(nl);
+  ASSERT_TRUE(whole.solver.ok) << whole.solver.message;
+  const RunResult kept = run(nl, {{0.3, 0.9}, nullptr});
+  ASSERT_TRUE(kept.solver.ok) << kept.solver.message;
+  ASSERT_EQ(kept.checkpoints.size(), 2u);
+  EXPECT_DOUBLE_EQ(kept.checkpoints[1].t, 0.9);
+
+  const RunResult resumed = run(nl, {{}, &kept.checkpoints[1]});
+  ASSERT_TRUE(resumed.solver.ok) << resumed.solver.message;
+  ASSERT_FALSE(resumed.table.rows.empty());
+  EXPECT_GT(resumed.table.rows.front()[0], 0.9);
+  EXPECT_DOUBLE_EQ(resumed.table.rows.back()[0], whole.table.rows.back()[0]);
+
+  // The events after the checkpoint, in the same order at the same times.
+  std::vector<EventLogEntry> after;
+  for (const auto& e : whole.solver.events)
+    if (e.t > 0.9) after.push_back(e);
+  ASSERT_GE(after.size(), 5u);  // B-, A- and the cycle's end are still to come
+  ASSERT_EQ(resumed.solver.events.size(), after.size());
+  for (std::size_t i = 0; i < after.size(); ++i) {
+    EXPECT_EQ(resumed.solver.events[i].component, after[i].component) << i;
+    EXPECT_EQ(resumed.solver.events[i].tag, after[i].tag) << i;
+    EXPECT_NEAR(resumed.solver.events[i].t, after[i].t, 1e-4) << i;
+  }
+
+  const int x_A = resumed.table.column("x_A"), x_B = resumed.table.column("x_B"),
+            travel = resumed.table.column("travel_A");
+  const double x_A0 = whole.table.rows.front()[x_A];
+  for (const auto& row : resumed.table.rows) {
+    EXPECT_NEAR(row[x_A], at(whole, x_A, row[0]), 5e-5) << "t = " << row[0];  // 0.05 mm
+    EXPECT_NEAR(row[x_B], at(whole, x_B, row[0]), 5e-5) << "t = " << row[0];
+    EXPECT_NEAR(row[travel], row[x_A] - x_A0, 5e-5) << "t = " << row[0];
+  }
+}
+
+TEST(Resume, ACheckpointOfAnotherCircuitIsRefused) {
+  const Netlist nl = sequence_with_travel();
+  RunResult kept = run(nl, {{0.3}, nullptr});
+  ASSERT_EQ(kept.checkpoints.size(), 1u);
+  kept.checkpoints[0].parts[0].y.pop_back();
+  EXPECT_THROW(run(nl, {{}, &kept.checkpoints[0]}), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace pneumo
