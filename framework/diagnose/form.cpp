@@ -452,20 +452,37 @@ class Refiner {
 
   // The residuals of every used run with `terms` in the model; false when one failed.
   bool residuals(const std::vector<DisturbanceTerm>& terms, std::vector<Eigen::VectorXd>& r, std::string* why) const {
-    const std::size_t nr = in_.used.size();
-    r.assign(nr, Eigen::VectorXd());
-    std::vector<std::string> reasons(nr);
-    parallel_for(static_cast<long>(nr), in_.threads, [&](int, long q) {
-      const auto sim = in_.simulate(in_.used[q], {Disturbance{balance_, {}, {}, terms}}, &reasons[q]);
+    std::vector<std::vector<Eigen::VectorXd>> rs;
+    std::vector<std::string> whys;
+    const bool ran = residuals_of({terms}, rs, whys)[0];
+    r = std::move(rs[0]);
+    if (!ran && why) *why = whys[0];
+    return ran;
+  }
+
+  // The same for several sets of terms, all their runs on the threads at
+  // once (a set's runs alone keep a thread idle when they are odd in
+  // number). Per set: whether every run ran, else why the first failed.
+  std::vector<char> residuals_of(const std::vector<std::vector<DisturbanceTerm>>& sets,
+                                 std::vector<std::vector<Eigen::VectorXd>>& r, std::vector<std::string>& why) const {
+    const std::size_t nr = in_.used.size(), ns = sets.size();
+    r.assign(ns, std::vector<Eigen::VectorXd>(nr));
+    std::vector<std::string> reasons(ns * nr);
+    parallel_for(static_cast<long>(ns * nr), in_.threads, [&](int, long job) {
+      const std::size_t k = static_cast<std::size_t>(job) / nr, q = static_cast<std::size_t>(job) % nr;
+      const auto sim = in_.simulate(in_.used[q], {Disturbance{balance_, {}, {}, sets[k]}}, &reasons[job]);
       ++sims_;
-      if (!sim.empty()) r[q] = in_.residual(in_.used[q], sim);
+      if (!sim.empty()) r[k][q] = in_.residual(in_.used[q], sim);
     });
-    for (std::size_t q = 0; q < nr; ++q)
-      if (r[q].size() == 0) {
-        if (why) *why = "run " + (*in_.runs)[in_.used[q]].name + ": " + reasons[q];
-        return false;
-      }
-    return true;
+    std::vector<char> ran(ns, 1);
+    why.assign(ns, "");
+    for (std::size_t k = 0; k < ns; ++k)
+      for (std::size_t q = 0; q < nr && ran[k]; ++q)
+        if (r[k][q].size() == 0) {
+          ran[k] = 0;
+          why[k] = "run " + (*in_.runs)[in_.used[q]].name + ": " + reasons[k * nr + q];
+        }
+    return ran;
   }
 
   // Damped Gauss-Newton steps from `terms` while each lowers the simulated
@@ -508,15 +525,20 @@ class Refiner {
   bool jacobian(const std::vector<DisturbanceTerm>& terms, const std::vector<Parameter>& params,
                 const Eigen::VectorXd& r_all, Eigen::MatrixXd& J) const {
     J.resize(r_all.size(), static_cast<Eigen::Index>(params.size()));
+    std::vector<std::vector<DisturbanceTerm>> moved(params.size(), terms);
+    std::vector<double> h(params.size());
     for (std::size_t p = 0; p < params.size(); ++p) {
-      auto moved = terms;
-      double& v = slot(moved, params[p]);
-      const double h = params[p].factor < 0 ? std::max(0.05 * std::abs(v), 1e-12)
-                                            : 0.05 * terms[params[p].term].factors[params[p].factor].width;
-      v += h;
-      std::vector<Eigen::VectorXd> rp;
-      if (!residuals(moved, rp, nullptr)) return false;
-      J.col(static_cast<Eigen::Index>(p)) = (stacked(rp) - r_all) / h;
+      double& v = slot(moved[p], params[p]);
+      h[p] = params[p].factor < 0 ? std::max(0.05 * std::abs(v), 1e-12)
+                                  : 0.05 * terms[params[p].term].factors[params[p].factor].width;
+      v += h[p];
+    }
+    std::vector<std::vector<Eigen::VectorXd>> rp;
+    std::vector<std::string> why;
+    const std::vector<char> ran = residuals_of(moved, rp, why);
+    for (std::size_t p = 0; p < params.size(); ++p) {
+      if (!ran[p]) return false;
+      J.col(static_cast<Eigen::Index>(p)) = (stacked(rp[p]) - r_all) / h[p];
     }
     return true;
   }
@@ -674,7 +696,10 @@ class Discovery {
     std::vector<DisturbanceTerm> best_form;
     std::vector<int> best_chosen;
     double best_score = INFINITY, best_ssr = ssr;
-    for (const auto& added : best_additions(N, chosen, usable, kTried)) {
+    const auto tried = best_additions(N, chosen, usable, kTried);
+    std::vector<std::vector<int>> sets;  // chosen and each addition
+    std::vector<std::vector<DisturbanceTerm>> trials;
+    for (const auto& added : tried) {
       auto S = chosen;
       S.insert(S.end(), added.begin(), added.end());
       const Eigen::VectorXd delta = N.fit(S, -1);
@@ -683,19 +708,24 @@ class Discovery {
         if (a < chosen.size()) trial[a].coefficient += delta[a];
         else trial.push_back({delta[a], terms_[S[a]].factors});
       }
-      std::vector<Eigen::VectorXd> rt;
-      std::string why;
-      if (!refiner_.residuals(trial, rt, &why)) {
-        if (form.empty() && failure.empty()) failure = why;
+      sets.push_back(std::move(S));
+      trials.push_back(std::move(trial));
+    }
+    std::vector<std::vector<Eigen::VectorXd>> rts;
+    std::vector<std::string> whys;
+    const std::vector<char> ran = refiner_.residuals_of(trials, rts, whys);
+    for (std::size_t i = 0; i < trials.size(); ++i) {
+      if (!ran[i]) {
+        if (form.empty() && failure.empty()) failure = whys[i];
         continue;
       }
-      double s = Refiner::stacked(rt).squaredNorm();
-      refiner_.refine(trial, s, rt, range_);
+      double s = Refiner::stacked(rts[i]).squaredNorm();
+      refiner_.refine(trials[i], s, rts[i], range_);
       double parameters = 0;
-      for (int k : added) parameters += parameters_of_[k];
+      for (int k : tried[i]) parameters += parameters_of_[k];
       const double score = s + parameters * price;
       if (ssr - s >= parameters * price && score < best_score)
-        best_score = score, best_ssr = s, best_form = std::move(trial), best_chosen = std::move(S);
+        best_score = score, best_ssr = s, best_form = std::move(trials[i]), best_chosen = std::move(sets[i]);
     }
     if (best_form.empty()) return false;
     form = std::move(best_form), chosen = std::move(best_chosen), ssr = best_ssr;
