@@ -161,30 +161,38 @@ std::vector<double> joined(const Variable& v) {
 // pressures, temperatures; one of each set that moves together, none that
 // stays constant. `largest`: the balance's state's largest magnitude.
 std::vector<Variable> record(const FormInput& in, const std::string& balance, double& largest) {
-  std::vector<Variable> vars;
   const std::size_t nr = in.used.size();
-  for (std::size_t q = 0; q < nr; ++q) {
+  std::vector<std::vector<Readable>> read(nr);
+  std::vector<std::vector<std::vector<double>>> y_of(nr), yp_of(nr);  // per run, per readable
+  std::vector<double> largest_of(nr, 0.0);
+  parallel_for(static_cast<long>(nr), in.threads, [&](int, long q) {
     const Netlist nl = in.netlist_of(in.used[q]);
     System sys(elaborate(nl, *in.registry));
     const auto& names = sys.variable_names();
     const auto it = std::find(names.begin(), names.end(), balance);
     const int b = it == names.end() ? -1 : static_cast<int>(it - names.begin());
-    const std::vector<Readable> read = readables(sys, b);
-    if (q == 0) {
-      for (const auto& r : read)
-        vars.push_back({r.name, r.unit, std::vector<std::vector<double>>(nr), std::vector<std::vector<double>>(nr),
-                        INFINITY, -INFINITY, r.unknown >= 0});
-    }
+    read[q] = readables(sys, b);
+    y_of[q].resize(read[q].size()), yp_of[q].resize(read[q].size());
     SolverOptions so = solver_options(nl.simulation);
     so.threads = 1;
     simulate(sys, so, [&](double t, const double* y, const double* yp) {
-      if (b >= 0) largest = std::max(largest, std::abs(y[b]));
-      for (std::size_t k = 0; k < vars.size() && k < read.size(); ++k) {
-        const Readable& r = read[k];
-        vars[k].y[q].push_back(r.unknown >= 0 ? y[r.unknown] : sys.probe(r.probe, t, y, yp));
-        vars[k].yp[q].push_back(r.unknown >= 0 ? yp[r.unknown] : 0.0);
+      if (b >= 0) largest_of[q] = std::max(largest_of[q], std::abs(y[b]));
+      for (std::size_t k = 0; k < read[q].size(); ++k) {
+        const Readable& r = read[q][k];
+        y_of[q][k].push_back(r.unknown >= 0 ? y[r.unknown] : sys.probe(r.probe, t, y, yp));
+        yp_of[q][k].push_back(r.unknown >= 0 ? yp[r.unknown] : 0.0);
       }
     });
+  });
+  // The first run's readables name the variables (every run's circuit is the model's).
+  std::vector<Variable> vars;
+  for (const auto& r : read[0])
+    vars.push_back({r.name, r.unit, std::vector<std::vector<double>>(nr), std::vector<std::vector<double>>(nr),
+                    INFINITY, -INFINITY, r.unknown >= 0});
+  for (std::size_t q = 0; q < nr; ++q) {
+    largest = std::max(largest, largest_of[q]);
+    for (std::size_t k = 0; k < vars.size() && k < read[q].size(); ++k)
+      vars[k].y[q] = std::move(y_of[q][k]), vars[k].yp[q] = std::move(yp_of[q][k]);
   }
   for (auto& v : vars)
     for (const auto& run : v.y)
