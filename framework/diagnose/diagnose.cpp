@@ -89,9 +89,6 @@ Unexplained leftover(Engine& eng, const Model& verdict, const DiagnosisReport& r
   significant_windows(eng.runs, val, r_val, u.windows);
   const Netlist model = eng.netlist_of(verdict, 0);
   UnexplainedInput in{&eng.runs, &eng.phase_names, &eng.phases, &model, &eng.registry(),
-                      [&](int k, const std::vector<Disturbance>& d, std::string* why) {
-                        return eng.simulate(verdict, k, d, {}, why);
-                      },
                       log, [&](int k) { return eng.netlist_of(verdict, k); },
                       [&](int k, const std::vector<double>& times) {
                         KeptRun r;
@@ -651,10 +648,13 @@ class Diagnosis {
       return m;
     };
     std::vector<std::optional<Engine::Linearisation>> at_null(open.size());
+    std::vector<double> null_gain(open.size(), -INFINITY);
     for (std::size_t i = 0; i < open.size(); ++i)
-      if (const auto starts = linearisation_starts(cat_.effects[open[i]]); starts.size() > 1)
+      if (const auto starts = linearisation_starts(cat_.effects[open[i]]); starts.size() > 1) {
         at_null[i] = eng_.linearise(with(open[i], starts[1]), cal_);
-    const std::set<int> afresh = starts_worth_simulating(open, at_null, c0);
+        null_gain[i] = linear_gain(*at_null[i], c0);
+      }
+    const std::set<int> afresh = starts_worth_simulating(open, at_null, null_gain);
     std::vector<std::pair<double, EffectInstance>> gains;
     for (std::size_t i = 0; i < open.size(); ++i) {
       const int k = open[i];
@@ -672,8 +672,7 @@ class Diagnosis {
         }
         gain = linear_gain(at_start, c0);
       }
-      if (const double g = at_null[i] ? linear_gain(*at_null[i], c0) : -INFINITY; g > gain)
-        gain = g, from = EffectInstance{e, starts[1]};
+      if (null_gain[i] > gain) gain = null_gain[i], from = EffectInstance{e, starts[1]};
       if (const Cand* c = cand_of(e->name)) {
         const double at_fit = ssr(eng_.residuals({eng_.model(with(k, c->fit.effects[0].values))}, cal_)[0]);
         if (1 - at_fit / c0 > gain) gain = 1 - at_fit / c0, from = c->fit.effects[0];
@@ -691,17 +690,17 @@ class Diagnosis {
     return out;
   }
 
-  // The candidates (of `open`, with their null's linearisation when they
-  // have a null) whose start is linearised too: the kRescreened best by the
-  // null's gain against the current misfit c0, and the kRescreened best by
-  // the first screen's gain.
+  // The candidates (of `open`, with their null's linearisation and its gain
+  // against the current misfit when they have a null) whose start is
+  // linearised too: the kRescreened best by that gain, and the kRescreened
+  // best by the first screen's gain.
   std::set<int> starts_worth_simulating(const std::vector<int>& open,
                                         const std::vector<std::optional<Engine::Linearisation>>& at_null,
-                                        double c0) const {
+                                        const std::vector<double>& null_gain) const {
     std::vector<std::pair<double, int>> by_null, by_first;
     for (std::size_t i = 0; i < open.size(); ++i) {
       if (!at_null[i]) continue;
-      const double g = linear_gain(*at_null[i], c0);
+      const double g = null_gain[i];
       by_null.push_back({std::isfinite(g) ? g : INFINITY, open[i]});
       by_first.push_back({results_[open[i]].screening_improvement, open[i]});
     }

@@ -178,15 +178,11 @@ class Search {
     std::vector<std::vector<std::vector<double>>> sim(runs_.size());
     kept_.resize(runs_.size());
     parallel_for(static_cast<long>(runs_.size()), opt.threads, [&](int, long k) {
-      if (in.keep) {
-        // Kept at every knot but the last: a hat is zero up to the knot
-        // before its first (at the first knot, the start's state).
-        const auto at = knots_of(runs_[k].t);
-        kept_[k] = in.keep(static_cast<int>(k), std::vector<double>(at.begin(), at.end() - 1));
-        sim[k] = kept_[k].signals;
-      } else {
-        sim[k] = in.simulate(static_cast<int>(k), {}, nullptr);
-      }
+      // Kept at every knot but the last: a hat is zero up to the knot
+      // before its first (at the first knot, the start's state).
+      const auto at = knots_of(runs_[k].t);
+      kept_[k] = in.keep(static_cast<int>(k), std::vector<double>(at.begin(), at.end() - 1));
+      sim[k] = kept_[k].signals;
       ++simulations;
     });
     for (int k = 0; k < static_cast<int>(runs_.size()); ++k) {
@@ -321,12 +317,11 @@ class Search {
   std::vector<std::vector<double>> simulate_hat(std::size_t q, int first, Disturbance d) const {
     return simulate_from(used[q], std::max(first - 1, 0), {std::move(d)}, nullptr);
   }
-  // Run k with disturbances that are zero up to knot j, from the kept run's
-  // checkpoint there (the other disturbed runs - confirmations, forms -
-  // from its start, on the same terms as the hats).
+  // Used run k with disturbances that are zero up to knot j, from the kept
+  // run's checkpoint there (the other disturbed runs - confirmations, forms
+  // - from its start, on the same terms as the hats).
   std::vector<std::vector<double>> simulate_from(int k, int j, const std::vector<Disturbance>& d, std::string* why) const {
-    if (kept_[k].from) return kept_[k].from(static_cast<std::size_t>(j), d, why);
-    return in_.simulate(k, d, why);
+    return kept_[k].from(static_cast<std::size_t>(j), d, why);
   }
 
   // The sensors: a smooth offset (in noise units) and a gain per run, exactly linear.

@@ -22,11 +22,6 @@
 
 namespace pneumo::diagnose {
 
-// Signals of run `run` at its measurement times, with the given
-// disturbances; empty if the solver failed, the reason then in `why`.
-using DisturbedSimulation = std::function<std::vector<std::vector<double>>(
-    int run, const std::vector<Disturbance>& disturbances, std::string* why)>;
-
 // A run of the verdict model kept at some times (Engine::keep): its signals
 // (empty: it failed) and the same run with disturbances that are zero up to
 // times[j], resumed there - what comes before is not integrated again.
@@ -43,12 +38,11 @@ struct UnexplainedInput {
   const std::vector<std::vector<int>>* phases = nullptr;  // per run, per sample
   const Netlist* model = nullptr;                          // the verdict's model (its states and their units)
   const Registry* registry = nullptr;
-  DisturbedSimulation simulate;
   std::function<void(const std::string&)> log;
   std::function<Netlist(int run)> netlist_of;  // the verdict model at a run's operating point (the form's variables)
-  // Optional: run `run` kept at `times` - a hat that starts at a later knot
-  // is simulated from there.
-  std::function<KeptRun(int run, const std::vector<double>& times)> keep = {};
+  // Run `run` kept at `times`: every disturbed run of the search goes on
+  // from one of its checkpoints (a hat from the knot before it).
+  std::function<KeptRun(int run, const std::vector<double>& times)> keep;
 };
 
 // Fills `u`'s balances, shape and sentence (its gap, signal, phase and
