@@ -452,6 +452,7 @@ class Diagnosis {
   // docs/how-to/diagnose.md.)
   std::vector<std::pair<double, int>> screen() {
     const std::size_t n = cat_.effects.size();
+    const double ssr_cal0 = ssr(r_cal0_);
     std::vector<double> gain(n, 0.0), at_null(n, 0.0);
     std::vector<std::pair<double, int>> by_first_look;  // the candidates with a start apart from their null
     for (std::size_t k = 0; k < n; ++k) {
@@ -460,7 +461,7 @@ class Diagnosis {
         log("  " + e.name + ": " + e.unavailable);
         continue;
       }
-      gain[k] = first_look(k, at_null[k]);
+      gain[k] = first_look(k, ssr_cal0, at_null[k]);
       if (linearisation_starts(e).size() > 1) by_first_look.push_back({gain[k], static_cast<int>(k)});
       log(fmt("  screening %-2.0f ", k + 1) + e.name + fmt(": linearised improvement %.1f %%  [%.1f s]", 100 * gain[k], elapsed()));
     }
@@ -469,7 +470,7 @@ class Diagnosis {
     for (std::size_t i = 0; i < by_first_look.size() && i < shortlist; ++i) {
       const int k = by_first_look[i].second;
       const Effect& e = cat_.effects[k];
-      gain[k] = std::max(at_null[k], linearised_gain(k, e.initial_values(), ssr(r_cal0_)));
+      gain[k] = std::max(at_null[k], linearised_gain(k, e.initial_values(), ssr_cal0));
       log("  screening " + e.name + fmt(" from its initial values: linearised improvement %.1f %%  [%.1f s]", 100 * gain[k], elapsed()));
     }
     std::vector<std::pair<double, int>> screened;
@@ -485,17 +486,16 @@ class Diagnosis {
   // Candidate k's first look: a structural switch's gain at its initial
   // values; else its null's (kept in `at_null`), or its chord's when that is
   // larger.
-  double first_look(std::size_t k, double& at_null) {
+  double first_look(std::size_t k, double ssr_cal0, double& at_null) {
     const Effect& e = cat_.effects[k];
     const auto starts = linearisation_starts(e);
     if (e.null_values().size() != e.parameters.size()) return linearised_gain(k, starts[0], -1);
-    const double ssr_cal0 = ssr(r_cal0_);
     at_null = linearised_gain(k, starts.back(), ssr_cal0);
     if (starts.size() == 1) return at_null;
     const std::size_t mark = eng_.failure_count();
     const auto r_start = eng_.residuals({eng_.model({EffectInstance{&e, starts[0]}})}, cal_)[0];
     keep_failures(mark, results_[k].failed_runs, results_[k].run_failures, e.name + " (screening)");
-    return std::max(at_null, chord_gain(r_start, ssr_cal0));
+    return std::max(at_null, chord_gain(r_start));
   }
 
   // Candidate k's screening gain linearised at `values` against the misfit
@@ -508,19 +508,17 @@ class Diagnosis {
     return std::max(0.0, linear_gain(lin, reference >= 0 ? reference : ssr(lin.r)));
   }
 
-  // The chord's gain: 1 less the share of the unpatched misfit left at the
-  // best point of the line through its residuals and `r` (a simulated
-  // point of the effect's family that ran).
-  double chord_gain(const std::vector<double>& r, double ssr_cal0) const {
+  // The chord's gain: the share of the unpatched misfit a Gauss-Newton step
+  // removes along the line through its residuals and `r` (a simulated point
+  // of the effect's family that ran) - a linearisation at the null whose one
+  // column is that chord.
+  double chord_gain(const std::vector<double>& r) const {
     // A start the solver fails on is on no line with the unpatched model.
     if (r.size() != r_cal0_.size() || std::find(r.begin(), r.end(), kFailedResidual) != r.end()) return 0.0;
-    double dd = 0, rd = 0;
-    for (std::size_t i = 0; i < r.size(); ++i) {
-      const double d = r[i] - r_cal0_[i];
-      dd += d * d, rd += r_cal0_[i] * d;
-    }
-    if (!(dd > 0) || !std::isfinite(dd) || !std::isfinite(rd)) return 0.0;
-    return rd * rd / dd / ssr_cal0;
+    Eigen::MatrixXd chord(static_cast<Eigen::Index>(r.size()), 1);
+    for (std::size_t i = 0; i < r.size(); ++i) chord(static_cast<Eigen::Index>(i), 0) = r[i] - r_cal0_[i];
+    const double share = fit::gauss_newton_share(chord, r_cal0_);
+    return std::isfinite(share) ? share : 0.0;
   }
 
   // The best screened candidates, each calibrated alone and judged on the
