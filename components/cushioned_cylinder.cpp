@@ -219,12 +219,13 @@ ComponentInfo describe() {
   for (auto* list : {cap_cushion_parameters, rod_cushion_parameters, wall_parameters})
     for (auto& s : list()) i.parameters.push_back(std::move(s));
   for (auto& f : FrictionLaw::parameters(true)) i.parameters.push_back(std::move(f));
+  for (auto& f : SealPresliding::parameters()) i.parameters.push_back(std::move(f));
   for (auto& s : initial_parameters()) i.parameters.push_back(std::move(s));
   for (auto& f : FrictionFaults::parameters()) i.parameters.push_back(std::move(f));
   for (auto& f : ChamberFaults::parameters()) i.parameters.push_back(std::move(f));
   for (const char* end : {"", "rod_"})
     for (auto& f : CushionFaults::parameters(end)) i.parameters.push_back(std::move(f));
-  DoubleActingCylinder::add_parts(layout(), i, true, true, true, true);
+  DoubleActingCylinder::add_parts(layout(), i, true, true, true, FrictionState::lugre);
   i.faults = {
       FrictionFaults::running_friction_fault(),
       {"cushion_needle_misadjusted", "cushion needle opening off its setting (turned, clogged)",

@@ -68,7 +68,7 @@ ComponentInfo describe() {
     for (auto& s : CushionFaults::parameters(end + "_")) i.parameters.push_back(std::move(s));
   }
   for (auto& s : Piston::parameters("rod-side")) i.parameters.push_back(std::move(s));
-  DoubleActingCylinder::add_parts(layout(), i, true, true, true, true);
+  DoubleActingCylinder::add_parts(layout(), i, true, true, true, FrictionState::lugre);
   i.faults = Piston::faults({"dead_volume_cap", "dead_volume_rod"});
   i.faults.push_back(FrictionFaults::chamber_pressure_fault());
   i.events = Piston::stop_events();

@@ -100,7 +100,7 @@ class DoubleActingCylinder final : public ComponentT<DoubleActingCylinder> {
   // An instance's ports, variables, observables, rows and roots (the order
   // of the header); describe() passes everything on.
   static void add_parts(const CylinderLayout& l, ComponentInfo& i, bool cap_cushion, bool rod_cushion, bool taps,
-                        bool lugre) {
+                        FrictionState friction_state) {
     clear_parts(i);
     const auto cushioned = [&](End e) { return e == End::cap ? cap_cushion : rod_cushion; };
     InfoPart all{.ports = l.ports, .roots = 2};
@@ -117,10 +117,10 @@ class DoubleActingCylinder final : public ComponentT<DoubleActingCylinder> {
     add_part(i, {.equations = {"force balance", l.end(l.at_zero).wall_row, l.end(l.far()).wall_row}});
     for (End e : {End::cap, End::rod})
       if (taps && cushioned(e) && l.end(e).tap) add_part(i, {.ports = {*l.end(e).tap}, .equations = l.end(e).tap_rows});
-    if (lugre) add_part(i, lugre_part());
+    add_friction_state(i, friction_state);
   }
   static ComponentInfo instance_info(const CylinderLayout& l, ComponentInfo i, const ParameterValues& p) {
-    add_parts(l, i, l.cushioned(p, End::cap), l.cushioned(p, End::rod), l.taps(p), p.text("friction_model") == "lugre");
+    add_parts(l, i, l.cushioned(p, End::cap), l.cushioned(p, End::rod), l.taps(p), friction_state_of(p));
     return i;
   }
   // Registers the preset `describe` (which calls add_parts with all true).
@@ -143,6 +143,8 @@ class DoubleActingCylinder final : public ComponentT<DoubleActingCylinder> {
         wall_alpha_(c.params["wall_alpha"]),
         friction_(FrictionLaw::from(c.params)),
         friction_faults_(c.params),
+        presliding_(c.params),
+        friction_state_(friction_state_of(c.params)),
         chamber_faults_(c.params),
         x0_(c.params["x0"]),
         p0_cap_(c.params[layout.p0_cap]),
@@ -208,7 +210,10 @@ class DoubleActingCylinder final : public ComponentT<DoubleActingCylinder> {
     // The flange pulls on the cylinder with f = -F.
     const T F = s.F_pressure + s.F_fric + s.F_stop;
     r[force_row_] = e.flange(kFlange).f + F;
-    if (friction_.has_state()) r[lugre_row_] = e.der(z_var_) - friction_.lugre_zdot(s.v, e.var(z_var_));
+    if (friction_state_ == FrictionState::lugre)
+      r[friction_row_] = e.der(z_var_) - friction_.lugre_zdot(s.v, e.var(z_var_));
+    if (friction_state_ == FrictionState::presliding)
+      r[friction_row_] = e.der(z_var_) - presliding_.engagement_rate(s.v, e.var(z_var_), friction_.v_eps);
   }
 
   double observe(int k, const Eval<double>& e) const override { return observe(k, state(e), e); }
@@ -265,7 +270,7 @@ class DoubleActingCylinder final : public ComponentT<DoubleActingCylinder> {
     sv.fix_position(kFlange, x);
     for (End end : {near_, l_.far()})
       side(end).start(sv, gas, port(end), heat(end), end == End::cap ? p0_cap_ : p0_rod_, T0_, travel(end, x));
-    if (friction_.has_state()) sv.fix_var(z_var_, 0.0);
+    if (friction_state_ != FrictionState::none) sv.fix_var(z_var_, 0.0);
   }
 
  private:
@@ -307,7 +312,7 @@ class DoubleActingCylinder final : public ComponentT<DoubleActingCylinder> {
     force_row_ = row++;
     rows_[index(near_)].wall = row++;
     rows_[index(l_.far())].wall = row++;
-    lugre_row_ = place_taps(taps, row);
+    friction_row_ = place_taps(taps, row);
     place_roots();
   }
   // Each side's variables and rows, near side first: the annulus' (when
@@ -391,19 +396,30 @@ class DoubleActingCylinder final : public ComponentT<DoubleActingCylinder> {
     s.v = fl.v;
     s.cap = side_gas(e, End::cap, s.x);
     s.rod = side_gas(e, End::rod, s.x);
-    s.z = friction_.has_state() ? e.var(z_var_) : T(0.0 * s.x);
-    s.F_fric = friction(s, gas.p_ambient);
-    if (friction_faults_.per_chamber_pressure > 0)
-      s.F_fric *= friction_faults_.law_factor(s.cap.p_piston, s.rod.p_piston, gas.p_ambient);
-    if (friction_faults_.any())
-      s.F_fric += friction_faults_.force(s.v, s.cap.p_piston, s.rod.p_piston, friction_.v_reg);
-    if (cap_.has_seal_drag() || rod_.has_seal_drag())
-      s.F_fric += cap_.cushion_seal_drag(s.cap, s.v, friction_.v_reg) +
-                  rod_.cushion_seal_drag(s.rod, s.v, friction_.v_reg);
+    s.z = friction_state_ != FrictionState::none ? e.var(z_var_) : T(0.0 * s.x);
+    s.F_fric = friction_state_ == FrictionState::presliding
+                   ? presliding_.engaged([&](const T& v) { return all_friction(s, v, gas.p_ambient); }, s.v, s.z,
+                                         friction_)
+                   : all_friction(s, s.v, gas.p_ambient);
     s.F_stop = stops_.force(s.x, s.v, stroke_);
     s.F_pressure = toward_far(cap_.annulus_force(s.cap), cap_.port_force(s.cap), rod_.force(s.rod),
                               gas.p_ambient * A_rod_);
     return s;
+  }
+
+  // The law's friction and the faults' at the velocity v (the state's own,
+  // or with presliding the speed the magnitude is taken at).
+  template <class T>
+  T all_friction(const State<T>& at_state, const T& v, double p_ambient) const {
+    State<T> s = at_state;
+    s.v = v;
+    T F = friction(s, p_ambient);
+    if (friction_faults_.per_chamber_pressure > 0)
+      F *= friction_faults_.law_factor(s.cap.p_piston, s.rod.p_piston, p_ambient);
+    if (friction_faults_.any()) F += friction_faults_.force(v, s.cap.p_piston, s.rod.p_piston, friction_.v_reg);
+    if (cap_.has_seal_drag() || rod_.has_seal_drag())
+      F += cap_.cushion_seal_drag(s.cap, v, friction_.v_reg) + rod_.cushion_seal_drag(s.rod, v, friction_.v_reg);
+    return F;
   }
 
   // Friction on the piston (+x). With a cushioning-zone set, the presets
@@ -499,12 +515,14 @@ class DoubleActingCylinder final : public ComponentT<DoubleActingCylinder> {
   double wall_alpha_;
   FrictionLaw friction_;
   FrictionFaults friction_faults_;
+  SealPresliding presliding_;
+  FrictionState friction_state_;
   ChamberFaults chamber_faults_;
   double x0_, p0_cap_, p0_rod_, T0_;
   CylinderSide::Rows rows_[2];
   int tap_port_[2] = {-1, -1};
   std::vector<Root> roots_;
-  int z_var_ = 0, force_row_ = 0, lugre_row_ = -1;
+  int z_var_ = 0, force_row_ = 0, friction_row_ = -1;
   std::vector<CylinderQuantity> quantities_;
   // state<double>() memo: its inputs (s, v, internal variables) and result.
   static constexpr int kMemoKey = 2 + 9;

@@ -78,6 +78,55 @@ inline void add_part(ComponentInfo& i, const InfoPart& part) {
 inline InfoPart lugre_part() {
   return {.variables = {{"z", "m", "LuGre bristle deflection", 1e-5}}, .equations = {"bristle dynamics"}};
 }
+// A piston friction's one state: LuGre's z, or with presliding the seal's
+// engagement w (SealPresliding), or none.
+enum class FrictionState { none, lugre, presliding };
+inline FrictionState friction_state_of(const ParameterValues& p) {
+  if (p.text("friction_model") == "lugre") return FrictionState::lugre;
+  return p["friction_presliding"] > 0 ? FrictionState::presliding : FrictionState::none;
+}
+
+// A seal that deforms before it slides - an O-ring rolls and shears in its
+// groove, a lip flexes - turns its friction over a travel after each
+// reversal, not within the law's velocity band (friction_v_reg). Dahl's
+// model (exponent 1): the seal's engagement w (-1 .. 1, a state) takes the
+// place of the friction's sign, dw/dt = (v - |v| w) / distance, so w turns
+// from -1 to 1 over a few distances of travel. The force is the friction's
+// magnitude at the current speed - `at` (the whole friction as a function
+// of the velocity) at the positive speed |v|, over the law's sign there -
+// times -w. LuGre's bristles are that law's own presliding.
+struct SealPresliding {
+  double distance = 0;  // m; 0: none
+
+  explicit SealPresliding(const ParameterValues& p) : distance(p["friction_presliding"]) {
+    if (distance > 0 && p.text("friction_model") == "lugre")
+      throw ParameterError("friction_presliding",
+                           "LuGre's bristles are its presliding (friction_sigma0); friction_presliding is for "
+                           "friction_model preset and coulomb_viscous");
+  }
+  static std::vector<ParameterSpec> parameters() {
+    return {ParameterSpec::scalar("friction_presliding", "m",
+                                  "presliding distance: after each reversal the friction turns over this travel "
+                                  "(the seal's engagement, Dahl; e-folding distance); 0: within friction_v_reg",
+                                  0.0)
+                .non_negative()};
+  }
+  template <class T>
+  T engagement_rate(const T& v, const T& w, double v_eps) const {
+    return (v - smooth_abs(v, v_eps) * w) / distance;
+  }
+  template <class T, class Friction>
+  T engaged(const Friction& at, const T& v, const T& w, const FrictionLaw& law) const {
+    const T speed = smooth_abs(v, law.v_eps);
+    return at(speed) / smooth_sign(speed, law.v_reg) * w;
+  }
+};
+inline void add_friction_state(ComponentInfo& i, FrictionState kind) {
+  if (kind == FrictionState::lugre) add_part(i, lugre_part());
+  if (kind == FrictionState::presliding)
+    add_part(i, {.variables = {{"w", "1", "seal engagement (friction_presliding: -1 .. 1)", 0.1}},
+                 .equations = {"seal engagement"}});
+}
 // The lists of `i` emptied, before its parts are added.
 inline void clear_parts(ComponentInfo& i) {
   i.ports.clear();
@@ -810,6 +859,7 @@ struct Piston {
   double x0, p0_cap, p0_rod, T0;
   ChamberFaults chamber_faults;
   FrictionFaults friction_faults;
+  SealPresliding presliding;
 
   explicit Piston(const ParameterValues& p)
       : A(circle_area(p["bore"])),
@@ -825,7 +875,8 @@ struct Piston {
         p0_rod(p["p0_rod"]),
         T0(p["T0"]),
         chamber_faults(p),
-        friction_faults(p) {
+        friction_faults(p),
+        presliding(p) {
     if (p["rod"] >= p["bore"]) throw ParameterError("rod", "rod diameter must be smaller than the bore");
     stops.hold_before_empty(cap.travel_to_empty(), rod.travel_to_empty());
   }
@@ -843,6 +894,7 @@ struct Piston {
             .non_negative(),
     };
     for (auto& f : FrictionLaw::parameters(false)) out.push_back(std::move(f));
+    for (auto& f : SealPresliding::parameters()) out.push_back(std::move(f));
     const std::vector<ParameterSpec> initial = {
         P::scalar("x0", "m", "initial position; default: at rest against the stop at x = 0 at force equilibrium",
                   std::numeric_limits<double>::quiet_NaN()),

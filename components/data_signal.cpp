@@ -23,7 +23,7 @@ class DataSignal final : public ComponentT<DataSignal> {
         "Plays column 'column' of a measured data file against its time column, linearly interpolated and held at "
         "the end values: y in SI (the file's unit converted), dy its slope per second. The file is read as it "
         "comes: separator, header yes/no, skip_rows, decimal and thousands marks; scale and offset turn a raw "
-        "sensor voltage into 'unit'. A relative file name is taken from the working directory.";
+        "sensor voltage into 'unit'; median and average a running median and mean that remove a sensor's spikes and jitter. A relative file name is taken from the working directory.";
     i.parameters = {
         ParameterSpec::text("file", {}, "the data file (a relative name: from the netlist's folder)", std::nullopt).path(),
         ParameterSpec::text("separator", {"comma", "semicolon", "tab", "whitespace"}, "cell separator", "comma"),
@@ -40,6 +40,16 @@ class DataSignal final : public ComponentT<DataSignal> {
         ParameterSpec::text("unit", {}, "unit of the replayed column after scale and offset ('' = SI)", ""),
         ParameterSpec::scalar("scale", "1", "the file's number is multiplied by this (e.g. N/V)", 1.0),
         ParameterSpec::scalar("offset", "1", "then this is added, in 'unit'", 0.0),
+        ParameterSpec::scalar("median", "1",
+                              "running median over this many samples (odd; 1 = as measured): removes spikes of up "
+                              "to (median - 1)/2 samples and keeps monotone stretches exactly",
+                              1.0)
+            .positive(),
+        ParameterSpec::scalar("average", "1",
+                              "then a centred moving average over this many samples (odd; 1 = none): smooths a "
+                              "reading's jitter, keeps ramps exactly",
+                              1.0)
+            .positive(),
         ParameterSpec::scalar("t_shift", "s", "the file's time minus this is the simulation's time", 0.0),
     };
     i.ports = {{"y", Domain::signal, Causality::output, "the measured value, SI"},
@@ -63,6 +73,11 @@ class DataSignal final : public ComponentT<DataSignal> {
     spec.columns = {column_spec("t", c.params.text("time_column"), c.params.text("time_unit"), 1.0, 0.0),
                     column_spec("y", c.params.text("column"), c.params.text("unit"), c.params["scale"],
                                 c.params["offset"])};
+    spec.columns[1].median = static_cast<int>(c.params["median"]);
+    spec.columns[1].average = static_cast<int>(c.params["average"]);
+    for (const char* k : {"median", "average"})
+      if (static_cast<int>(c.params[k]) != c.params[k] || static_cast<int>(c.params[k]) % 2 == 0)
+        throw ParameterError(k, "an odd whole number of samples (1 = as measured)");
     const DataColumns d = read_data_file(spec);
     t_ = d.values[0];
     y_ = d.values[1];

@@ -48,7 +48,7 @@ class SingleActingCylinder final : public ComponentT<SingleActingCylinder> {
         P::scalar("dead_volume_rod", "m3", "spring chamber volume at x = stroke (closed chamber)", 1e-6).positive(),
     };
     for (auto& s : Piston::parameters("spring chamber (closed chamber)")) i.parameters.push_back(std::move(s));
-    add_parts(i, true, true);
+    add_parts(i, true, FrictionState::lugre);
     i.faults = Piston::faults({"dead_volume_cap"});
     i.events = Piston::stop_events();
     i.faults.push_back({"spring_weak", "return spring weaker or stiffer than its data sheet (fatigue, wrong spring)",
@@ -56,14 +56,15 @@ class SingleActingCylinder final : public ComponentT<SingleActingCylinder> {
     return i;
   }
 
-  // A vented spring chamber has no gas state and no ports; LuGre adds z.
+  // A vented spring chamber has no gas state and no ports; LuGre (z) or a
+  // friction_presliding (w) adds a friction state.
   static ComponentInfo instance_info(ComponentInfo i, const ParameterValues& p) {
-    add_parts(i, p.text("spring_chamber") == "closed", p.text("friction_model") == "lugre");
+    add_parts(i, p.text("spring_chamber") == "closed", friction_state_of(p));
     return i;
   }
   // In the order of the rows: the cap side's and the force balance, the
-  // closed spring chamber's, LuGre's z.
-  static void add_parts(ComponentInfo& i, bool closed, bool lugre) {
+  // closed spring chamber's, the friction state's (LuGre's z, presliding's w).
+  static void add_parts(ComponentInfo& i, bool closed, FrictionState friction_state) {
     using S = CylinderSide;
     clear_parts(i);
     InfoPart cap;
@@ -93,7 +94,7 @@ class SingleActingCylinder final : public ComponentT<SingleActingCylinder> {
                                  {"U_rod", "J", "internal energy, spring chamber"}},
                    .observables = {{"T_rod", "K", "spring chamber gas temperature (closed chamber)"}},
                    .equations = S::equation_names("rod", "rod", "rod")});
-    if (lugre) add_part(i, lugre_part());
+    add_friction_state(i, friction_state);
   }
 
   explicit SingleActingCylinder(const Construction& c)
@@ -101,7 +102,8 @@ class SingleActingCylinder final : public ComponentT<SingleActingCylinder> {
         p_(c.params),
         F0_(c.params["spring_preload"]),
         k_(c.params["spring_rate"]),
-        closed_(c.params.text("spring_chamber") == "closed") {
+        closed_(c.params.text("spring_chamber") == "closed"),
+        friction_state_(friction_state_of(c.params)) {
     p_.cap.set_first_variable(0);
     p_.rod.set_first_variable(2);
     z_var_ = closed_ ? 4 : 2;
@@ -124,12 +126,18 @@ class SingleActingCylinder final : public ComponentT<SingleActingCylinder> {
     if (closed_) s.rod = p_.rod.gas(e, T(p_.stroke - fl.s));
     s.F_spring = F0_ + k_ * fl.s;
     s.F_pressure = p_.cap.force(s.cap) - (closed_ ? T(p_.rod.force(s.rod) + p_amb * p_.A_rod) : spring_side);
-    const T z = p_.friction.has_state() ? e.var(z_var_) : T(0.0 * fl.v);
+    const T z = friction_state_ != FrictionState::none ? e.var(z_var_) : T(0.0 * fl.v);
     const T& p_rod = closed_ ? s.rod.p_piston : spring_side;
-    s.F_fric = piston_friction(p_.friction, fl.v, z, p_rod, s.cap.p, s.cap.p, p_amb);
     const T other = closed_ ? s.rod.p : T(0.0 * fl.s + p_amb);
-    if (p_.friction_faults.per_chamber_pressure > 0) s.F_fric *= p_.friction_faults.law_factor(s.cap.p, other, p_amb);
-    if (p_.friction_faults.any()) s.F_fric += p_.friction_faults.force(fl.v, s.cap.p, other, p_.friction.v_reg);
+    const FrictionFaults& ff = p_.friction_faults;
+    const auto friction_at = [&](const T& v) {
+      T F = piston_friction(p_.friction, v, z, p_rod, s.cap.p, s.cap.p, p_amb);
+      if (ff.per_chamber_pressure > 0) F *= ff.law_factor(s.cap.p, other, p_amb);
+      if (ff.any()) F += ff.force(v, s.cap.p, other, p_.friction.v_reg);
+      return F;
+    };
+    s.F_fric = friction_state_ == FrictionState::presliding ? p_.presliding.engaged(friction_at, fl.v, z, p_.friction)
+                                                            : friction_at(fl.v);
     s.F_stop = p_.stops.force(fl.s, fl.v, p_.stroke);
     return s;
   }
@@ -149,7 +157,9 @@ class SingleActingCylinder final : public ComponentT<SingleActingCylinder> {
                      r + row, faulty ? &ff.rod : nullptr);
       row += p_.rod.rows();
     }
-    if (p_.friction.has_state()) r[row] = e.der(z_var_) - p_.friction.lugre_zdot(fl.v, e.var(z_var_));
+    if (friction_state_ == FrictionState::lugre) r[row] = e.der(z_var_) - p_.friction.lugre_zdot(fl.v, e.var(z_var_));
+    if (friction_state_ == FrictionState::presliding)
+      r[row] = e.der(z_var_) - p_.presliding.engagement_rate(fl.v, e.var(z_var_), p_.friction.v_eps);
   }
 
   double observe(int k, const Eval<double>& e) const override { return observe(k, state(e), e); }
@@ -191,13 +201,14 @@ class SingleActingCylinder final : public ComponentT<SingleActingCylinder> {
     sv.fix_position(kFlange, x);
     p_.cap.start(sv, gas, kCap, kHeatCap, p_.p0_cap, p_.T0, x);
     if (closed_) p_.rod.start(sv, gas, kRod, kHeatRod, p_.p0_rod, p_.T0, p_.stroke - x);
-    if (p_.friction.has_state()) sv.fix_var(z_var_, 0.0);
+    if (friction_state_ != FrictionState::none) sv.fix_var(z_var_, 0.0);
   }
 
  private:
   Piston p_;
   double F0_, k_;
   bool closed_;
+  FrictionState friction_state_;
   int z_var_ = 2;
 };
 

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <string>
+#include <vector>
 
 #include "framework/io/data_file.hpp"
 
@@ -118,6 +119,77 @@ TEST(DataFile, AColumnBeyondTheRowOrAMissingHeaderNameIsRefused) {
   } catch (const pneumo::InputError& e) {
     EXPECT_NE(std::string(e.what()).find("has no cell 'time' (it has: t, p)"), std::string::npos) << e.what();
   }
+}
+
+// The laser's reading jumps now and then by 0.1-0.5 mm for a sample or
+// two; the rod, at under 20 mm/s, moves under 0.2 mm in 10 ms and runs
+// smoothly. A running median of five removes the jumps and leaves every
+// sample whose five neighbours are monotone exactly as measured.
+int jumps(const std::vector<double>& x) {
+  int n = 0;
+  for (std::size_t i = 1; i + 1 < x.size(); ++i)
+    if (std::fabs(x[i] - 0.5 * (x[i - 1] + x[i + 1])) > 0.15e-3) ++n;
+  return n;
+}
+
+bool monotone(const std::vector<double>& x, std::size_t i) {
+  bool up = true, down = true;
+  for (std::size_t j = i - 2; j < i + 2; ++j) {
+    up = up && x[j + 1] >= x[j];
+    down = down && x[j + 1] <= x[j];
+  }
+  return up || down;
+}
+
+TEST(DataFile, ARunningMedianRemovesTheLasersJumpsAndKeepsEveryMonotoneStretch) {
+  auto s = friction_spec();
+  s.file = kDir + "O-ring_3bar_head1000.csv";
+  s.skip_rows = 15;
+  const auto raw = pneumo::read_data_file(s, kAmb).values[1];
+  s.columns[1].median = 5;
+  const auto filtered = pneumo::read_data_file(s, kAmb).values[1];
+  ASSERT_EQ(raw.size(), filtered.size());
+  EXPECT_GE(jumps(raw), 10);
+  EXPECT_EQ(jumps(filtered), 0);
+  int kept = 0;
+  for (std::size_t i = 2; i + 2 < raw.size(); ++i)
+    if (monotone(raw, i)) {
+      EXPECT_EQ(filtered[i], raw[i]) << "sample " << i;
+      ++kept;
+    }
+  EXPECT_GT(kept, 800);  // of 985: the strokes' ramps
+  s.columns[1].median = 4;
+  EXPECT_THROW(pneumo::read_data_file(s, kAmb), pneumo::InputError);
+}
+
+// The rod at 6 mm/s, logged every 10 ms with a 290 ms gap in the logging
+// and each reading off by +-0.03 mm in turn (timing jitter): the running
+// line keeps the ramp exact across the gap and cuts the jitter's swing of
+// the difference quotient - the replayed velocity - to under a quarter
+// (where the whole window fits in the file).
+TEST(DataFile, ARunningLineKeepsARampAcrossALoggingGapAndCalmsItsJitter) {
+  std::string exact, jittered;
+  std::vector<double> t_ms;
+  for (int i = 0; i < 40; ++i) t_ms.push_back(10.0 * i + (i >= 20 ? 280.0 : 0.0));
+  for (std::size_t i = 0; i < t_ms.size(); ++i) {
+    const double x = 6e-3 * t_ms[i];  // mm at 6 mm/s
+    exact += std::to_string(t_ms[i]) + "," + std::to_string(x) + "\n";
+    jittered += std::to_string(t_ms[i]) + "," + std::to_string(x + (i % 2 ? 0.03 : -0.03)) + "\n";
+  }
+  DataFileSpec s;
+  s.file = "ramp.csv";
+  s.header = false;
+  s.columns = {DataColumnSpec{"t", 1, "", "ms"}, DataColumnSpec{"s", 2, "", "mm"}};
+  s.columns[1].average = 5;
+  const auto ramp = pneumo::parse_data_file(s, exact, kAmb);
+  for (std::size_t i = 0; i < ramp.rows(); ++i) EXPECT_NEAR(ramp.values[1][i], 6e-3 * ramp.values[0][i], 1e-12);
+  const auto d = pneumo::parse_data_file(s, jittered, kAmb);
+  for (std::size_t i = 3; i + 2 < d.rows(); ++i) {  // the window shrinks at the file's ends
+    const double v = (d.values[1][i] - d.values[1][i - 1]) / (d.values[0][i] - d.values[0][i - 1]);
+    EXPECT_LT(std::fabs(v - 6e-3), 0.25 * 0.06e-3 / 0.010) << "sample " << i;  // raw: +-6 mm/s about 6 mm/s
+  }
+  s.columns[1].average = 2;
+  EXPECT_THROW(pneumo::parse_data_file(s, exact, kAmb), pneumo::InputError);
 }
 
 }  // namespace

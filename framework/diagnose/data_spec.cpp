@@ -44,9 +44,15 @@ DataColumnSpec column_from_yaml(const std::string& file, const std::string& name
       c.scale = number_of(file, it->second, "scale");
     } else if (k == "offset") {
       c.offset = number_of(file, it->second, "offset");
+    } else if (k == "median" || k == "average") {
+      const double v = number_of(file, it->second, k);
+      if (!(v >= 1 && v <= 99 && v == static_cast<int>(v) && static_cast<int>(v) % 2 == 1))
+        throw InputError(location_of(file, it->second), "", name,
+                         "column '" + name + "': " + k + ": an odd number of samples from 1 to 99");
+      (k == "median" ? c.median : c.average) = static_cast<int>(v);
     } else {
       throw InputError(location_of(file, it->first), "", k,
-                       "column '" + name + "': unknown key '" + k + "' (column, unit, scale, offset)");
+                       "column '" + name + "': unknown key '" + k + "' (column, unit, scale, offset, median, average)");
     }
   }
   if (c.number == 0 && c.header_name.empty())

@@ -1,5 +1,6 @@
 #include "framework/io/data_file.hpp"
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdlib>
@@ -81,6 +82,46 @@ std::string listed(const std::vector<std::string>& cells) {
   return out;
 }
 
+// Each sample replaced by the median of the `window` samples centred on it
+// (the window shrinks symmetrically at the ends).
+std::vector<double> running_median(const std::vector<double>& x, int window) {
+  if (window <= 1) return x;
+  const std::size_t half = static_cast<std::size_t>(window / 2), n = x.size();
+  std::vector<double> out(n), w;
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::size_t h = std::min({half, i, n - 1 - i});
+    w.assign(x.begin() + static_cast<std::ptrdiff_t>(i - h), x.begin() + static_cast<std::ptrdiff_t>(i + h + 1));
+    std::nth_element(w.begin(), w.begin() + static_cast<std::ptrdiff_t>(h), w.end());
+    out[i] = w[h];
+  }
+  return out;
+}
+
+// Each sample replaced by the line fitted through the `window` samples
+// centred on it (shrinking symmetrically at the ends), taken at its time:
+// with even sampling the window's mean; with a gap in the logging or uneven
+// time stamps a ramp still stays exact.
+std::vector<double> running_line(const std::vector<double>& t, const std::vector<double>& x, int window) {
+  if (window <= 1) return x;
+  const std::size_t half = static_cast<std::size_t>(window / 2), n = x.size();
+  std::vector<double> out(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::size_t h = std::min({half, i, n - 1 - i}), m = 2 * h + 1;
+    double tm = 0, xm = 0;
+    for (std::size_t j = i - h; j <= i + h; ++j) {
+      tm += t[j] / static_cast<double>(m);
+      xm += x[j] / static_cast<double>(m);
+    }
+    double stx = 0, stt = 0;
+    for (std::size_t j = i - h; j <= i + h; ++j) {
+      stx += (t[j] - tm) * (x[j] - xm);
+      stt += (t[j] - tm) * (t[j] - tm);
+    }
+    out[i] = xm + (stt > 0 ? stx / stt * (t[i] - tm) : 0.0);
+  }
+  return out;
+}
+
 }  // namespace
 
 bool parse_lab_number(const std::string& cell, char decimal, char thousands, double& out) {
@@ -116,6 +157,11 @@ DataColumns parse_data_file(const DataFileSpec& spec, const std::string& text, d
     } catch (const std::exception& e) {
       throw InputError(spec.described_at, "", c.name, "column '" + c.name + "': unit '" + c.unit + "': " + e.what());
     }
+    for (const auto& [what, n] : {std::pair<std::string, int>{"median", c.median}, {"average", c.average}})
+      if (n < 1 || n % 2 == 0)
+        throw InputError(spec.described_at, "", c.name,
+                         "column '" + c.name + "': " + what + " " + std::to_string(n) +
+                             ": an odd number of samples (1 = as measured)");
     if (c.number <= 0 && (c.header_name.empty() || !spec.header))
       throw InputError(spec.described_at, "", c.name,
                        "column '" + c.name + "': give its number (1 = first)" +
@@ -174,6 +220,13 @@ DataColumns parse_data_file(const DataFileSpec& spec, const std::string& text, d
     throw InputError(SourceLocation{file, line_no, 1}, "", "", "no data rows (after " +
                                                                    std::to_string(spec.skip_rows) + " skipped lines" +
                                                                    (spec.header ? " and the header)" : ")"));
+  // Smoothing follows the time column ("t") when the description has one.
+  const int t_col = out.column("t");
+  std::vector<double> row_index(out.rows());
+  for (std::size_t i = 0; i < row_index.size(); ++i) row_index[i] = static_cast<double>(i);
+  const std::vector<double> time = t_col >= 0 ? out.values[static_cast<std::size_t>(t_col)] : row_index;
+  for (std::size_t k = 0; k < spec.columns.size(); ++k)
+    out.values[k] = running_line(time, running_median(out.values[k], spec.columns[k].median), spec.columns[k].average);
   return out;
 }
 

@@ -6,6 +6,19 @@
 // volts by a linear sensor gives `scale` (and `offset`): the value is
 // (number * scale + offset) in `unit`. Values come out in SI.
 //
+// A column may be read through a running median of `median` samples (odd):
+// it removes outliers of up to (median - 1) / 2 consecutive samples - a
+// laser's dropouts, a sensor's spikes - and leaves every monotone stretch
+// exactly as measured (the middle of a sorted window is its middle sample),
+// so a replayed position keeps its ramps and loses only its spikes; turning
+// points are flattened by at most the travel within half the window.
+// Then `average` (odd) samples may smooth what jitters about a smooth course
+// - a position read with timing jitter, whose difference quotient would
+// stall and leap: each sample becomes the straight line through the samples
+// centred on it, at its time (against the column named "t" when there is
+// one, else the row): the moving average of evenly logged samples, and a
+// ramp stays exact across a gap in the logging.
+//
 // When the thousands separator is the decimal mark too (files written with
 // "151.203.000" for 151203.000 ms), the last mark of a number is the decimal
 // one and the others group thousands; every group must have three digits,
@@ -31,6 +44,8 @@ struct DataColumnSpec {
   std::string unit;         // unit of number*scale+offset: "ms", "mm", "bar g", "N", "" = SI
   double scale = 1.0;       // e.g. N per V for a raw load-cell voltage
   double offset = 0.0;      // in `unit`
+  int median = 1;           // running median window in samples (odd; 1 = as measured)
+  int average = 1;          // then a centred running line over this many samples (odd; 1 = none)
 };
 
 struct DataFileSpec {
