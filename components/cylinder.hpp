@@ -410,10 +410,8 @@ class DoubleActingCylinder final : public ComponentT<DoubleActingCylinder> {
   // The law's friction and the faults' at the velocity v (the state's own,
   // or with presliding the speed the magnitude is taken at).
   template <class T>
-  T all_friction(const State<T>& at_state, const T& v, double p_ambient) const {
-    State<T> s = at_state;
-    s.v = v;
-    T F = friction(s, p_ambient);
+  T all_friction(const State<T>& s, const T& v, double p_ambient) const {
+    T F = friction(s, v, p_ambient);
     if (friction_faults_.per_chamber_pressure > 0)
       F *= friction_faults_.law_factor(s.cap.p_piston, s.rod.p_piston, p_ambient);
     if (friction_faults_.any()) F += friction_faults_.force(v, s.cap.p_piston, s.rod.p_piston, friction_.v_reg);
@@ -422,20 +420,20 @@ class DoubleActingCylinder final : public ComponentT<DoubleActingCylinder> {
     return F;
   }
 
-  // Friction on the piston (+x). With a cushioning-zone set, the presets
-  // blend the main-stroke set and the cushioning set (at each cushioned
-  // end) by the bore openings; a set whose weight is 0 (the opening clamped
+  // The law's friction on the piston (+x) at the velocity v. With a
+  // cushioning-zone set, the presets blend the main-stroke set and the
+  // cushioning set (at each cushioned end) by the bore openings; a set whose weight is 0 (the opening clamped
   // at 0 or 1, so its derivative is 0 too) is not evaluated, except for the
   // structural pattern.
   template <class T>
-  T friction(const State<T>& s, double p_ambient) const {
+  T friction(const State<T>& s, const T& v, double p_ambient) const {
     const T& p_rod = s.rod.p_piston;
     const T& p_cap = s.cap.p_piston;
-    if (!l_.cushion_friction) return piston_friction(friction_, s.v, s.z, p_rod, p_cap, p_cap, p_ambient);
+    if (!l_.cushion_friction) return piston_friction(friction_, v, s.z, p_rod, p_cap, p_cap, p_ambient);
     const T zero = 0.0 * s.x;
-    if (friction_.model != FrictionModel::preset) return friction_.force(friction_.main, s.v, s.z, zero);
+    if (friction_.model != FrictionModel::preset) return friction_.force(friction_.main, v, s.z, zero);
     auto set = [&](const FrictionCoefficients& c, const T& p_cushion) {
-      return friction_force(c, s.v, p_rod, p_cap, p_cushion, p_ambient, friction_.v_reg, friction_.v_eps);
+      return friction_force(c, v, p_rod, p_cap, p_cushion, p_ambient, friction_.v_reg, friction_.v_eps);
     };
     constexpr bool structural = std::is_same_v<T, Pattern>;
     const double open = value(s.cap.open), open_r = value(s.rod.open);
