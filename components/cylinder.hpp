@@ -212,8 +212,7 @@ class DoubleActingCylinder final : public ComponentT<DoubleActingCylinder> {
     r[force_row_] = e.flange(kFlange).f + F;
     if (friction_state_ == FrictionState::lugre)
       r[friction_row_] = e.der(z_var_) - friction_.lugre_zdot(s.v, e.var(z_var_));
-    if (friction_state_ == FrictionState::presliding)
-      r[friction_row_] = e.der(z_var_) - presliding_.engagement_rate(s.v, e.var(z_var_), friction_.v_eps);
+    if (presliding_.on()) presliding_.rows(e, z_var_, s.v, friction_.v_eps, r + friction_row_);
   }
 
   double observe(int k, const Eval<double>& e) const override { return observe(k, state(e), e); }
@@ -270,7 +269,8 @@ class DoubleActingCylinder final : public ComponentT<DoubleActingCylinder> {
     sv.fix_position(kFlange, x);
     for (End end : {near_, l_.far()})
       side(end).start(sv, gas, port(end), heat(end), end == End::cap ? p0_cap_ : p0_rod_, T0_, travel(end, x));
-    if (friction_state_ != FrictionState::none) sv.fix_var(z_var_, 0.0);
+    if (friction_state_ == FrictionState::lugre) sv.fix_var(z_var_, 0.0);
+    if (presliding_.on()) presliding_.start(sv, z_var_);
   }
 
  private:
@@ -396,8 +396,10 @@ class DoubleActingCylinder final : public ComponentT<DoubleActingCylinder> {
     s.v = fl.v;
     s.cap = side_gas(e, End::cap, s.x);
     s.rod = side_gas(e, End::rod, s.x);
-    s.z = friction_state_ != FrictionState::none ? e.var(z_var_) : T(0.0 * s.x);
-    s.F_fric = friction_state_ == FrictionState::presliding
+    s.z = presliding_.on()                        ? presliding_.engagement(e, z_var_)
+          : friction_state_ == FrictionState::lugre ? e.var(z_var_)
+                                                    : T(0.0 * s.x);
+    s.F_fric = presliding_.on()
                    ? presliding_.engaged([&](const T& v) { return all_friction(s, v, gas.p_ambient); }, s.v, s.z,
                                          friction_)
                    : all_friction(s, s.v, gas.p_ambient);

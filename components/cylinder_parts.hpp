@@ -78,12 +78,14 @@ inline void add_part(ComponentInfo& i, const InfoPart& part) {
 inline InfoPart lugre_part() {
   return {.variables = {{"z", "m", "LuGre bristle deflection", 1e-5}}, .equations = {"bristle dynamics"}};
 }
-// A piston friction's one state: LuGre's z, or with presliding the seal's
-// engagement w (SealPresliding), or none.
-enum class FrictionState { none, lugre, presliding };
+// A piston friction's states: LuGre's z, or with presliding the seal's
+// engagement (SealPresliding: one element, or a fast and a slow one), or
+// none.
+enum class FrictionState { none, lugre, presliding, presliding_two };
 inline FrictionState friction_state_of(const ParameterValues& p) {
   if (p.text("friction_model") == "lugre") return FrictionState::lugre;
-  return p["friction_presliding"] > 0 ? FrictionState::presliding : FrictionState::none;
+  if (!(p["friction_presliding"] > 0)) return FrictionState::none;
+  return p["friction_presliding_slow"] > 0 ? FrictionState::presliding_two : FrictionState::presliding;
 }
 
 // A seal that deforms before it slides - an O-ring rolls and shears in its
@@ -91,41 +93,76 @@ inline FrictionState friction_state_of(const ParameterValues& p) {
 // reversal, not within the law's velocity band (friction_v_reg). Dahl's
 // model (exponent 1): the seal's engagement w (-1 .. 1, a state) takes the
 // place of the friction's sign, dw/dt = (v - |v| w) / distance, so w turns
-// from -1 to 1 over a few distances of travel. The force is the friction's
-// magnitude at the current speed - `at` (the whole friction as a function
-// of the velocity) at the positive speed |v|, over the law's sign there -
-// times -w. LuGre's bristles are that law's own presliding.
+// from -1 to 1 over a few distances of travel. A seal may turn in two
+// stages - most of the force within a tenth of a millimetre, the rest over
+// a millimetre or two - as the elements of a generalised Maxwell-slip
+// model: a slow element of its own distance carries a share of the force,
+// the engagement is (1 - share) w + share w_slow. The force is the
+// friction's magnitude at the current speed - `at` (the whole friction as a
+// function of the velocity) at the positive speed |v|, over the law's sign
+// there - times minus the engagement. LuGre's bristles are that law's own
+// presliding.
 struct SealPresliding {
-  double distance = 0;  // m; 0: none
+  double distance = 0, slow_distance = 0, slow_share = 0;  // m, m, 1; 0: none
 
-  explicit SealPresliding(const ParameterValues& p) : distance(p["friction_presliding"]) {
+  explicit SealPresliding(const ParameterValues& p)
+      : distance(p["friction_presliding"]),
+        slow_distance(p["friction_presliding_slow"]),
+        slow_share(p["friction_presliding_slow_share"]) {
     if (distance > 0 && p.text("friction_model") == "lugre")
       throw ParameterError("friction_presliding",
                            "LuGre's bristles are its presliding (friction_sigma0); friction_presliding is for "
                            "friction_model preset and coulomb_viscous");
+    if (slow_distance > 0 && !(distance > 0))
+      throw ParameterError("friction_presliding_slow", "a slow presliding element needs friction_presliding > 0");
   }
   static std::vector<ParameterSpec> parameters() {
-    return {ParameterSpec::scalar("friction_presliding", "m",
-                                  "presliding distance: after each reversal the friction turns over this travel "
-                                  "(the seal's engagement, Dahl; e-folding distance); 0: within friction_v_reg",
-                                  0.0)
-                .non_negative()};
+    using P = ParameterSpec;
+    return {P::scalar("friction_presliding", "m",
+                      "presliding distance: after each reversal the friction turns over this travel (the seal's "
+                      "engagement, Dahl; e-folding distance); 0: within friction_v_reg",
+                      0.0)
+                .non_negative(),
+            P::scalar("friction_presliding_slow", "m",
+                      "a second, slow presliding element's distance (the force's second stage); 0: none", 0.0)
+                .non_negative(),
+            P::scalar("friction_presliding_slow_share", "1", "the slow element's share of the force", 0.0)
+                .range(0.0, 1.0)};
   }
+  bool on() const { return distance > 0; }
+  bool two() const { return slow_distance > 0; }
+
+  // The engagement (-1 .. 1) from the states at `var` (var + 1: the slow one).
   template <class T>
-  T engagement_rate(const T& v, const T& w, double v_eps) const {
-    return (v - smooth_abs(v, v_eps) * w) / distance;
+  T engagement(const Eval<T>& e, int var) const {
+    return two() ? (1.0 - slow_share) * e.var(var) + slow_share * e.var(var + 1) : e.var(var);
+  }
+  // Their rows, r[0] (and r[1]).
+  template <class T>
+  void rows(const Eval<T>& e, int var, const T& v, double v_eps, T* r) const {
+    const T speed = smooth_abs(v, v_eps);
+    r[0] = e.der(var) - (v - speed * e.var(var)) / distance;
+    if (two()) r[1] = e.der(var + 1) - (v - speed * e.var(var + 1)) / slow_distance;
+  }
+  // At rest, unengaged.
+  void start(StartValues& sv, int var) const {
+    sv.fix_var(var, 0.0);
+    if (two()) sv.fix_var(var + 1, 0.0);
   }
   template <class T, class Friction>
-  T engaged(const Friction& at, const T& v, const T& w, const FrictionLaw& law) const {
+  T engaged(const Friction& at, const T& v, const T& engagement, const FrictionLaw& law) const {
     const T speed = smooth_abs(v, law.v_eps);
-    return at(speed) / smooth_sign(speed, law.v_reg) * w;
+    return at(speed) / smooth_sign(speed, law.v_reg) * engagement;
   }
 };
 inline void add_friction_state(ComponentInfo& i, FrictionState kind) {
   if (kind == FrictionState::lugre) add_part(i, lugre_part());
-  if (kind == FrictionState::presliding)
+  if (kind == FrictionState::presliding || kind == FrictionState::presliding_two)
     add_part(i, {.variables = {{"w", "1", "seal engagement (friction_presliding: -1 .. 1)", 0.1}},
                  .equations = {"seal engagement"}});
+  if (kind == FrictionState::presliding_two)
+    add_part(i, {.variables = {{"w_slow", "1", "slow presliding element's engagement (-1 .. 1)", 0.1}},
+                 .equations = {"slow element's engagement"}});
 }
 // The lists of `i` emptied, before its parts are added.
 inline void clear_parts(ComponentInfo& i) {

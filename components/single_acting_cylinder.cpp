@@ -126,7 +126,9 @@ class SingleActingCylinder final : public ComponentT<SingleActingCylinder> {
     if (closed_) s.rod = p_.rod.gas(e, T(p_.stroke - fl.s));
     s.F_spring = F0_ + k_ * fl.s;
     s.F_pressure = p_.cap.force(s.cap) - (closed_ ? T(p_.rod.force(s.rod) + p_amb * p_.A_rod) : spring_side);
-    const T z = friction_state_ != FrictionState::none ? e.var(z_var_) : T(0.0 * fl.v);
+    const T z = p_.presliding.on()                     ? p_.presliding.engagement(e, z_var_)
+                : friction_state_ == FrictionState::lugre ? e.var(z_var_)
+                                                          : T(0.0 * fl.v);
     const T& p_rod = closed_ ? s.rod.p_piston : spring_side;
     const T other = closed_ ? s.rod.p : T(0.0 * fl.s + p_amb);
     const FrictionFaults& ff = p_.friction_faults;
@@ -136,8 +138,7 @@ class SingleActingCylinder final : public ComponentT<SingleActingCylinder> {
       if (ff.any()) F += ff.force(v, s.cap.p, other, p_.friction.v_reg);
       return F;
     };
-    s.F_fric = friction_state_ == FrictionState::presliding ? p_.presliding.engaged(friction_at, fl.v, z, p_.friction)
-                                                            : friction_at(fl.v);
+    s.F_fric = p_.presliding.on() ? p_.presliding.engaged(friction_at, fl.v, z, p_.friction) : friction_at(fl.v);
     s.F_stop = p_.stops.force(fl.s, fl.v, p_.stroke);
     return s;
   }
@@ -158,8 +159,7 @@ class SingleActingCylinder final : public ComponentT<SingleActingCylinder> {
       row += p_.rod.rows();
     }
     if (friction_state_ == FrictionState::lugre) r[row] = e.der(z_var_) - p_.friction.lugre_zdot(fl.v, e.var(z_var_));
-    if (friction_state_ == FrictionState::presliding)
-      r[row] = e.der(z_var_) - p_.presliding.engagement_rate(fl.v, e.var(z_var_), p_.friction.v_eps);
+    if (p_.presliding.on()) p_.presliding.rows(e, z_var_, fl.v, p_.friction.v_eps, r + row);
   }
 
   double observe(int k, const Eval<double>& e) const override { return observe(k, state(e), e); }
@@ -201,7 +201,8 @@ class SingleActingCylinder final : public ComponentT<SingleActingCylinder> {
     sv.fix_position(kFlange, x);
     p_.cap.start(sv, gas, kCap, kHeatCap, p_.p0_cap, p_.T0, x);
     if (closed_) p_.rod.start(sv, gas, kRod, kHeatRod, p_.p0_rod, p_.T0, p_.stroke - x);
-    if (friction_state_ != FrictionState::none) sv.fix_var(z_var_, 0.0);
+    if (friction_state_ == FrictionState::lugre) sv.fix_var(z_var_, 0.0);
+    if (p_.presliding.on()) p_.presliding.start(sv, z_var_);
   }
 
  private:

@@ -20,7 +20,7 @@ constexpr double kFC = 20.0, kX0 = 0.5e-3, kV = 0.01, kReverseAt = 0.3;
 
 // `type` a single-acting (vented) or a double-acting cylinder, both ports to
 // the atmosphere; the drive reverses at kReverseAt.
-std::string rig(const std::string& type, double x0) {
+std::string rig(const std::string& type, double x0, const std::string& more = "") {
   const bool single = type == "single_acting_cylinder";
   return std::string(R"(components:
   air: {type: pressure_source, p: 1 atm}
@@ -28,7 +28,7 @@ std::string rig(const std::string& type, double x0) {
 )") + (single ? "" : "  port_rod: {type: iso6358_throttle, C: 5 dm3/(s*bar), b: 0.3}\n") + R"(  cyl: {type: )" + type + R"(, bore: 25 mm, rod: 8 mm, stroke: 50 mm, x0: 20 mm,)" +
          (single ? " spring_rate: 0 N/m," : "") + R"(
         friction_model: coulomb_viscous, friction_FC: 20 N, friction_v_reg: 0.1 mm/s,
-        friction_presliding: )" + test_support::num(x0) + R"(}
+        friction_presliding: )" + test_support::num(x0) + more + R"(}
   speed: {type: signal_source, kind: step, value: 0.01, height: -0.02, t_start: 0.3}
   drive: {type: velocity_source, s0: 20 mm}
 connections:
@@ -60,6 +60,20 @@ TEST(SealPresliding, TheFrictionBuildsOverTheDistanceAndTurnsOverItAtAReversal) 
     EXPECT_NEAR(crossing, t_zero, 0.5e-3) << type;  // 34.7 ms after the reversal
     EXPECT_NEAR(test_support::at(r.table, "F", 0.45), kFC * (1 - (1 + w0) * std::exp(-kV * 0.15 / kX0)), 2e-3 * kFC)
         << type;
+  }
+}
+
+// Two elements (a generalised Maxwell-slip seal): 0.1 mm carrying 70 % of
+// the force and 1 mm carrying 30 %, each engaging as 1 - exp(-travel / x_i).
+TEST(SealPresliding, TwoElementsEngageEachOverItsOwnDistance) {
+  const RunResult r = test_support::run_text(
+      rig("cylinder", 0.1e-3, ", friction_presliding_slow: 1 mm, friction_presliding_slow_share: 0.3"),
+      "presliding.yaml");
+  ASSERT_TRUE(r.solver.ok) << r.solver.message;
+  for (double t : {0.01, 0.03, 0.1, 0.2, 0.299}) {
+    const double x = kV * t;
+    const double w = 0.7 * (1 - std::exp(-x / 0.1e-3)) + 0.3 * (1 - std::exp(-x / 1e-3));
+    EXPECT_NEAR(test_support::at(r.table, "F", t), -kFC * w, 2e-3 * kFC) << "t = " << t;
   }
 }
 
