@@ -110,5 +110,32 @@ TEST(RunDataDescription, AnUnknownKeyOrAColumnThatIsNoOutputIsRefusedInTheRunFil
   }
 }
 
+// A column read through a running median and line: the median leaves the
+// monotone rise as it is, and the line through five 10 ms samples bends it
+// by half its curvature times the window's mean square time offset,
+// p'' x 2e-4 s^2 / 2 (9 mbar at the start), to the file's rounding; a
+// window of an even number of samples is refused at its line.
+TEST(RunDataDescription, AColumnsMedianAndLineAreReadAndAnEvenWindowIsRefusedAtItsLine) {
+  std::string cleaned = kDescription;
+  cleaned.replace(cleaned.find("unit: bar g}"), 12, "unit: bar g, median: 5, average: 5}");
+  const auto runs = Folder(cleaned).load();
+  const auto& cal = runs[0].name == "cal" ? runs[0] : runs[1];
+  ASSERT_EQ(cal.t.size(), 201u);
+  for (std::size_t i = 2; i + 2 < cal.t.size(); ++i) {
+    const double curvature = -4e5 / 0.04 * std::exp(-cal.t[i] / 0.2);
+    EXPECT_NEAR(cal.y[0][i], p_of(cal.t[i]) + curvature * 1e-4, 2.0) << "t = " << cal.t[i];
+  }
+  std::string even = kDescription;
+  even.replace(even.find("unit: bar g}"), 12, "unit: bar g, median: 4}");
+  try {
+    (void)Folder(even).load();
+    FAIL();
+  } catch (const InputError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("cal.yaml:9"), std::string::npos) << m;
+    EXPECT_NE(m.find("median: an odd number of samples"), std::string::npos) << m;
+  }
+}
+
 }  // namespace
 }  // namespace pneumo
