@@ -424,9 +424,9 @@ class DoubleActingCylinder final : public ComponentT<DoubleActingCylinder> {
 
   // The law's friction on the piston (+x) at the velocity v. With a
   // cushioning-zone set, the presets blend the main-stroke set and the
-  // cushioning set (at each cushioned end) by the bore openings; a set whose weight is 0 (the opening clamped
-  // at 0 or 1, so its derivative is 0 too) is not evaluated, except for the
-  // structural pattern.
+  // cushioning set (at each cushioned end) by the bore openings; a set whose
+  // weight is 0 (the opening clamped at 0 or 1, so its derivative is 0 too)
+  // is not evaluated, except for the structural pattern.
   template <class T>
   T friction(const State<T>& s, const T& v, double p_ambient) const {
     const T& p_rod = s.rod.p_piston;

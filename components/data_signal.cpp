@@ -23,7 +23,8 @@ class DataSignal final : public ComponentT<DataSignal> {
         "Plays column 'column' of a measured data file against its time column, linearly interpolated and held at "
         "the end values: y in SI (the file's unit converted), dy its slope per second. The file is read as it "
         "comes: separator, header yes/no, skip_rows, decimal and thousands marks; scale and offset turn a raw "
-        "sensor voltage into 'unit'; median and average a running median and mean that remove a sensor's spikes and jitter. A relative file name is taken from the working directory.";
+        "sensor voltage into 'unit'; median and average (a running median, then a running line) remove a "
+        "sensor's spikes and jitter. A relative file name is taken from the working directory.";
     i.parameters = {
         ParameterSpec::text("file", {}, "the data file (a relative name: from the netlist's folder)", std::nullopt).path(),
         ParameterSpec::text("separator", {"comma", "semicolon", "tab", "whitespace"}, "cell separator", "comma"),
@@ -46,8 +47,8 @@ class DataSignal final : public ComponentT<DataSignal> {
                               1.0)
             .positive(),
         ParameterSpec::scalar("average", "1",
-                              "then a centred moving average over this many samples (odd; 1 = none): smooths a "
-                              "reading's jitter, keeps ramps exactly",
+                              "then the straight line through this many samples about each (odd; 1 = none; the "
+                              "moving average of evenly logged samples): smooths a reading's jitter, keeps ramps",
                               1.0)
             .positive(),
         ParameterSpec::scalar("t_shift", "s", "the file's time minus this is the simulation's time", 0.0),
