@@ -74,11 +74,10 @@ class DataSignal final : public ComponentT<DataSignal> {
     spec.columns = {column_spec("t", c.params.text("time_column"), c.params.text("time_unit"), 1.0, 0.0),
                     column_spec("y", c.params.text("column"), c.params.text("unit"), c.params["scale"],
                                 c.params["offset"])};
+    for (const char* k : {"median", "average"})
+      if (const std::string why = window_problem(c.params[k]); !why.empty()) throw ParameterError(k, why);
     spec.columns[1].median = static_cast<int>(c.params["median"]);
     spec.columns[1].average = static_cast<int>(c.params["average"]);
-    for (const char* k : {"median", "average"})
-      if (static_cast<int>(c.params[k]) != c.params[k] || static_cast<int>(c.params[k]) % 2 == 0)
-        throw ParameterError(k, "an odd whole number of samples (1 = as measured)");
     const DataColumns d = read_data_file(spec);
     t_ = d.values[0];
     y_ = d.values[1];

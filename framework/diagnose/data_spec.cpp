@@ -46,9 +46,8 @@ DataColumnSpec column_from_yaml(const std::string& file, const std::string& name
       c.offset = number_of(file, it->second, "offset");
     } else if (k == "median" || k == "average") {
       const double v = number_of(file, it->second, k);
-      if (!(v >= 1 && v <= 99 && v == static_cast<int>(v) && static_cast<int>(v) % 2 == 1))
-        throw InputError(location_of(file, it->second), "", name,
-                         "column '" + name + "': " + k + ": an odd number of samples from 1 to 99");
+      if (const std::string why = window_problem(v); !why.empty())
+        throw InputError(location_of(file, it->second), "", name, "column '" + name + "': " + k + ": " + why);
       (k == "median" ? c.median : c.average) = static_cast<int>(v);
     } else {
       throw InputError(location_of(file, it->first), "", k,

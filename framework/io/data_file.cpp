@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <sstream>
 #include <stdexcept>
@@ -122,7 +123,31 @@ std::vector<double> running_line(const std::vector<double>& t, const std::vector
   return out;
 }
 
+// Each column through its running median and line; the line follows the
+// time column ("t") when the description has one, else the row.
+void clean_columns(const DataFileSpec& spec, DataColumns& out) {
+  std::vector<double> time;
+  for (std::size_t k = 0; k < spec.columns.size(); ++k) {
+    const DataColumnSpec& c = spec.columns[k];
+    if (c.median > 1) out.values[k] = running_median(out.values[k], c.median);
+    if (c.average <= 1) continue;
+    if (time.empty()) {
+      const int t = out.column("t");
+      if (t >= 0) time = out.values[static_cast<std::size_t>(t)];
+      for (std::size_t i = 0; t < 0 && i < out.rows(); ++i) time.push_back(static_cast<double>(i));
+    }
+    out.values[k] = running_line(time, out.values[k], c.average);
+  }
+}
+
 }  // namespace
+
+std::string window_problem(double n) {
+  if (n >= 1 && n <= 99 && n == std::floor(n) && static_cast<int>(n) % 2 == 1) return "";
+  char shown_n[32];
+  std::snprintf(shown_n, sizeof shown_n, "%g", n);
+  return "an odd number of samples from 1 to 99 (1 = as measured), not " + std::string(shown_n);
+}
 
 bool parse_lab_number(const std::string& cell, char decimal, char thousands, double& out) {
   if (cell.empty()) return false;
@@ -158,10 +183,8 @@ DataColumns parse_data_file(const DataFileSpec& spec, const std::string& text, d
       throw InputError(spec.described_at, "", c.name, "column '" + c.name + "': unit '" + c.unit + "': " + e.what());
     }
     for (const auto& [what, n] : {std::pair<std::string, int>{"median", c.median}, {"average", c.average}})
-      if (n < 1 || n % 2 == 0)
-        throw InputError(spec.described_at, "", c.name,
-                         "column '" + c.name + "': " + what + " " + std::to_string(n) +
-                             ": an odd number of samples (1 = as measured)");
+      if (const std::string why = window_problem(n); !why.empty())
+        throw InputError(spec.described_at, "", c.name, "column '" + c.name + "': " + what + ": " + why);
     if (c.number <= 0 && (c.header_name.empty() || !spec.header))
       throw InputError(spec.described_at, "", c.name,
                        "column '" + c.name + "': give its number (1 = first)" +
@@ -220,13 +243,7 @@ DataColumns parse_data_file(const DataFileSpec& spec, const std::string& text, d
     throw InputError(SourceLocation{file, line_no, 1}, "", "", "no data rows (after " +
                                                                    std::to_string(spec.skip_rows) + " skipped lines" +
                                                                    (spec.header ? " and the header)" : ")"));
-  // Smoothing follows the time column ("t") when the description has one.
-  const int t_col = out.column("t");
-  std::vector<double> row_index(out.rows());
-  for (std::size_t i = 0; i < row_index.size(); ++i) row_index[i] = static_cast<double>(i);
-  const std::vector<double> time = t_col >= 0 ? out.values[static_cast<std::size_t>(t_col)] : row_index;
-  for (std::size_t k = 0; k < spec.columns.size(); ++k)
-    out.values[k] = running_line(time, running_median(out.values[k], spec.columns[k].median), spec.columns[k].average);
+  clean_columns(spec, out);
   return out;
 }
 

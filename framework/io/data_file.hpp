@@ -75,6 +75,10 @@ DataSeparator parse_data_separator(const std::string& text);
 // throws std::invalid_argument.
 char parse_number_mark(const std::string& text, bool allow_none);
 
+// "" when n can be a column's median or average window (a whole odd number
+// of samples from 1 to 99), else what is wrong with it.
+std::string window_problem(double n);
+
 // A number written with `decimal` and `thousands`; false if it is not one.
 bool parse_lab_number(const std::string& cell, char decimal, char thousands, double& out);
 
