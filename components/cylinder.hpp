@@ -144,7 +144,6 @@ class DoubleActingCylinder final : public ComponentT<DoubleActingCylinder> {
         friction_(FrictionLaw::from(c.params)),
         friction_faults_(c.params),
         presliding_(c.params),
-        friction_state_(friction_state_of(c.params)),
         chamber_faults_(c.params),
         x0_(c.params["x0"]),
         p0_cap_(c.params[layout.p0_cap]),
@@ -210,8 +209,7 @@ class DoubleActingCylinder final : public ComponentT<DoubleActingCylinder> {
     // The flange pulls on the cylinder with f = -F.
     const T F = s.F_pressure + s.F_fric + s.F_stop;
     r[force_row_] = e.flange(kFlange).f + F;
-    if (friction_state_ == FrictionState::lugre)
-      r[friction_row_] = e.der(z_var_) - friction_.lugre_zdot(s.v, e.var(z_var_));
+    if (friction_.has_state()) r[friction_row_] = e.der(z_var_) - friction_.lugre_zdot(s.v, e.var(z_var_));
     if (presliding_.on()) presliding_.rows(e, z_var_, s.v, friction_.v_eps, r + friction_row_);
   }
 
@@ -269,7 +267,7 @@ class DoubleActingCylinder final : public ComponentT<DoubleActingCylinder> {
     sv.fix_position(kFlange, x);
     for (End end : {near_, l_.far()})
       side(end).start(sv, gas, port(end), heat(end), end == End::cap ? p0_cap_ : p0_rod_, T0_, travel(end, x));
-    if (friction_state_ == FrictionState::lugre) sv.fix_var(z_var_, 0.0);
+    if (friction_.has_state()) sv.fix_var(z_var_, 0.0);
     if (presliding_.on()) presliding_.start(sv, z_var_);
   }
 
@@ -396,9 +394,9 @@ class DoubleActingCylinder final : public ComponentT<DoubleActingCylinder> {
     s.v = fl.v;
     s.cap = side_gas(e, End::cap, s.x);
     s.rod = side_gas(e, End::rod, s.x);
-    s.z = presliding_.on()                        ? presliding_.engagement(e, z_var_)
-          : friction_state_ == FrictionState::lugre ? e.var(z_var_)
-                                                    : T(0.0 * s.x);
+    s.z = presliding_.on()        ? presliding_.engagement(e, z_var_)
+          : friction_.has_state() ? e.var(z_var_)
+                                  : T(0.0 * s.x);
     s.F_fric = presliding_.on()
                    ? presliding_.engaged([&](const T& v) { return all_friction(s, v, gas.p_ambient); }, s.v, s.z,
                                          friction_)
@@ -516,7 +514,6 @@ class DoubleActingCylinder final : public ComponentT<DoubleActingCylinder> {
   FrictionLaw friction_;
   FrictionFaults friction_faults_;
   SealPresliding presliding_;
-  FrictionState friction_state_;
   ChamberFaults chamber_faults_;
   double x0_, p0_cap_, p0_rod_, T0_;
   CylinderSide::Rows rows_[2];

@@ -102,8 +102,7 @@ class SingleActingCylinder final : public ComponentT<SingleActingCylinder> {
         p_(c.params),
         F0_(c.params["spring_preload"]),
         k_(c.params["spring_rate"]),
-        closed_(c.params.text("spring_chamber") == "closed"),
-        friction_state_(friction_state_of(c.params)) {
+        closed_(c.params.text("spring_chamber") == "closed") {
     p_.cap.set_first_variable(0);
     p_.rod.set_first_variable(2);
     z_var_ = closed_ ? 4 : 2;
@@ -126,9 +125,9 @@ class SingleActingCylinder final : public ComponentT<SingleActingCylinder> {
     if (closed_) s.rod = p_.rod.gas(e, T(p_.stroke - fl.s));
     s.F_spring = F0_ + k_ * fl.s;
     s.F_pressure = p_.cap.force(s.cap) - (closed_ ? T(p_.rod.force(s.rod) + p_amb * p_.A_rod) : spring_side);
-    const T z = p_.presliding.on()                     ? p_.presliding.engagement(e, z_var_)
-                : friction_state_ == FrictionState::lugre ? e.var(z_var_)
-                                                          : T(0.0 * fl.v);
+    const T z = p_.presliding.on()        ? p_.presliding.engagement(e, z_var_)
+                : p_.friction.has_state() ? e.var(z_var_)
+                                          : T(0.0 * fl.v);
     const T& p_rod = closed_ ? s.rod.p_piston : spring_side;
     const T other = closed_ ? s.rod.p : T(0.0 * fl.s + p_amb);
     const FrictionFaults& ff = p_.friction_faults;
@@ -158,7 +157,7 @@ class SingleActingCylinder final : public ComponentT<SingleActingCylinder> {
                      r + row, faulty ? &ff.rod : nullptr);
       row += p_.rod.rows();
     }
-    if (friction_state_ == FrictionState::lugre) r[row] = e.der(z_var_) - p_.friction.lugre_zdot(fl.v, e.var(z_var_));
+    if (p_.friction.has_state()) r[row] = e.der(z_var_) - p_.friction.lugre_zdot(fl.v, e.var(z_var_));
     if (p_.presliding.on()) p_.presliding.rows(e, z_var_, fl.v, p_.friction.v_eps, r + row);
   }
 
@@ -201,7 +200,7 @@ class SingleActingCylinder final : public ComponentT<SingleActingCylinder> {
     sv.fix_position(kFlange, x);
     p_.cap.start(sv, gas, kCap, kHeatCap, p_.p0_cap, p_.T0, x);
     if (closed_) p_.rod.start(sv, gas, kRod, kHeatRod, p_.p0_rod, p_.T0, p_.stroke - x);
-    if (friction_state_ == FrictionState::lugre) sv.fix_var(z_var_, 0.0);
+    if (p_.friction.has_state()) sv.fix_var(z_var_, 0.0);
     if (p_.presliding.on()) p_.presliding.start(sv, z_var_);
   }
 
@@ -209,7 +208,6 @@ class SingleActingCylinder final : public ComponentT<SingleActingCylinder> {
   Piston p_;
   double F0_, k_;
   bool closed_;
-  FrictionState friction_state_;
   int z_var_ = 2;
 };
 
