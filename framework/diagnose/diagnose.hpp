@@ -198,7 +198,8 @@ struct FormTermFinding {
 };
 
 struct FormFinding {
-  std::string balance, unit;            // the balance and its rate's unit
+  std::string balance, unit;            // the balance and its rate's unit (a reading: the signal and its unit)
+  bool reading = false;                 // the terms add to a measured signal's reading, not to a balance
   std::vector<FormTermFinding> terms;
   std::string formula;                  // "d(balance) [unit] = ..."
   double gap_before = 0;                // all runs, the verdict's model

@@ -4,12 +4,14 @@
 #include <atomic>
 #include <cmath>
 #include <map>
+#include <optional>
 #include <set>
 #include <sstream>
 
 #include "framework/assembly/system.hpp"
 #include "framework/core/parallel.hpp"
 #include "framework/core/text.hpp"
+#include "framework/diagnose/statistics.hpp"
 #include "framework/run/run.hpp"
 
 namespace pneumo::diagnose {
@@ -85,23 +87,18 @@ std::vector<PhysicalNode> physical_nodes(const System& sys) {
   return out;
 }
 
-// The components a missing term in the balance of unknown `balance` may
-// read: those whose equations read the balance's state, and those within
-// three physical nodes of them - a force on a piston or a chamber's leak
-// depends on the cylinder's own chambers and position and on its drive (the
-// throttles at its ports, the lines behind them, their valve), not on
-// another cylinder's. The search does not cross a held node: a supply or
-// exhaust manifold joins every valve of a line, but its pressure is the
-// source's, whatever the other drives do. On a small circuit that is most
-// of it; on a line of cylinders the dictionary would otherwise grow with
-// the square of the line's pressures (their differences). All components
-// when `balance` is not an unknown.
-std::vector<char> neighbourhood(const System& sys, int balance) {
+// The components a missing term may read: those of `near` (the components
+// whose equations read the balance's state, or the one a reading comes
+// from), and those within three physical nodes of them - a force on a piston
+// or a chamber's leak depends on the cylinder's own chambers and position
+// and on its drive (the throttles at its ports, the lines behind them, their
+// valve), not on another cylinder's. The search does not cross a held node:
+// a supply or exhaust manifold joins every valve of a line, but its pressure
+// is the source's, whatever the other drives do. On a small circuit that is
+// most of it; on a line of cylinders the dictionary would otherwise grow
+// with the square of the line's pressures (their differences).
+std::vector<char> neighbourhood(const System& sys, std::vector<char> near) {
   constexpr int kHops = 3;
-  const Circuit& circuit = sys.circuit();
-  if (balance < 0) return std::vector<char>(circuit.components.size(), 1);
-  std::vector<char> near(circuit.components.size(), 0);
-  for (int c : sys.components_reading(balance)) near[c] = 1;
   const auto nodes = physical_nodes(sys);
   for (int hop = 0; hop < kHops; ++hop) {
     const std::vector<char> from = near;
@@ -112,9 +109,24 @@ std::vector<char> neighbourhood(const System& sys, int balance) {
   return near;
 }
 
-std::vector<Readable> readables(const System& sys, int balance) {
+// Where a missing term starts: the components that read the balance's state
+// (unknown `balance`; all components when it is none), or the component
+// whose output `reading` is.
+std::vector<char> seed_of(const System& sys, int balance, const std::string& reading) {
+  const Circuit& circuit = sys.circuit();
+  std::vector<char> seed(circuit.components.size(), 0);
+  if (!reading.empty()) {
+    for (const auto& p : circuit.probes)
+      if (p.name == reading && p.component >= 0) seed[p.component] = 1;
+    return seed;
+  }
+  if (balance < 0) return std::vector<char>(circuit.components.size(), 1);
+  for (int c : sys.components_reading(balance)) seed[c] = 1;
+  return seed;
+}
+
+std::vector<Readable> readables(const System& sys, const std::vector<char>& near) {
   static const std::set<std::string> units = {"m", "m/s", "rad", "rad/s", "Pa", "K"};
-  const std::vector<char> near = neighbourhood(sys, balance);
   std::vector<Readable> out;
   const auto& names = sys.variable_names();
   for (int i = 0; i < sys.size(); ++i) {
@@ -159,11 +171,15 @@ std::vector<double> joined(const Variable& v) {
 
 // The variables along the verdict model's runs: positions, velocities,
 // pressures, temperatures; one of each set that moves together, none that
-// stays constant. `largest`: the balance's state's largest magnitude.
-std::vector<Variable> record(const FormInput& in, const std::string& balance, double& largest) {
+// stays constant. Near the balance's state (`largest`: its largest
+// magnitude), or near the component of the output `reading`; `times`: the
+// output times each run's samples are at.
+std::vector<Variable> record(const FormInput& in, const std::string& balance, const std::string& reading, double& largest,
+                             std::vector<std::vector<double>>* times = nullptr) {
   const std::size_t nr = in.used.size();
   std::vector<std::vector<Readable>> read(nr);
   std::vector<std::vector<std::vector<double>>> y_of(nr), yp_of(nr);  // per run, per readable
+  std::vector<std::vector<double>> t_of(nr);
   std::vector<double> largest_of(nr, 0.0);
   parallel_for(static_cast<long>(nr), in.threads, [&](int, long q) {
     const Netlist nl = in.netlist_of(in.used[q]);
@@ -171,12 +187,13 @@ std::vector<Variable> record(const FormInput& in, const std::string& balance, do
     const auto& names = sys.variable_names();
     const auto it = std::find(names.begin(), names.end(), balance);
     const int b = it == names.end() ? -1 : static_cast<int>(it - names.begin());
-    read[q] = readables(sys, b);
+    read[q] = readables(sys, neighbourhood(sys, seed_of(sys, b, reading)));
     y_of[q].resize(read[q].size()), yp_of[q].resize(read[q].size());
     SolverOptions so = solver_options(nl.simulation);
     so.threads = 1;
     simulate(sys, so, [&](double t, const double* y, const double* yp) {
       if (b >= 0) largest_of[q] = std::max(largest_of[q], std::abs(y[b]));
+      t_of[q].push_back(t);
       for (std::size_t k = 0; k < read[q].size(); ++k) {
         const Readable& r = read[q][k];
         y_of[q][k].push_back(r.unknown >= 0 ? y[r.unknown] : sys.probe(r.probe, t, y, yp));
@@ -184,6 +201,7 @@ std::vector<Variable> record(const FormInput& in, const std::string& balance, do
       }
     });
   });
+  if (times) *times = std::move(t_of);
   // The first run's readables name the variables (every run's circuit is the model's).
   std::vector<Variable> vars;
   for (const auto& r : read[0])
@@ -292,13 +310,25 @@ DisturbanceFactor read(Of of, const std::string& variable, const std::string& ot
   return f;
 }
 
+// The speed a sign's smoothing is sized by: the 99th percentile of |v|
+// along the runs, not its peak - a servo that takes a replayed position at
+// the start moves metres per second for one step, and a sign smoothed over
+// a twentieth of that is a viscous law at the speeds the runs hold.
+double typical_speed(const Variable& v) {
+  std::vector<double> a = joined(v);
+  for (double& x : a) x = std::abs(x);
+  const auto k = a.begin() + static_cast<std::ptrdiff_t>(0.99 * static_cast<double>(a.size() - 1));
+  std::nth_element(a.begin(), k, a.end());
+  return *k > 0 ? *k : std::max(std::abs(v.lo), std::abs(v.hi));
+}
+
 // The candidate terms: single factors by the variables' units, bumps over
 // each position's range, and sign(v) and v times each non-velocity factor
 // (sign(v) times each bump: friction concentrated somewhere on the stroke).
 std::vector<Entry> candidate_terms(const Dictionary& dict) {
   std::vector<std::vector<DisturbanceFactor>> single, other, bumps;
   const auto sign = [](const Variable& v) {
-    return DisturbanceFactor{Of::sign, v.name, "", 0, 0.05 * std::max(std::abs(v.lo), std::abs(v.hi))};
+    return DisturbanceFactor{Of::sign, v.name, "", 0, 0.05 * typical_speed(v)};
   };
   for (const auto& v : dict.vars()) {
     if (is_velocity(v.unit)) {
@@ -395,11 +425,32 @@ double needed(const Normal& N, double ssr) {
   return static_cast<double>(N.G.size()) + 0.01 * std::max(ssr - N.n, 0.0);
 }
 
+bool same_factor(const DisturbanceFactor& a, const DisturbanceFactor& b) {
+  return a.of == b.of && a.variable == b.variable && a.other == b.other && a.centre == b.centre && a.width == b.width;
+}
+
+// For each term that is a factor times a quantity (sgn(v) * p, v * x), the
+// term of that factor alone, else -1: with it the term becomes an affine law
+// of the quantity under the same factor - a friction a + b p that takes the
+// sign of the motion (eq. 8 of the end-cushioning paper) - as a term with
+// the constant is an affine law (a spring with its preload).
+std::vector<int> partners(const std::vector<Entry>& terms) {
+  std::vector<int> out(terms.size(), -1);
+  for (std::size_t k = 0; k < terms.size(); ++k) {
+    if (terms[k].factors.size() != 2) continue;
+    for (std::size_t j = 0; j < terms.size(); ++j)
+      if (terms[j].factors.size() == 1 && same_factor(terms[j].factors[0], terms[k].factors[0]))
+        out[k] = static_cast<int>(j);
+  }
+  return out;
+}
+
 // The additions to the form's terms `S` - one term, or one with the
-// constant (an affine law - a spring with its preload - that neither term
-// alone fits) - with how much each, refitted with S, lowers `error` (of
-// the terms fitted); best first. The constant is candidate 0.
+// constant, or one with its partner (affine laws that neither term alone
+// fits) - with how much each, refitted with S, lowers `error` (of the terms
+// fitted); best first. The constant is candidate 0.
 std::vector<std::pair<double, std::vector<int>>> additions(const std::vector<int>& S, const std::vector<char>& usable,
+                                                           const std::vector<int>& partner,
                                                            const std::function<double(const std::vector<int>&)>& error) {
   const double before = error(S);
   std::vector<std::pair<double, std::vector<int>>> ranked;
@@ -408,11 +459,12 @@ std::vector<std::pair<double, std::vector<int>>> additions(const std::vector<int
     T.insert(T.end(), added.begin(), added.end());
     ranked.emplace_back(before - error(T), std::move(added));
   };
-  const bool constant_free = usable[0] && std::find(S.begin(), S.end(), 0) == S.end();
+  const auto free = [&](int k) { return k >= 0 && usable[k] && std::find(S.begin(), S.end(), k) == S.end(); };
   for (int k = 0; k < static_cast<int>(usable.size()); ++k) {
-    if (!usable[k] || std::find(S.begin(), S.end(), k) != S.end()) continue;
+    if (!free(k)) continue;
     consider({k});
-    if (k > 0 && constant_free) consider({k, 0});
+    if (k > 0 && free(0)) consider({k, 0});
+    if (free(partner[k])) consider({k, partner[k]});
   }
   std::sort(ranked.begin(), ranked.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
   return ranked;
@@ -420,14 +472,21 @@ std::vector<std::pair<double, std::vector<int>>> additions(const std::vector<int
 
 // The additions that lower the cross-validated error by enough (a term's
 // price each), best first, at most `count`.
-std::vector<std::vector<int>> best_additions(const Normal& N, const std::vector<int>& S,
-                                             const std::vector<char>& usable, std::size_t count) {
+std::vector<std::vector<int>> best_additions(const Normal& N, const std::vector<int>& S, const std::vector<char>& usable,
+                                             const std::vector<int>& partner, std::size_t count) {
   const double price = needed(N, N.cross_validated(S));
   std::vector<std::vector<int>> out;
   const auto cv = [&](const std::vector<int>& T) { return N.cross_validated(T); };
-  for (auto& [gain, added] : additions(S, usable, cv))
+  for (auto& [gain, added] : additions(S, usable, partner, cv))
     if (out.size() < count && gain >= static_cast<double>(added.size()) * price) out.push_back(std::move(added));
   return out;
+}
+
+// A term's parameters: its coefficient, and a bump's centre and width.
+double parameter_count(const Entry& e) {
+  double p = 1;
+  for (const auto& f : e.factors) p += f.of == Of::bump ? 2 : 0;
+  return p;
 }
 
 // The form's parameters for Gauss-Newton: each term's coefficient, and a
@@ -581,7 +640,7 @@ std::string coefficient_unit(const std::string& rate, const std::string& term) {
 // The terms as found: coefficient, unit, text, and the formula.
 void describe(FormFinding& f, const std::vector<DisturbanceTerm>& terms, const Dictionary& dict) {
   std::ostringstream o;
-  o << "d[" << f.balance << "]/dt gains ";
+  o << (f.reading ? "the reading " + f.balance : "d[" + f.balance + "]/dt") << " gains ";
   for (std::size_t j = 0; j < terms.size(); ++j) {
     const Entry e = dict.entry(terms[j].factors);
     FormTermFinding t{e.text, terms[j].coefficient, coefficient_unit(f.unit, e.unit)};
@@ -597,10 +656,13 @@ std::string sentence_of(const FormFinding& f) {
   if (f.terms.empty() && f.gap_before <= 1.1)
     return "Nothing is left on " + f.balance + " for a form to explain (gap " + rounded(f.gap_before, 2) + " x noise).";
   if (f.terms.empty())
-    return "No function of the model's states beats the time-shaped correction on " + f.balance +
+    return std::string("No function of the model's states beats the time-shaped correction on ") +
+           (f.reading ? "the reading " : "") + f.balance +
            " across runs (none lowers the error on a run it was not fitted to).";
   if (!f.confirmed) return "The form found (" + f.formula + ") could not be simulated: " + f.failure + ".";
-  std::string s = "The missing term's form: " + f.formula + "; simulated with it, the gap is " + rounded(f.gap_after, 2) +
+  const std::string with = f.reading ? "with it (the reading's terms do not act on the model: no simulation needed)"
+                                     : "simulated with it";
+  std::string s = "The missing term's form: " + f.formula + "; " + with + ", the gap is " + rounded(f.gap_after, 2) +
                   " x noise (from " + rounded(f.gap_before, 2) + "; the time-shaped correction leaves " +
                   rounded(f.gap_shape, 2) + ").";
   if (!f.beats_shape) s += " It does not beat the time-shaped correction: read it as a lead, not a finding.";
@@ -618,13 +680,9 @@ namespace {
 class Discovery {
  public:
   Discovery(const FormInput& in, std::string balance, std::vector<Entry> terms, double amplitude, double range)
-      : in_(in), balance_(std::move(balance)), terms_(std::move(terms)), amplitude_(amplitude), range_(range),
-        refiner_(in, balance_, sims) {
-    for (const auto& t : terms_) {
-      double p = 1;
-      for (const auto& f : t.factors) p += f.of == Of::bump ? 2 : 0;
-      parameters_of_.push_back(p);
-    }
+      : in_(in), balance_(std::move(balance)), terms_(std::move(terms)), partner_(partners(terms_)),
+        amplitude_(amplitude), range_(range), refiner_(in, balance_, sims) {
+    for (const auto& t : terms_) parameters_of_.push_back(parameter_count(t));
   }
 
   std::atomic<long> sims{0};
@@ -685,7 +743,7 @@ class Discovery {
     for (int k : chosen) wanted[k] = 1;
     std::size_t fresh = 0;
     const auto cv = [&](const std::vector<int>& S) { return N.cross_validated(S); };
-    for (const auto& [gain, added] : additions(chosen, first_usable_, cv)) {
+    for (const auto& [gain, added] : additions(chosen, first_usable_, partner_, cv)) {
       if (fresh >= kScreened) break;
       for (int k : added) fresh += wanted[k] ? 0 : 1, wanted[k] = 1;
     }
@@ -704,7 +762,7 @@ class Discovery {
     std::vector<DisturbanceTerm> best_form;
     std::vector<int> best_chosen;
     double best_score = INFINITY, best_ssr = ssr;
-    const auto tried = best_additions(N, chosen, usable, kTried);
+    const auto tried = best_additions(N, chosen, usable, partner_, kTried);
     std::vector<std::vector<int>> sets;  // chosen and each addition
     std::vector<std::vector<DisturbanceTerm>> trials;
     for (const auto& added : tried) {
@@ -743,6 +801,7 @@ class Discovery {
   const FormInput& in_;
   std::string balance_;
   std::vector<Entry> terms_;
+  std::vector<int> partner_;
   double amplitude_, range_;
   Refiner refiner_;
   std::vector<double> parameters_of_;
@@ -752,12 +811,114 @@ class Discovery {
 
 }  // namespace
 
+namespace {
+
+// The runs' normal equations for a reading's terms: a term added to the
+// reading moves the residual by -term / sigma on that signal's samples (the
+// term at the output times, interpolated to the run's), nothing elsewhere.
+// Each column is the term over its RMS (a coefficient c' = c x RMS): a
+// pressure in Pa and a sign are twelve decades apart in the normal
+// equations, where the fit's tiny ridge would otherwise hold the sign's
+// coefficient at zero.
+Normal reading_normal(const FormInput& in, const std::string& signal, const Dictionary& dict,
+                      const std::vector<Entry>& terms, const std::vector<std::vector<double>>& times) {
+  Normal N;
+  for (std::size_t q = 0; q < in.used.size(); ++q) {
+    const MeasuredRun& run = (*in.runs)[in.used[q]];
+    const std::size_t m = run.t.size();
+    const auto s = static_cast<std::size_t>(std::find(run.signals.begin(), run.signals.end(), signal) - run.signals.begin());
+    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(in.r0[q].size(), static_cast<Eigen::Index>(terms.size()));
+    if (s < run.signals.size() && times[q].size() >= 2) {
+      std::vector<double> v(times[q].size());
+      for (std::size_t k = 0; k < terms.size(); ++k) {
+        for (std::size_t j = 0; j < v.size(); ++j) v[j] = dict.value(terms[k].factors, q, j);
+        for (std::size_t i = 0; i < m; ++i)
+          J(static_cast<Eigen::Index>(s * m + i), static_cast<Eigen::Index>(k)) =
+              -interp(times[q], v, run.t[i]) / (run.sigma[s] * terms[k].rms);
+      }
+    }
+    N.add(J, in.r0[q]);
+  }
+  return N;
+}
+
+struct ReadingFit {
+  std::vector<int> S;  // the chosen terms
+  Eigen::VectorXd c;   // their coefficients
+  double ssr = 0;
+};
+
+// Forward selection as for a balance, but exact: the residual is linear in
+// the reading's terms, so every addition's fit is its confirmation.
+ReadingFit select_reading_terms(const Normal& N, const std::vector<Entry>& terms) {
+  const std::vector<int> partner = partners(terms);
+  const std::vector<char> usable(terms.size(), 1);
+  ReadingFit best;
+  for (double s : N.s) best.ssr += s;
+  while (static_cast<int>(best.S.size()) < kMaxTerms && best.ssr > 1.1 * N.n) {
+    const double price = needed(N, best.ssr);
+    std::optional<ReadingFit> next;
+    double next_score = INFINITY;
+    for (const auto& added : best_additions(N, best.S, usable, partner, kTried)) {
+      ReadingFit trial{best.S, {}, 0};
+      trial.S.insert(trial.S.end(), added.begin(), added.end());
+      trial.c = N.fit(trial.S, -1);
+      for (std::size_t q = 0; q < N.G.size(); ++q) trial.ssr += N.ssr(trial.S, q, trial.c);
+      double parameters = 0;
+      for (int k : added) parameters += parameter_count(terms[k]);
+      const double score = trial.ssr + parameters * price;
+      if (best.ssr - trial.ssr >= parameters * price && score < next_score) next_score = score, next = std::move(trial);
+    }
+    if (!next) break;
+    best = std::move(*next);
+  }
+  return best;
+}
+
+}  // namespace
+
+std::optional<FormFinding> discover_reading_form(const FormInput& in, const std::string& signal, double gap_shape) {
+  const std::size_t nr = in.used.size();
+  if (nr < 2 || !in.netlist_of) return std::nullopt;
+  const Circuit circuit = elaborate(in.netlist_of(in.used[0]), *in.registry);
+  const auto probe = std::find_if(circuit.probes.begin(), circuit.probes.end(), [&](const Probe& p) { return p.name == signal; });
+  if (probe == circuit.probes.end() || probe->component < 0 || probe->integral) return std::nullopt;
+  double largest = 0;
+  std::vector<std::vector<double>> times;
+  const Dictionary dict(record(in, "", signal, largest, &times));
+  if (dict.vars().empty()) return std::nullopt;
+  const std::vector<Entry> terms = candidate_terms(dict);
+  FormFinding f;
+  f.balance = signal, f.unit = probe->unit, f.reading = true, f.gap_shape = gap_shape;
+  f.dictionary = static_cast<int>(terms.size());
+  for (const auto& v : dict.vars()) f.read.push_back(v.name);
+  if (in.log) in.log("form of the reading " + signal + ": " + std::to_string(terms.size()) + " candidate terms x " + std::to_string(nr) + " runs");
+  const Normal N = reading_normal(in, signal, dict, terms, times);
+  const ReadingFit fit = select_reading_terms(N, terms);
+  double s0 = 0;
+  for (double s : N.s) s0 += s;
+  f.gap_before = std::sqrt(s0 / N.n);
+  if (!fit.S.empty()) {
+    f.confirmed = true;
+    f.gap_after = std::sqrt(fit.ssr / N.n);
+    f.beats_shape = f.gap_after <= 1.05 * gap_shape || f.gap_after <= 1.5;
+    std::vector<DisturbanceTerm> form;
+    for (std::size_t a = 0; a < fit.S.size(); ++a)
+      form.push_back({fit.c[static_cast<Eigen::Index>(a)] / terms[fit.S[a]].rms, terms[fit.S[a]].factors});
+    describe(f, form, dict);
+  }
+  f.simulations = static_cast<long>(nr);
+  f.sentence = sentence_of(f);
+  if (in.log) in.log("form: " + f.sentence + " [" + std::to_string(f.simulations) + " simulations]");
+  return f;
+}
+
 std::optional<FormFinding> discover_form(const FormInput& in, const std::string& balance, const std::string& rate_unit,
                                          double gap_shape) {
   const std::size_t nr = in.used.size();
   if (nr < 2) return std::nullopt;
   double largest = 0;
-  const Dictionary dict(record(in, balance, largest));
+  const Dictionary dict(record(in, balance, "", largest));
   if (dict.vars().empty()) return std::nullopt;
   std::vector<Entry> terms = candidate_terms(dict);
   FormFinding f;
@@ -794,7 +955,8 @@ std::optional<FormFinding> discover_form(const FormInput& in, const std::string&
 std::string form_json(const FormFinding& f, const std::function<std::string(double)>& num,
                       const std::function<std::string(const std::string&)>& str) {
   std::ostringstream o;
-  o << "{\"balance\": " << str(f.balance) << ", \"unit\": " << str(f.unit) << ", \"formula\": " << str(f.formula)
+  o << "{\"balance\": " << str(f.balance) << ", \"reading\": " << (f.reading ? "true" : "false")
+    << ", \"unit\": " << str(f.unit) << ", \"formula\": " << str(f.formula)
     << ", \"terms\": [";
   for (std::size_t j = 0; j < f.terms.size(); ++j)
     o << (j ? ", " : "") << "{\"term\": " << str(f.terms[j].text) << ", \"coefficient\": " << num(f.terms[j].coefficient)

@@ -62,6 +62,16 @@ struct FormInput {
 std::optional<FormFinding> discover_form(const FormInput& in, const std::string& balance, const std::string& rate_unit,
                                          double gap_shape);
 
+// The form a measured signal's reading gains beyond the model: which
+// function of the model's variables near the component the output `signal`
+// comes from (a force a position-driven flange feels, a transducer's
+// error). The terms add to the reading and do not act on the model, so the
+// residual is linear in them: chosen by the same leave-one-run-out forward
+// selection, fitted exactly, no simulation beyond one a run that records
+// the variables. nullopt when the runs are too few (fewer than two) or
+// `signal` is no output of a component.
+std::optional<FormFinding> discover_reading_form(const FormInput& in, const std::string& signal, double gap_shape);
+
 // report.json's "form" and its HTML paragraph.
 std::string form_json(const FormFinding& f, const std::function<std::string(double)>& num,
                       const std::function<std::string(const std::string&)>& str);

@@ -436,13 +436,20 @@ class Search {
                    : ", no step of its fit runs (" + c.finding.failure + ")"));
   }
 
-  // The missing term's form on the best state balance, and on the next
-  // best when the first's does not beat its time-shaped correction.
+  // The missing term's form: on the reading when a sensor's correction is
+  // the best of all (the gap looks like what a signal reads, not like what
+  // a balance holds), and, unless that form beats its time-shaped
+  // correction, on the best state balance, and on the next best when the
+  // first's does not beat its own. The form that leaves least is kept.
   std::optional<FormFinding> form_of(const std::vector<Candidate>& cands) const {
     FormInput f{&runs_, used, r0, in_.netlist_of, in_.registry,
                 [&](int k, const std::vector<Disturbance>& d, std::string* why) { return simulate_from(k, 0, d, why); },
                 [&](int k, const std::vector<std::vector<double>>& sim) { return residual(k, sim); }, in_.log, opt_.threads};
     std::optional<FormFinding> best;
+    if (!cands.empty() && cands.front().variable.empty() && in_.netlist_of) {
+      best = discover_reading_form(f, cands.front().finding.balance.substr(7), cands.front().finding.gap_after);
+      if (best && best->beats_shape) return best;
+    }
     int tried = 0;
     for (const auto& c : cands) {
       if (c.variable.empty() || tried == 2 || !in_.netlist_of) continue;
