@@ -90,40 +90,59 @@ const char* const kVelocity = "v at {cyl.flange, load.flange}";
 const char* const kPosition = "s at {cyl.flange, load.flange}";
 constexpr double kMass = 10;  // kg: the load; the cylinder's piston has no mass of its own
 
+// A measured output of the runs and the standard deviation of its noise.
+struct Reading {
+  std::string column;
+  double noise;
+};
+
+// Runs of the netlist `truth` at the supply pressures `gauge` (p_s, gauge;
+// the highest one the validation run) with `disturbances`, each reading
+// sampled every `dt` from `from` on with Gaussian noise.
+std::filesystem::path write_runs(const TempDir& dir, const std::string& truth,
+                                 const std::vector<std::pair<std::string, double>>& gauge,
+                                 const std::vector<Reading>& readings, double dt, double from, unsigned seed,
+                                 const std::vector<Disturbance>& disturbances = {}) {
+  const auto runs = dir.path() / "runs";
+  std::filesystem::create_directories(runs);
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> noise(0, 1);
+  for (const auto& [name, p] : gauge) {
+    Netlist nl = parse_netlist(truth, "truth.yaml");
+    set_si_value(nl, ParameterPath::parse("p_s"), p + 101325);
+    SolverOptions opt = solver_options(nl.simulation);
+    opt.disturbances = disturbances;
+    const RunResult res = run_circuit(elaborate(nl, builtin_registry()), opt);
+    EXPECT_TRUE(res.solver.ok) << res.solver.message;
+    std::ofstream csv(runs / (name + ".csv"));
+    csv << "t";
+    for (const auto& r : readings) csv << "," << r.column;
+    csv << "\n";
+    csv.precision(12);
+    double last = -1;
+    for (const auto& row : res.table.rows) {
+      // The sampling grid only: the rows written at events are not samples.
+      if (std::abs(row[0] / dt - std::round(row[0] / dt)) > 1e-6 || row[0] <= last || row[0] < from) continue;
+      last = row[0];
+      csv << row[0];
+      for (const auto& r : readings) csv << "," << row[res.table.column(r.column)] + r.noise * noise(rng);
+      csv << "\n";
+    }
+    std::ofstream(runs / (name + ".yaml")) << "data: " << name << ".csv\nrole: "
+                                           << (p == gauge.back().second ? "validation" : "calibration")
+                                           << "\noperating_point:\n  p_s: " << num(p + 101325) << "\n";
+  }
+  return runs;
+}
+
 // Runs at three supply pressures of the model edited by `edit` (the truth),
 // with `truth` disturbances, and sensor noise: x 0.02 mm, pressures 3 mbar.
 std::filesystem::path measured(const TempDir& dir, const std::function<void(std::string&)>& edit,
                                const std::vector<Disturbance>& truth = {}) {
   std::string text = kMeterOut;
   edit(text);
-  const auto runs = dir.path() / "runs";
-  std::filesystem::create_directories(runs);
-  std::mt19937 rng(11);
-  std::normal_distribution<double> noise(0, 1);
-  for (const auto& [name, p] : {std::pair{"low", 4e5}, std::pair{"mid", 5.5e5}, std::pair{"high", 7e5}}) {
-    Netlist nl = parse_netlist(text, "truth.yaml");
-    set_si_value(nl, ParameterPath::parse("p_s"), p + 101325);
-    SolverOptions opt = solver_options(nl.simulation);
-    opt.disturbances = truth;
-    const RunResult res = run_circuit(elaborate(nl, builtin_registry()), opt);
-    EXPECT_TRUE(res.solver.ok) << res.solver.message;
-    std::ofstream csv(runs / (std::string(name) + ".csv"));
-    csv << "t,x,p_cap,p_rod\n";
-    csv.precision(12);
-    double last = -1;
-    for (const auto& row : res.table.rows) {
-      // The sampling grid only: the rows written at events are not samples.
-      if (std::abs(row[0] / 2e-3 - std::round(row[0] / 2e-3)) > 1e-6 || row[0] <= last) continue;
-      last = row[0];
-      csv << row[0] << "," << row[res.table.column("x")] + 2e-5 * noise(rng) << ","
-          << row[res.table.column("p_cap")] + 300 * noise(rng) << "," << row[res.table.column("p_rod")] + 300 * noise(rng)
-          << "\n";
-    }
-    std::ofstream(runs / (std::string(name) + ".yaml"))
-        << "data: " << name << ".csv\nrole: " << (p > 6e5 ? "validation" : "calibration")
-        << "\noperating_point:\n  p_s: " << num(p + 101325) << "\n";
-  }
-  return runs;
+  return write_runs(dir, text, {{"low", 4e5}, {"mid", 5.5e5}, {"high", 7e5}}, {{"x", 2e-5}, {"p_cap", 300}, {"p_rod", 300}},
+                    2e-3, 0.0, 11, truth);
 }
 
 using Discover = std::function<std::optional<diagnose::FormFinding>(const diagnose::FormInput&)>;
@@ -365,29 +384,7 @@ simulation: {t_end: 7.5 s, output_interval: 10 ms}
 
 // Runs of `truth` at 2, 4 and 6 bar g, the force read with 0.03 N of noise at 100 Hz.
 std::filesystem::path driven_runs(const TempDir& dir, const std::string& truth) {
-  const auto runs = dir.path() / "runs";
-  std::filesystem::create_directories(runs);
-  std::mt19937 rng(5);
-  std::normal_distribution<double> noise(0, 0.03);
-  for (const auto& [name, p] : {std::pair{"p2", 2e5}, std::pair{"p4", 4e5}, std::pair{"p6", 6e5}}) {
-    Netlist nl = parse_netlist(truth, "truth.yaml");
-    set_si_value(nl, ParameterPath::parse("p_s"), p + 101325);
-    const RunResult res = run_circuit(elaborate(nl, builtin_registry()), solver_options(nl.simulation));
-    EXPECT_TRUE(res.solver.ok) << res.solver.message;
-    std::ofstream csv(runs / (std::string(name) + ".csv"));
-    csv << "t,F\n";
-    csv.precision(12);
-    double last = -1;
-    for (const auto& row : res.table.rows) {
-      if (std::abs(row[0] / 1e-2 - std::round(row[0] / 1e-2)) > 1e-6 || row[0] <= last || row[0] < 0.1) continue;
-      last = row[0];
-      csv << row[0] << "," << row[res.table.column("F")] + noise(rng) << "\n";
-    }
-    std::ofstream(runs / (std::string(name) + ".yaml"))
-        << "data: " << name << ".csv\nrole: " << (p > 5e5 ? "validation" : "calibration")
-        << "\noperating_point:\n  p_s: " << num(p + 101325) << "\n";
-  }
-  return runs;
+  return write_runs(dir, truth, {{"p2", 2e5}, {"p4", 4e5}, {"p6", 6e5}}, {{"F", 0.03}}, 1e-2, 0.1, 5);
 }
 
 // The seal's friction grows by 0.5 N/bar of the chamber's gauge pressure

@@ -553,19 +553,21 @@ class Refiner {
   }
 
   // Damped Gauss-Newton steps from `terms` while each lowers the simulated
-  // sum of squares by more than a percent; `terms` and `ssr` end at the best.
-  void refine(std::vector<DisturbanceTerm>& terms, double& ssr, std::vector<Eigen::VectorXd> r, double range) const {
+  // sum of squares by more than a percent, at most four; `terms` and `ssr`
+  // end at the best. Returns whether the fourth still did (not converged).
+  bool refine(std::vector<DisturbanceTerm>& terms, double& ssr, std::vector<Eigen::VectorXd> r, double range) const {
     const std::vector<Parameter> params = parameters(terms);
     for (int it = 0; it < 4; ++it) {
       const Eigen::VectorXd r_all = stacked(r);
       Eigen::MatrixXd J;
-      if (!jacobian(terms, params, r_all, J)) return;
+      if (!jacobian(terms, params, r_all, J)) return false;
       Eigen::MatrixXd A = J.transpose() * J;
       A.diagonal() *= 1.001;
       const Eigen::VectorXd delta = -A.ldlt().solve(J.transpose() * r_all);
       const double before = ssr;
-      if (!step(terms, params, delta, range, ssr, r) || ssr > 0.99 * before) return;
+      if (!step(terms, params, delta, range, ssr, r) || ssr > 0.99 * before) return false;
     }
+    return true;
   }
 
   static Eigen::VectorXd stacked(const std::vector<Eigen::VectorXd>& r) {
@@ -762,6 +764,7 @@ class Discovery {
     std::vector<DisturbanceTerm> best_form;
     std::vector<int> best_chosen;
     double best_score = INFINITY, best_ssr = ssr;
+    bool best_unfinished = false;
     const auto tried = best_additions(N, chosen, usable, partner_, kTried);
     std::vector<std::vector<int>> sets;  // chosen and each addition
     std::vector<std::vector<DisturbanceTerm>> trials;
@@ -786,15 +789,23 @@ class Discovery {
         continue;
       }
       double s = Refiner::stacked(rts[i]).squaredNorm();
-      refiner_.refine(trials[i], s, rts[i], range_);
+      const bool unfinished = refiner_.refine(trials[i], s, rts[i], range_);
       double parameters = 0;
       for (int k : tried[i]) parameters += parameters_of_[k];
       const double score = s + parameters * price;
       if (ssr - s >= parameters * price && score < best_score)
-        best_score = score, best_ssr = s, best_form = std::move(trials[i]), best_chosen = std::move(sets[i]);
+        best_score = score, best_ssr = s, best_form = std::move(trials[i]), best_chosen = std::move(sets[i]),
+        best_unfinished = unfinished;
     }
     if (best_form.empty()) return false;
     form = std::move(best_form), chosen = std::move(best_chosen), ssr = best_ssr;
+    if (!refiner_.residuals(form, r, nullptr)) return false;
+    // Refined on while its steps still pay, before the next round: a term
+    // added later must not take the credit for steps its predecessors had
+    // yet to make (a strong spring's coefficients, four steps from their
+    // linearisation, else carry in a bump that does nothing).
+    if (!best_unfinished) return true;
+    refiner_.refine(form, ssr, r, range_);
     return refiner_.residuals(form, r, nullptr);
   }
 
