@@ -820,10 +820,6 @@ class Discovery {
   std::vector<char> first_usable_;
 };
 
-}  // namespace
-
-namespace {
-
 // The runs' normal equations for a reading's terms: a term added to the
 // reading moves the residual by -term / sigma on that signal's samples (the
 // term at the output times, interpolated to the run's), nothing elsewhere.
