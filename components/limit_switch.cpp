@@ -4,6 +4,7 @@
 // the instant the cam reaches the switch is an event in the log
 // (COMPONENT.on / COMPONENT.off).
 #include "components/builtin.hpp"
+#include "components/faults.hpp"
 #include "components/switching.hpp"
 #include "components/symbols.hpp"
 
@@ -26,6 +27,7 @@ class LimitSwitch final : public WindowSwitchComponent<LimitSwitch> {
         ParameterSpec::scalar("window", "m", "length of travel over which the switch is actuated", 2e-3).positive(),
         ParameterSpec::scalar("hysteresis", "m", "extra travel beyond the window before it releases", 0.1e-3)
             .non_negative(),
+        fault_parameter("fault_shift", "m", "switch sits this far off its position along the travel"),
     };
     i.ports = {{"flange", Domain::translational, Causality::acausal, "sensed flange (no force)"},
                {"y", Domain::signal, Causality::output, "switch state 0/1", true}};
@@ -35,13 +37,17 @@ class LimitSwitch final : public WindowSwitchComponent<LimitSwitch> {
     i.roots = 2;
     i.events = {{"on", "switches on"}, {"off", "switches off"}};
     i.follows_inputs = true;  // its state at the start is read from the initial position
+    i.faults = {fault("misplaced", "switches early or late: the switch slipped on its mounting or the cam is bent",
+                      {fault_amount("ds", "fault_shift", "m", -5e-3, 5e-3, 5e-4)})};
+    i.faults.back().needs_port = "y";
     return i;
   }
 
   explicit LimitSwitch(const Construction& c)
       : WindowSwitchComponent(c,
-                              {c.params["position"] - 0.5 * c.params["window"],
-                               c.params["position"] + 0.5 * c.params["window"], c.params["hysteresis"]},
+                              {c.params["position"] + c.params["fault_shift"] - 0.5 * c.params["window"],
+                               c.params["position"] + c.params["fault_shift"] + 0.5 * c.params["window"],
+                               c.params["hysteresis"]},
                               "s", "m") {}
 
   template <class T>

@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "components/builtin.hpp"
+#include "components/faults.hpp"
 #include "components/switching.hpp"
 #include "components/symbols.hpp"
 
@@ -24,6 +25,7 @@ class PressureSwitch final : public WindowSwitchComponent<PressureSwitch> {
     i.parameters = {
         ParameterSpec::scalar("p_on", "Pa", "switching pressure, absolute").positive().absolute(),
         ParameterSpec::scalar("hysteresis", "Pa", "fall below p_on before it releases", 0.2e5).non_negative(),
+        fault_parameter("fault_p_on_shift", "Pa", "switching pressure off its setting by this much"),
     };
     i.ports = {{"port", Domain::pneumatic, Causality::acausal, "gas port (tapped, no flow)"},
                {"y", Domain::signal, Causality::output, "switch state 0/1", true}};
@@ -33,11 +35,16 @@ class PressureSwitch final : public WindowSwitchComponent<PressureSwitch> {
     i.roots = 2;
     i.events = {{"on", "switches on"}, {"off", "switches off"}};
     i.follows_inputs = true;  // its state at the start is read from the initial pressure
+    i.faults = {fault("misadjusted", "switches below or above its setting (set screw turned, spring drifted)",
+                      {fault_amount("dp", "fault_p_on_shift", "Pa", -1e5, 1e5, 1e4)})};
+    i.faults.back().needs_port = "y";
     return i;
   }
 
   explicit PressureSwitch(const Construction& c)
-      : WindowSwitchComponent(c, {c.params["p_on"], std::numeric_limits<double>::infinity(), c.params["hysteresis"]},
+      : WindowSwitchComponent(c,
+                              {c.params["p_on"] + c.params["fault_p_on_shift"], std::numeric_limits<double>::infinity(),
+                               c.params["hysteresis"]},
                               "p", "Pa") {}
 
   template <class T>

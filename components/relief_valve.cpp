@@ -6,8 +6,10 @@
 // `p_set: 5 barg` (or `5 bar g`, `5 bar(g)`) for 5 bar above ambient.
 // In a circuit fed through a resistance the inlet therefore levels off
 // between p_set and p_set + band, where the relieved flow matches the feed.
+// A seat that does not close tight leaves a fraction `leakage` of C open.
 #include "components/builtin.hpp"
 #include "components/check_valve_flow.hpp"
+#include "components/faults.hpp"
 #include "components/symbols.hpp"
 
 namespace pneumo::components {
@@ -21,7 +23,7 @@ class ReliefValve final : public ComponentT<ReliefValve> {
     i.type = "relief_valve";
     i.description =
         "Pressure relief valve in -> out: closed for p_in <= p_set (absolute; write barg for gauge), ISO 6358 "
-        "conductance C opening C1-smoothly over 'band' above p_set; isenthalpic.";
+        "conductance C opening C1-smoothly over 'band' above p_set (a fraction 'leakage' always open); isenthalpic.";
     i.symbol = symbols::relief_valve();
     i.parameters = {
         ParameterSpec::scalar("p_set", "Pa", "set (cracking) pressure, absolute: write e.g. 5 barg for gauge")
@@ -30,20 +32,31 @@ class ReliefValve final : public ComponentT<ReliefValve> {
             .positive(),
         ParameterSpec::scalar("C", "m3/(s*Pa)", "sonic conductance when fully open, e.g. 1 dm3/(s*bar)").positive(),
         ParameterSpec::scalar("b", "1", "critical pressure ratio when open", 0.3).range(0.0, 0.99),
+        ParameterSpec::scalar("leakage", "1", "fraction of C open below p_set (0 = tight)", 0.0).range(0.0, 1.0),
+        fault_parameter("fault_p_set_shift", "Pa", "set pressure off its setting by this much"),
     };
     i.ports = {{"in", Domain::pneumatic, Causality::acausal, "inlet: the protected pressure (1)"},
                {"out", Domain::pneumatic, Causality::acausal, "outlet: exhaust or atmosphere (3)"}};
     i.observables = {{"m_flow", "kg/s", "relieved mass flow in -> out"}, {"opening", "1", "open fraction of C"}};
     i.equations = {"relief mass flow", "mass balance", "stream temperature in", "stream temperature out"};
+    i.faults = {fault("misadjusted", "opens below or above its setting (spring drifted, set screw turned)",
+                      {fault_amount("dp", "fault_p_set_shift", "Pa", -1e5, 1e5, 1e4)}),
+                fault("seat_leak", "not closing tight below its setting (worn or dirty seat): a fraction of C open",
+                      {fault_amount("leak", "leakage", "1", 0.0, 0.2, 0.02)})};
     return i;
   }
 
   explicit ReliefValve(const Construction& c)
-      : ComponentT(c), p_set_(c.params["p_set"]), band_(c.params["band"]), C_(c.params["C"]), b_(c.params["b"]) {}
+      : ComponentT(c),
+        p_set_(c.params["p_set"] + c.params["fault_p_set_shift"]),
+        band_(c.params["band"]),
+        C_(c.params["C"]),
+        b_(c.params["b"]),
+        leakage_(c.params["leakage"]) {}
 
   template <class T>
   T opening(const T& p_in) const {
-    return check_valve_opening(T(p_in - p_set_), 0.0, band_);
+    return leakage_ + (1.0 - leakage_) * check_valve_opening(T(p_in - p_set_), 0.0, band_);
   }
 
   template <class T>
@@ -61,7 +74,7 @@ class ReliefValve final : public ComponentT<ReliefValve> {
   }
 
  private:
-  double p_set_, band_, C_, b_;
+  double p_set_, band_, C_, b_, leakage_;
 };
 
 void register_relief_valve(Registry& r) { r.add<ReliefValve>(); }

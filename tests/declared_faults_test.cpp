@@ -59,6 +59,10 @@ TEST(DeclaredFaults, EachComponentTypeListsWhatCanFailInIt) {
       {"pressure_sensor", {"offset", "gain", "lag"}},
       {"position_sensor", {"offset", "gain", "lag"}},
       {"temperature_sensor", {"offset", "gain", "lag"}},
+      {"relief_valve", {"misadjusted", "seat_leak"}},
+      {"pressure_switch", {"misadjusted"}},
+      {"limit_switch", {"misplaced"}},
+      {"timer", {"misadjusted"}},
   };
   for (const auto& [type, faults] : want) {
     const auto have = fault_names(type);
@@ -397,6 +401,124 @@ TEST(DeclaredFaults, SensorReadsGainTimesValuePlusOffset) {
       "simulation: {t_end: 0.1 s, output_interval: 10 ms}\n",
       "sensor.yaml");
   EXPECT_NEAR(column(r.table, "p").back(), 1.1 * 2e5 + 1e3, 1e-6);
+}
+
+// The run of netlist `text` with its declared fault `name` (COMPONENT.FAULT)
+// at `values`, through the catalogue a diagnosis makes of the circuit.
+RunResult run_with_fault(const std::string& text, const std::string& name, const std::vector<double>& values) {
+  const Netlist nl = parse_netlist(text, "faulty.yaml");
+  const auto cat = diagnose::declared_faults(nl, builtin_registry(), {}, {});
+  const diagnose::Effect* e = cat.find(name);
+  EXPECT_NE(e, nullptr) << name;
+  if (!e) return {};
+  EXPECT_TRUE(e->unavailable.empty()) << e->unavailable;
+  diagnose::MeasurementModel mm;
+  return run_simulation(diagnose::apply_effects(nl, {{e, values}}, &mm), builtin_registry());
+}
+
+// The first event of `component` tagged `tag`, as (time, value the message
+// reports after " = ").
+std::pair<double, double> first_event(const RunResult& r, const std::string& component, const std::string& tag) {
+  for (const auto& ev : r.solver.events)
+    if (ev.component == component && ev.tag == tag)
+      return {ev.t, std::stod(ev.message.substr(ev.message.find(" = ") + 3))};
+  ADD_FAILURE() << "no " << component << "." << tag;
+  return {NAN, NAN};
+}
+
+// A rod driven out at 0.1 m/s past a limit switch set at 50 mm (window
+// 2 mm): sound, it switches on at 49 mm, t = 0.49 s; slipped 3 mm back
+// along the travel, at 46 mm, t = 0.46 s.
+TEST(DeclaredFaults, AMisplacedLimitSwitchSwitchesWhereItNowSits) {
+  const std::string text =
+      "components:\n"
+      "  drive: {type: velocity_source, v: 0.1 m/s}\n"
+      "  sw: {type: limit_switch, position: 50 mm}\n"
+      "  watch: {type: not}\n"
+      "connections:\n  - [drive.flange, sw.flange]\n  - [sw.y, watch.in]\n"
+      "outputs: {s: sw.state}\n"
+      "simulation: {t_end: 0.8 s, output_interval: 10 ms}\n";
+  for (const double shift : {0.0, -3e-3, 2e-3}) {
+    const RunResult r = run_with_fault(text, "sw.misplaced", {shift});
+    ASSERT_TRUE(r.solver.ok) << r.solver.message;
+    const auto [t, s] = first_event(r, "sw", "on");
+    EXPECT_NEAR(s, 0.049 + shift, 1e-7) << shift;
+    EXPECT_NEAR(t, (0.049 + shift) / 0.1, 1e-6) << shift;
+  }
+}
+
+// A 1 L tank filled through a throttle: its pressure switch (set 4 bar
+// abs) turned 0.3 bar up switches on where the tank's pressure reaches
+// 4.3 bar, later than the sound switch.
+TEST(DeclaredFaults, AMisadjustedPressureSwitchSwitchesAtItsShiftedPressure) {
+  const std::string text =
+      "components:\n"
+      "  supply: {type: pressure_source, p: 7 bar}\n"
+      "  fill: {type: iso6358_throttle, C: 0.3 dm3/(s*bar), b: 0.3}\n"
+      "  tank: {type: volume, V: 1 L, p0: 1 bar}\n"
+      "  ps: {type: pressure_switch, p_on: 4 bar}\n"
+      "  watch: {type: not}\n"
+      "connections:\n  - [supply.port, fill.a]\n  - [fill.b, tank.port, ps.port]\n  - [ps.y, watch.in]\n"
+      "outputs: {p: tank.p}\n"
+      "simulation: {t_end: 3 s, output_interval: 10 ms}\n";
+  const RunResult sound = run_with_fault(text, "ps.misadjusted", {0.0});
+  const RunResult turned = run_with_fault(text, "ps.misadjusted", {0.3e5});
+  ASSERT_TRUE(sound.solver.ok && turned.solver.ok);
+  EXPECT_NEAR(first_event(sound, "ps", "on").second, 4e5, 1.0);
+  EXPECT_NEAR(first_event(turned, "ps", "on").second, 4.3e5, 1.0);
+  EXPECT_GT(first_event(turned, "ps", "on").first, first_event(sound, "ps", "on").first + 0.05);
+}
+
+// An on-delay timer set to 0.2 s, its dial 1.5 x off: the output rises
+// 0.3 s after the input's step at 0.1 s.
+TEST(DeclaredFaults, AMisadjustedTimerElapsesAfterItsDelayTimesTheFactor) {
+  const std::string text =
+      "components:\n"
+      "  go: {type: signal_source, kind: step, value: 0, height: 1, t_start: 0.1 s}\n"
+      "  tmr: {type: timer, delay: 0.2 s}\n"
+      "  watch: {type: not}\n"
+      "connections:\n  - [go.y, tmr.in]\n  - [tmr.y, watch.in]\n"
+      "outputs: {y: tmr.state}\n"
+      "simulation: {t_end: 1 s, output_interval: 10 ms}\n";
+  for (const double k : {1.0, 1.5, 0.6}) {
+    const RunResult r = run_with_fault(text, "tmr.misadjusted", {k});
+    ASSERT_TRUE(r.solver.ok) << r.solver.message;
+    double t_elapsed = NAN;
+    for (const auto& ev : r.solver.events)
+      if (ev.component == "tmr" && ev.tag == "elapsed") t_elapsed = ev.t;
+    EXPECT_NEAR(t_elapsed, 0.1 + 0.2 * k, 1e-9) << k;
+  }
+}
+
+// A relief valve (set 5 bar abs, band 0.5 bar) held at a source pressure:
+// turned up by dp it is as open at p_set + dp + band / 2 as the sound valve
+// at p_set + band / 2; with a seat leak, below its setting, it passes the
+// flow of a throttle of that fraction of its conductance (same b).
+TEST(DeclaredFaults, AReliefValveOffItsSettingOrLeakingAtItsSeat) {
+  auto held = [](const std::string& p_in, const std::string& twin = "") {
+    return "components:\n"
+           "  src: {type: pressure_source, p: " + p_in + "}\n"
+           "  relief: {type: relief_valve, p_set: 5 bar, band: 0.5 bar, C: 1 dm3/(s*bar), b: 0.3}\n"
+           "  air: {type: atmosphere}\n" +
+           (twin.empty() ? "" : "  twin: {type: iso6358_throttle, C: " + twin + ", b: 0.3}\n") +
+           "connections:\n  - [src.port, relief.in" + (twin.empty() ? "" : ", twin.a") + "]\n"
+           "  - [relief.out, air.port" + (twin.empty() ? "" : ", twin.b") + "]\n"
+           "outputs: {open: relief.opening, m: relief.m_flow" + (twin.empty() ? "" : ", m_twin: twin.m_flow") + "}\n"
+           "simulation: {t_end: 0.01 s, output_interval: 10 ms}\n";
+  };
+  const RunResult sound = run_with_fault(held("5.25 bar"), "relief.misadjusted", {0.0});
+  const RunResult turned = run_with_fault(held("5.65 bar"), "relief.misadjusted", {0.4e5});
+  ASSERT_TRUE(sound.solver.ok && turned.solver.ok);
+  const double open = column(sound.table, "open").back();
+  EXPECT_GT(open, 0.1);
+  EXPECT_LT(open, 0.9);
+  EXPECT_NEAR(column(turned.table, "open").back(), open, 1e-12);
+
+  const RunResult leaking = run_with_fault(held("4 bar", "0.03 dm3/(s*bar)"), "relief.seat_leak", {0.03});
+  ASSERT_TRUE(leaking.solver.ok) << leaking.solver.message;
+  EXPECT_NEAR(column(leaking.table, "open").back(), 0.03, 1e-12);
+  EXPECT_GT(column(leaking.table, "m").back(), 0.0);
+  EXPECT_LT(rel_err(column(leaking.table, "m").back(), column(leaking.table, "m_twin").back()), 1e-9);
 }
 
 // A mass pushed by a constant force F against friction reaches the speed

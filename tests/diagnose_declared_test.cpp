@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <random>
 
 #include "components/builtin.hpp"
@@ -163,6 +164,60 @@ TEST(DiagnoseDeclared, DryFrictionGrownAloneIsTheRunningFrictionWithItsTwoFactor
       ASSERT_EQ(values.size(), 2u);
       EXPECT_NEAR(values[0], 2.0, 0.2);  // k_coulomb
       EXPECT_NEAR(values[1], 1.0, 0.1);  // k_viscous
+    }
+  EXPECT_TRUE(found);
+}
+
+// The classic sequence A+ B+ B- A- (netlists/sequence_ab.yaml), its switch
+// a1 - which starts B+ once A is out - slipped 4 mm back along A's travel
+// (planted as the switch's position, not as the fault's shift): B starts
+// before A has arrived. A valve that switches late cannot start B early, a
+// sluggish B cannot either; the diagnosis names the switch, about 4 mm off.
+TEST(DiagnoseDeclared, ASlippedLimitSwitchThatStartsTheNextMoveEarlyIsNamed) {
+  TempDir dir;
+  std::ifstream in(std::string(PNEUMO_SOURCE_DIR) + "/netlists/sequence_ab.yaml");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  text.replace(text.find("output_interval: 1 ms"), 21, "output_interval: 5 ms");
+  const std::string model = dir.write("seq.yaml", text);
+  std::string truth = text;
+  const std::string a1 = "a1:      {type: limit_switch, position: 100 mm}";
+  truth.replace(truth.find(a1), a1.size(), "a1:      {type: limit_switch, position: 96 mm}");
+  const fs::path runs = dir.path() / "runs";
+  fs::create_directories(runs);
+  std::mt19937 rng(41);
+  std::normal_distribution<double> noise(0, 1e-4);
+  const struct {
+    const char* name;
+    const char* role;
+    const char* p;
+  } points[] = {{"cal", "calibration", "7 bar"}, {"val", "validation", "6 bar"}};
+  for (const auto& r : points) {
+    Netlist nl = parse_netlist(truth, "truth.yaml");
+    apply_override(nl, std::string("p_supply=") + r.p);
+    const RunResult res = run_simulation(nl, builtin_registry());
+    ASSERT_TRUE(res.solver.ok) << res.solver.message;
+    std::ofstream csv(runs / (std::string(r.name) + ".csv"));
+    csv.precision(10);
+    csv << "t,x_A,x_B\n";
+    for (const auto& row : res.table.rows)
+      csv << row[0] << "," << row[res.table.column("x_A")] + noise(rng) << "," << row[res.table.column("x_B")] + noise(rng)
+          << "\n";
+    std::ofstream(runs / (std::string(r.name) + ".yaml"))
+        << "data: " << r.name << ".csv\nrole: " << r.role << "\noperating_point:\n  p_supply: " << r.p << "\n";
+  }
+  const auto rep =
+      diagnose::diagnose(model, runs.string(), "", builtin_registry(), declared({"a1", "b1", "valve_B", "cyl_B"}));
+  ASSERT_FALSE(rep.verdict.empty());
+  EXPECT_EQ(rep.verdict[0], "a1.misplaced");
+  EXPECT_GT(rep.validation_before.total.rms, 3.0);
+  EXPECT_LT(rep.validation_after.total.rms, 1.5);
+  bool found = false;
+  for (const auto& [name, values] : rep.final_values)
+    if (name == "a1.misplaced") {
+      found = true;
+      std::cout << "validation gap " << rep.validation_before.total.rms << " -> " << rep.validation_after.total.rms
+                << ", a1 off by " << values[0] * 1e3 << " mm\n";
+      EXPECT_NEAR(values[0], -4e-3, 0.5e-3);
     }
   EXPECT_TRUE(found);
 }
