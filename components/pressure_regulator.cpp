@@ -44,6 +44,7 @@ class PressureRegulator final : public ComponentT<PressureRegulator> {
             .positive()
             .optional(),
         P::scalar("relief_b", "1", "critical pressure ratio of the relief path", 0.3).range(0.0, 0.99),
+        fault_parameter("fault_p_set_shift", "Pa", "set pressure off its setting by this much (relief point with it)"),
     };
     i.ports = {{"in", Domain::pneumatic, Causality::acausal, "supply (1)"},
                {"out", Domain::pneumatic, Causality::acausal, "regulated outlet (2)"},
@@ -55,13 +56,15 @@ class PressureRegulator final : public ComponentT<PressureRegulator> {
                      {"p_out", "Pa", "outlet pressure, absolute"}};
     i.equations = series_port_equations("in", "out", "exhaust");
     i.faults = {fault("supply_sag", "outlet pressure sags under flow (throttled supply path, worn spring)",
-                      {fault_factor("C", 0.05, 2.0, 0.5), fault_factor("droop", 0.25, 10.0, 2.0)})};
+                      {fault_factor("C", 0.05, 2.0, 0.5), fault_factor("droop", 0.25, 10.0, 2.0)}),
+                fault("misadjusted", "regulates below or above its setting (knob turned, spring drifted)",
+                      {fault_amount("dp", "fault_p_set_shift", "Pa", -1e5, 1e5, 1e4)})};
     return i;
   }
 
   explicit PressureRegulator(const Construction& c)
       : ComponentT(c),
-        p_set_(c.params["p_set"]),
+        p_set_(c.params["p_set"] + c.params["fault_p_set_shift"]),
         droop_(c.params["droop"]),
         C_(c.params["C"]),
         b_(c.params["b"]),

@@ -52,7 +52,7 @@ TEST(DeclaredFaults, EachComponentTypeListsWhatCanFailInIt) {
       {"nozzle", {"clogged"}},
       {"check_valve", {"leak"}},
       {"pressure_source", {"supply_sag"}},
-      {"pressure_regulator", {"supply_sag"}},
+      {"pressure_regulator", {"supply_sag", "misadjusted"}},
       {"volume", {"volume_off"}},
       {"hose", {"resistance"}},
       {"translational_mass", {"mass_off"}},
@@ -519,6 +519,33 @@ TEST(DeclaredFaults, AReliefValveOffItsSettingOrLeakingAtItsSeat) {
   EXPECT_NEAR(column(leaking.table, "open").back(), 0.03, 1e-12);
   EXPECT_GT(column(leaking.table, "m").back(), 0.0);
   EXPECT_LT(rel_err(column(leaking.table, "m").back(), column(leaking.table, "m_twin").back()), 1e-9);
+}
+
+// A regulator set to 4 bar abs (droop 0.3 bar) between held pressures:
+// turned down by 0.2 bar, its supply path is as open at 3.65 bar as the
+// sound one at 3.85 bar - the whole law moved by the shift, the relief
+// point with it.
+TEST(DeclaredFaults, AMisadjustedRegulatorRegulatesAtItsShiftedSetting) {
+  auto held = [](const std::string& p_out) {
+    return "components:\n"
+           "  src: {type: pressure_source, p: 8 bar}\n"
+           "  reg: {type: pressure_regulator, p_set: 4 bar, droop: 0.3 bar, C: 1 dm3/(s*bar)}\n"
+           "  load: {type: pressure_source, p: " + p_out + "}\n"
+           "  air: {type: atmosphere}\n"
+           "connections:\n  - [src.port, reg.in]\n  - [reg.out, load.port]\n  - [reg.exhaust, air.port]\n"
+           "outputs: {open: reg.opening, relief: reg.opening_relief}\n"
+           "simulation: {t_end: 0.01 s, output_interval: 10 ms}\n";
+  };
+  const RunResult sound = run_with_fault(held("3.85 bar"), "reg.misadjusted", {0.0});
+  const RunResult turned = run_with_fault(held("3.65 bar"), "reg.misadjusted", {-0.2e5});
+  ASSERT_TRUE(sound.solver.ok && turned.solver.ok);
+  const double open = column(sound.table, "open").back();
+  EXPECT_GT(open, 0.1);
+  EXPECT_LT(open, 0.9);
+  EXPECT_NEAR(column(turned.table, "open").back(), open, 1e-12);
+  const RunResult relieving = run_with_fault(held("4.0 bar"), "reg.misadjusted", {-0.2e5});
+  EXPECT_GT(column(relieving.table, "relief").back(), 0.0);  // above 3.8 + 0.1 bar: the relief path opens
+  EXPECT_EQ(column(run_with_fault(held("4.0 bar"), "reg.misadjusted", {0.0}).table, "relief").back(), 0.0);
 }
 
 // A mass pushed by a constant force F against friction reaches the speed
