@@ -26,7 +26,9 @@ class DirectionalValve32 final : public SpoolValve<DirectionalValve32> {
                {"R", Domain::pneumatic, Causality::acausal, "exhaust"},
                {"command", Domain::signal, Causality::input, "commanded state 0/1 (overrides 'schedule')", true, 0.0}};
     i.variables = {{"x", "1", "spool position: 0 rest (A -> R open), 1 actuated (P -> A open)", 1.0}};
-    i.modes = 1;  // schedule events passed
+    i.modes = kModes;
+    i.roots = kRoots;
+    i.follows_inputs = true;  // a delayed command (a fault) follows the signals
     i.equations = {
         "flow at P",   "flow at A", "flow at R", "temperature out of P", "temperature out of A", "temperature out of R",
         "spool motion"};
@@ -47,7 +49,7 @@ class DirectionalValve32 final : public SpoolValve<DirectionalValve32> {
     const T m_PA = PA_.mass_flow(P, A, x, gas);
     const T m_AR = AR_.mass_flow(A, R, T(1.0 - x), gas);
     series_port_rows(P, A, R, m_PA, m_AR, gas, r);
-    r[6] = spool_.equation(e, kCommand, kX);
+    r[6] = spool_row(e);
   }
 
  private:

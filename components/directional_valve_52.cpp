@@ -27,7 +27,9 @@ class DirectionalValve52 final : public SpoolValve<DirectionalValve52> {
     i.ports.push_back(
         {"command", Domain::signal, Causality::input, "commanded state 0/1 (overrides 'schedule')", true, 0.0});
     i.variables = {{"x", "1", "spool position: 0 rest (P -> B, A -> R), 1 actuated (P -> A, B -> R)", 1.0}};
-    i.modes = 1;  // schedule events passed
+    i.modes = kModes;
+    i.roots = kRoots;
+    i.follows_inputs = true;  // a delayed command (a fault) follows the signals
     i.faults = SpoolDrive::faults();
     i.events = SpoolDrive::events();
     i.faults.push_back(ValvePath::leakage_fault());
@@ -51,7 +53,7 @@ class DirectionalValve52 final : public SpoolValve<DirectionalValve52> {
     const T m_PB = PB_.mass_flow(P, B, T(1.0 - x), gas);
     const T m_AR = AR_.mass_flow(A, R, T(1.0 - x), gas);
     five_port_rows(P, A, B, R, m_PA, m_PB, m_AR, m_BR, gas, r);
-    r[8] = spool_.equation(e, kCommand, kX);
+    r[8] = spool_row(e);
   }
 
  private:

@@ -50,8 +50,10 @@ class DirectionalValve53 final : public SpoolValve<DirectionalValve53> {
     i.ports.push_back({"command_14", Domain::signal, Causality::input, "solenoid 14 energised (1) or not (0)", true});
     i.ports.push_back({"command_12", Domain::signal, Causality::input, "solenoid 12 energised (1) or not (0)", true});
     i.variables = {{"y", "1", "spool position: -1 solenoid 12, 0 centre, 1 solenoid 14", 1.0}};
-    i.modes = 1;  // schedule events passed
-    i.faults = SpoolDrive::faults();
+    i.modes = kModes;
+    i.roots = kRoots;
+    i.follows_inputs = true;  // a delayed command (a fault) follows the signals
+    i.faults = SpoolDrive::faults("command_14");
     i.events = SpoolDrive::events({"12", "centre", "14"});
     i.faults.push_back(ValvePath::leakage_fault());
     return i;
@@ -81,8 +83,7 @@ class DirectionalValve53 final : public SpoolValve<DirectionalValve53> {
     const T m_AR = AR_.mass_flow(A, R, T(on12 + centre_exhausted_ * centre), gas);
     const T m_BR = BR_.mass_flow(B, R, T(on14 + centre_exhausted_ * centre), gas);
     five_port_rows(P, A, B, R, m_PA, m_PB, m_AR, m_BR, gas, r);
-    r[8] = signal_driven(e) ? spool_.driven(e, T(e.signal(kCommand14) - e.signal(kCommand12)), kY)
-                            : spool_.scheduled(e, kY);
+    r[8] = spool_row(e);
   }
 
  private:

@@ -16,7 +16,14 @@
 //    t_switch_time dx/dt = tanh((u - x)/0.01), the same ramp rate, ending in an
 //    exponential approach over 1 % of the stroke so the right-hand side stays
 //    smooth (switching instants are then not known in advance and are not
-//    events). A connected `command` port overrides the schedule.
+//    events). A connected `command` port overrides the schedule. With a
+//    delay fault the spool follows the command as it acts instead: the
+//    signals' level (0/1; the 5/3 valve's -1/0/1), held in a mode and
+//    changed `delay` after the signals changed - at the root of t - t_due,
+//    the change itself seen by the event iteration (a sequencer's or a
+//    switch's jump) or at the root where the signals leave the held level
+//    by half a step. A command that returns before its delay has passed is
+//    lost, as a short pulse on a sticky spool is.
 // The paths are ISO 6358 resistances whose conductance is scaled by the open
 // fraction of the path, x for the paths open when actuated and 1 - x for the
 // others (linear crossover, so at mid-stroke all paths are half open).
@@ -57,23 +64,27 @@ class SpoolDrive {
                                  "; increasing t)",
                              false),
         ParameterSpec::scalar("fault_delay_actuate", "s",
-                              "fault (diagnosis): a scheduled command away from rest acts this late; 0 = none", 0.0)
+                              "fault (diagnosis): a command away from rest acts this late; 0 = none", 0.0)
             .non_negative(),
         ParameterSpec::scalar("fault_delay_release", "s",
-                              "fault (diagnosis): a scheduled command back toward rest acts this late; 0 = none", 0.0)
+                              "fault (diagnosis): a command back toward rest acts this late; 0 = none", 0.0)
             .non_negative(),
     };
   }
 
   // The spool's faults: late switching per direction, a slow stroke.
-  static std::vector<FaultSpec> faults() {
-    // The delays act on a schedule's commands: a valve without one has none.
+  // `command_port`: the signal that commands it (the 5/3 valve's first).
+  static std::vector<FaultSpec> faults(const std::string& command_port = "command") {
+    // The delays act on commands, a schedule's or a signal's: a valve with
+    // neither has none.
     return {{"delay_actuate", "switches late when actuated (sticky spool, slow pilot, solenoid)",
              {{"delay", "fault_delay_actuate", "s", false, 0.0, 0.0, 0.1, 0.01, false}},
-             "schedule"},
+             "schedule",
+             command_port},
             {"delay_release", "switches late when released (weak return spring, sticky spool)",
              {{"delay", "fault_delay_release", "s", false, 0.0, 0.0, 0.1, 0.01, false}},
-             "schedule"},
+             "schedule",
+             command_port},
             {"slow_switching", "spool stroke slower (or faster) than its data sheet",
              {{"k", "t_switch_time", "1", true, 1.0, 0.25, 20.0, 2.0, true}}}};
   }
@@ -82,7 +93,8 @@ class SpoolDrive {
   // (command_WORD) and the spool has arrived (switched_WORD).
   static std::vector<EventSpec> events(const std::vector<std::string>& words = {"off", "on"}) {
     std::vector<EventSpec> out;
-    for (const auto& w : words) out.push_back({"command_" + w, "a scheduled command to state '" + w + "' acts"});
+    for (const auto& w : words)
+      out.push_back({"command_" + w, "a command to state '" + w + "' acts (scheduled, or a signal's delayed by a fault)"});
     for (const auto& w : words) out.push_back({"switched_" + w, "the spool has arrived in state '" + w + "'"});
     return out;
   }
@@ -91,19 +103,18 @@ class SpoolDrive {
       : SpoolDrive(p, {{0.0, std::move(rest), "off"}, {1.0, std::move(actuated), "on"}}) {}
 
   SpoolDrive(const ParameterValues& p, const std::vector<SpoolState>& states)
-      : t_switch_(p["t_switch_time"]), x0_(p["initial"]) {
-    auto state = [&](double v) -> const SpoolState* {
-      for (const auto& s : states)
-        if (s.value == v) return &s;
-      return nullptr;
-    };
+      : t_switch_(p["t_switch_time"]),
+        x0_(p["initial"]),
+        delay_actuate_(p["fault_delay_actuate"]),
+        delay_release_(p["fault_delay_release"]),
+        states_(states) {
     std::string allowed;
     for (const auto& s : states) allowed += (allowed.empty() ? "" : ", ") + std::to_string(static_cast<int>(s.value));
     if (!state(x0_)) throw ParameterError("initial", "initial must be one of " + allowed);
     if (!p.has("schedule")) return;
     const Table& rows = p.table("schedule");
     require_increasing(rows, "schedule", "times");
-    const std::vector<double> acts = acting_times(rows, x0_, p["fault_delay_actuate"], p["fault_delay_release"]);
+    const std::vector<double> acts = acting_times(rows);
     double x = x0_;
     for (std::size_t i = 0; i < rows.size(); ++i) {
       const double t = acts[i], s = rows[i][1];
@@ -127,12 +138,6 @@ class SpoolDrive {
     }
   }
 
-  // The spool equation (residual row) for the internal variable `k_x`.
-  template <class T>
-  T equation(const Eval<T>& e, int command_port, int k_x) const {
-    if (e.connected(command_port)) return driven(e, e.signal(command_port), k_x);
-    return scheduled(e, k_x);
-  }
   // Driven by the command value u (signal inputs).
   template <class T>
   T driven(const Eval<T>& e, const T& u, int k_x) const {
@@ -155,10 +160,19 @@ class SpoolDrive {
 
   double x0() const { return x0_; }
   std::vector<double> time_events() const { return times_; }
-
-  EventResult on_event(const Eval<double>& e, double* modes, int command_port) const {
-    return on_event(e, modes, e.connected(command_port));
+  // Whether a delay fault is set, and the delay of a command from state
+  // `from` to `to` (away from rest: actuating; toward it: releasing).
+  bool delayed() const { return delay_actuate_ > 0.0 || delay_release_ > 0.0; }
+  double delay(double from, double to) const {
+    return std::abs(to) > std::abs(from) ? delay_actuate_ : to != from ? delay_release_ : 0.0;
   }
+  // The state of value v, for messages and tags (nullptr: none).
+  const SpoolState* state(double v) const {
+    for (const auto& s : states_)
+      if (s.value == v) return &s;
+    return nullptr;
+  }
+
   EventResult on_event(const Eval<double>& e, double* modes, bool signal_driven) const {
     if (signal_driven) return {};
     auto k = static_cast<std::size_t>(modes[0]);
@@ -179,12 +193,12 @@ class SpoolDrive {
   // When each scheduled command acts: its time, later by the delay of its
   // direction (away from rest or toward it), never before the one before.
   // Without delays, the schedule's own times.
-  static std::vector<double> acting_times(const Table& rows, double x0, double delay_actuate, double delay_release) {
+  std::vector<double> acting_times(const Table& rows) const {
     std::vector<double> out;
-    double x = x0;
+    double x = x0_;
     for (const auto& row : rows) {
-      const double delay = std::abs(row[1]) > std::abs(x) ? delay_actuate : row[1] != x ? delay_release : 0.0;
-      out.push_back(out.empty() ? row[0] + delay : std::max(row[0] + delay, out.back()));
+      const double d = delay(x, row[1]);
+      out.push_back(out.empty() ? row[0] + d : std::max(row[0] + d, out.back()));
       x = row[1];
     }
     return out;
@@ -197,18 +211,27 @@ class SpoolDrive {
     tags_.push_back(std::move(tag));
   }
 
-  double t_switch_, x0_;
+  double t_switch_, x0_, delay_actuate_, delay_release_;
+  std::vector<SpoolState> states_;
   std::vector<double> times_, rates_;  // event k at times_[k]; dx/dt = rates_[k] after it
   std::vector<std::string> messages_, tags_;
 };
 
 // Base of the directional valves: the spool variable, its start value, the
-// schedule's time events and their handling, which do not depend on the
-// valve's paths. The derived valve declares its ports and paths and writes
-// its rows with spool_.equation(e, command_port_, spool_var_) for the spool.
+// schedule's time events, a signal-driven spool's delayed command, and
+// their handling, which do not depend on the valve's paths. The derived
+// valve declares its ports and paths, `modes = kModes`, `roots = kRoots`,
+// `follows_inputs`, and writes its spool's row with spool_row(e).
 template <class Derived>
 class SpoolValve : public ComponentT<Derived> {
  public:
+  // The schedule's events passed; the command acting on a signal-driven
+  // spool with a delay fault (NaN until the start has been read), the one
+  // due next (NaN: none) and when it is due.
+  enum Mode { kPassed, kHeld, kPending, kDue, kModes };
+  // t - t_due; the signals' distance from the level last commanded.
+  static constexpr int kRoots = 2;
+
   SpoolValve(const Construction& c, int command_port, int spool_var, std::string actuated, std::string rest)
       : ComponentT<Derived>(c),
         spool_(c.params, std::move(actuated), std::move(rest)),
@@ -225,10 +248,26 @@ class SpoolValve : public ComponentT<Derived> {
         spool_var_(spool_var) {}
 
   void start(StartValues& s, const GasModel&) const override { s.fix_var(spool_var_, spool_.x0()); }
-  void initial_modes(double* modes) const override { modes[0] = 0.0; }
+  void initial_modes(double* modes) const override {
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    modes[kPassed] = 0.0;
+    modes[kHeld] = modes[kPending] = nan;
+    modes[kDue] = 0.0;
+  }
   std::vector<double> time_events() const override { return spool_.time_events(); }
-  EventResult on_event(const Eval<double>& e, double* modes, EventKind, int, int) const override {
-    return spool_.on_event(e, modes, signal_driven(e));
+  void roots(const Eval<double>& e, double* g) const override {
+    g[0] = g[1] = 1.0;
+    if (!delayed(e) || std::isnan(e.mode(kHeld))) return;
+    const bool pending = !std::isnan(e.mode(kPending));
+    g[0] = pending ? e.t() - e.mode(kDue) : -1.0;
+    g[1] = 0.5 - std::abs(command(e) - (pending ? e.mode(kPending) : e.mode(kHeld)));
+  }
+  EventResult on_event(const Eval<double>& e, double* modes, EventKind kind, int root, int) const override {
+    if (kind == EventKind::time) return spool_.on_event(e, modes, signal_driven(e));
+    return root == 0 ? act(modes) : follow(e, modes);
+  }
+  EventResult on_inputs_changed(const Eval<double>& e, double* modes) const override {
+    return delayed(e) ? follow(e, modes) : EventResult{};
   }
 
  protected:
@@ -236,9 +275,66 @@ class SpoolValve : public ComponentT<Derived> {
   bool signal_driven(const Eval<T>& e) const {
     return e.connected(command_port_) || (second_command_port_ >= 0 && e.connected(second_command_port_));
   }
+  // The signals' command: the first port's, less the second's (5/3: 14 - 12).
+  template <class T>
+  T command(const Eval<T>& e) const {
+    if (second_command_port_ < 0) return e.signal(command_port_);
+    return T(e.signal(command_port_) - e.signal(second_command_port_));
+  }
+  // The spool's row: the schedule's, or driven by the signals - as they
+  // act, held in a mode, where a delay fault delays them.
+  template <class T>
+  T spool_row(const Eval<T>& e) const {
+    if (!signal_driven(e)) return spool_.scheduled(e, spool_var_);
+    if (!spool_.delayed() || std::isnan(e.mode(kHeld))) return spool_.driven(e, command(e), spool_var_);
+    return spool_.driven(e, T(e.mode(kHeld)), spool_var_);
+  }
 
   SpoolDrive spool_;
   int command_port_, second_command_port_ = -1, spool_var_;
+
+ private:
+  template <class T>
+  bool delayed(const Eval<T>& e) const {
+    return spool_.delayed() && signal_driven(e);
+  }
+  // The level the signals command now (the nearest state).
+  double level(const Eval<double>& e) const { return std::round(command(e)); }
+  std::string state_text(double v) const {
+    const SpoolState* s = spool_.state(v);
+    return s ? std::to_string(static_cast<int>(v)) + " (" + s->name + ")" : std::to_string(v);
+  }
+  // The pending command acts.
+  EventResult act(double* modes) const {
+    if (std::isnan(modes[kPending])) return {};
+    const double v = modes[kPending];
+    modes[kHeld] = v;
+    modes[kPending] = std::numeric_limits<double>::quiet_NaN();
+    const SpoolState* s = spool_.state(v);
+    return {true, "command " + state_text(v) + " acts, late", s ? "command_" + s->word : ""};
+  }
+  // The signals changed (or the start is read): the new level is due after
+  // its direction's delay, at once without one; back at the acting level
+  // before that, the pending command is lost.
+  EventResult follow(const Eval<double>& e, double* modes) const {
+    const double u = level(e);
+    if (std::isnan(modes[kHeld])) {
+      modes[kHeld] = u;  // the command standing at the start has acted
+      return {};
+    }
+    const bool pending = !std::isnan(modes[kPending]);
+    if (u == (pending ? modes[kPending] : modes[kHeld])) return {};
+    modes[kPending] = std::numeric_limits<double>::quiet_NaN();
+    if (u == modes[kHeld]) return {true, "command back to " + state_text(u) + " before the delayed one acted", ""};
+    const double d = spool_.delay(modes[kHeld], u);
+    if (d <= 0.0) {
+      modes[kHeld] = u;
+      return {true, "", ""};
+    }
+    modes[kPending] = u;
+    modes[kDue] = e.t() + d;
+    return {true, "command " + state_text(u) + " due at t = " + std::to_string(modes[kDue]) + " s", ""};
+  }
 };
 
 // One flow path of a valve: an ISO 6358 resistance. Parameters C and b are

@@ -287,7 +287,7 @@ TEST(DeclaredFaults, ALateOpeningFollowsItsCommandThroughFourLags) {
 // A fault of a part the instance lacks is no candidate: rod-end cushioning
 // on a cushioned cylinder without it, cushioning on a plain cylinder's
 // ends, a late opening on a throttle whose opening no signal drives, a
-// valve delay without a schedule to delay.
+// valve delay with neither a schedule nor a command signal to delay.
 TEST(DeclaredFaults, AFaultOfAnAbsentPartIsNoCandidate) {
   const Netlist nl = parse_netlist(
       "components:\n"
@@ -301,13 +301,15 @@ TEST(DeclaredFaults, AFaultOfAnAbsentPartIsNoCandidate) {
       "  driven: {type: iso6358_throttle, C: 0.5 dm3/(s*bar)}\n"
       "  fixed: {type: iso6358_throttle, C: 0.5 dm3/(s*bar)}\n"
       "  valve: {type: directional_valve_32, C: 0.3 dm3/(s*bar)}\n"
+      "  idle: {type: directional_valve_32, C: 0.3 dm3/(s*bar)}\n"
       "  supply: {type: pressure_source, p: 6 bar}\n"
       "  tank: {type: volume, V: 0.5 L}\n"
+      "  tank2: {type: volume, V: 0.5 L}\n"
       "  air: {type: atmosphere}\n"
       "  load_rig: {type: translational_mass, m: 1 kg}\n"
       "  load_cyl: {type: translational_mass, m: 1 kg}\n"
-      "connections:\n  - [cmd.y, driven.opening, valve.command]\n  - [supply.port, driven.a, fixed.a, valve.P]\n"
-      "  - [driven.b, fixed.b, valve.R, air.port]\n  - [valve.A, tank.port]\n  - [rig.flange, load_rig.flange]\n"
+      "connections:\n  - [cmd.y, driven.opening, valve.command]\n  - [supply.port, driven.a, fixed.a, valve.P, idle.P]\n"
+      "  - [driven.b, fixed.b, valve.R, idle.R, air.port]\n  - [valve.A, tank.port]\n  - [idle.A, tank2.port]\n  - [rig.flange, load_rig.flange]\n"
       "  - [cyl.flange, load_cyl.flange]\n",
       "parts.yaml");
   const auto cat = diagnose::declared_faults(nl, builtin_registry(), {}, {});
@@ -317,11 +319,12 @@ TEST(DeclaredFaults, AFaultOfAnAbsentPartIsNoCandidate) {
     return e && e->unavailable.empty();
   };
   for (const char* yes : {"rig.cushion_seal_leak", "rig.cushion_seal_friction", "cyl.rod_cushion_seal_leak",
-                          "cyl.rod_cushion_seal_friction", "driven.opening_late", "valve.slow_switching"})
+                          "cyl.rod_cushion_seal_friction", "driven.opening_late", "valve.slow_switching",
+                          "valve.delay_actuate", "valve.delay_release"})
     EXPECT_TRUE(available(yes)) << yes;
   for (const char* no : {"rig.rod_cushion_seal_leak", "rig.rod_cushion_seal_friction", "cyl.cap_cushion_seal_leak",
-                         "cyl.cap_cushion_seal_friction", "fixed.opening_late", "valve.delay_actuate",
-                         "valve.delay_release"})
+                         "cyl.cap_cushion_seal_friction", "fixed.opening_late", "idle.delay_actuate",
+                         "idle.delay_release"})
     EXPECT_FALSE(available(no)) << no;
 }
 
@@ -360,6 +363,50 @@ TEST(DeclaredFaults, ValveDelaysMoveEachCommandByItsDirectionsDelay) {
   ASSERT_TRUE(first.count("command_on") && first.count("command_off"));
   EXPECT_NEAR(first["command_on"], 0.07, 1e-9);
   EXPECT_NEAR(first["command_off"], 0.70, 1e-9);
+}
+
+// The same valve commanded by a signal (a step at 0.05 s, as a sequencer
+// or a switch would give it): 20 ms late, its spool and the tank's
+// pressure are the sound run's 20 ms later, the command acting at 0.07 s.
+// A command pulse shorter than the delay is lost: the spool never moves.
+TEST(DeclaredFaults, ASignalDrivenValvesDelayShiftsItsResponseAndLosesAShorterPulse) {
+  auto circuit = [](const std::string& command, const std::string& delay) {
+    return "components:\n"
+           "  supply: {type: pressure_source, p: 6 bar}\n"
+           "  go: " + command + "\n"
+           "  valve: {type: directional_valve_32, C: 0.3 dm3/(s*bar), fault_delay_actuate: " + delay + "}\n"
+           "  tank: {type: volume, V: 0.5 L}\n"
+           "  air: {type: atmosphere}\n"
+           "connections:\n  - [supply.port, valve.P]\n  - [valve.A, tank.port]\n  - [valve.R, air.port]\n"
+           "  - [go.y, valve.command]\n"
+           "outputs: {p: tank.p, x: valve.x}\n"
+           "simulation: {t_end: 0.3 s, output_interval: 1 ms}\n";
+  };
+  const std::string step = "{type: signal_source, kind: step, value: 0, height: 1, t_start: 0.05 s}";
+  const RunResult sound = run_text(circuit(step, "0 s"), "sound.yaml");
+  const RunResult late = run_text(circuit(step, "20 ms"), "late.yaml");
+  ASSERT_TRUE(sound.solver.ok && late.solver.ok);
+  double acted = NAN;
+  for (const auto& e : late.solver.events)
+    if (e.component == "valve" && e.tag == "command_on") acted = e.t;
+  EXPECT_NEAR(acted, 0.07, 1e-9);
+  const auto p0 = column(sound.table, "p"), p1 = column(late.table, "p");
+  const auto x0 = column(sound.table, "x"), x1 = column(late.table, "x");
+  ASSERT_EQ(p0.size(), p1.size());
+  EXPECT_EQ(x1[69], 0.0);   // t = 69 ms: not moved yet
+  EXPECT_GT(p0.back(), 1.5e5);  // the tank fills
+  for (std::size_t k = 20; k < p0.size(); ++k) {
+    EXPECT_NEAR(p1[k], p0[k - 20], 1e-4 * p0[k - 20]) << k;
+    EXPECT_NEAR(x1[k], x0[k - 20], 1e-4) << k;
+  }
+
+  const std::string pulse =
+      "{type: signal_source, kind: table, table: [[0, 0], [0.05, 0], [0.0501, 1], [0.06, 1], [0.0601, 0], [1, 0]]}";
+  const RunResult lost = run_text(circuit(pulse, "20 ms"), "pulse.yaml");
+  ASSERT_TRUE(lost.solver.ok) << lost.solver.message;
+  for (const double x : column(lost.table, "x")) EXPECT_LT(std::abs(x), 1e-9);
+  const auto x_sound_pulse = column(run_text(circuit(pulse, "0 s"), "p.yaml").table, "x");
+  EXPECT_GT(*std::max_element(x_sound_pulse.begin(), x_sound_pulse.end()), 0.5);
 }
 
 // A source at p whose supply line throttles (restriction 1/C_line, b 0.3)

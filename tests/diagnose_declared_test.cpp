@@ -168,21 +168,17 @@ TEST(DiagnoseDeclared, DryFrictionGrownAloneIsTheRunningFrictionWithItsTwoFactor
   EXPECT_TRUE(found);
 }
 
-// The classic sequence A+ B+ B- A- (netlists/sequence_ab.yaml), its switch
-// a1 - which starts B+ once A is out - slipped 4 mm back along A's travel
-// (planted as the switch's position, not as the fault's shift): B starts
-// before A has arrived. A valve that switches late cannot start B early, a
-// sluggish B cannot either; the diagnosis names the switch, about 4 mm off.
-TEST(DiagnoseDeclared, ASlippedLimitSwitchThatStartsTheNextMoveEarlyIsNamed) {
-  TempDir dir;
+// netlists/sequence_ab.yaml (A+ B+ B- A-), logged at 200 Hz.
+std::string sequence_ab() {
   std::ifstream in(std::string(PNEUMO_SOURCE_DIR) + "/netlists/sequence_ab.yaml");
   std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   text.replace(text.find("output_interval: 1 ms"), 21, "output_interval: 5 ms");
-  const std::string model = dir.write("seq.yaml", text);
-  std::string truth = text;
-  const std::string a1 = "a1:      {type: limit_switch, position: 100 mm}";
-  truth.replace(truth.find(a1), a1.size(), "a1:      {type: limit_switch, position: 96 mm}");
-  const fs::path runs = dir.path() / "runs";
+  return text;
+}
+
+// Calibration (7 bar) and validation (6 bar) runs of `truth`, the two
+// positions read with 0.1 mm of noise.
+void write_sequence_runs(const fs::path& runs, const std::string& truth) {
   fs::create_directories(runs);
   std::mt19937 rng(41);
   std::normal_distribution<double> noise(0, 1e-4);
@@ -205,21 +201,61 @@ TEST(DiagnoseDeclared, ASlippedLimitSwitchThatStartsTheNextMoveEarlyIsNamed) {
     std::ofstream(runs / (std::string(r.name) + ".yaml"))
         << "data: " << r.name << ".csv\nrole: " << r.role << "\noperating_point:\n  p_supply: " << r.p << "\n";
   }
-  const auto rep =
-      diagnose::diagnose(model, runs.string(), "", builtin_registry(), declared({"a1", "b1", "valve_B", "cyl_B"}));
+}
+
+// The first value the diagnosis fitted for `name` (NAN: not in the verdict).
+double fitted(const diagnose::DiagnosisReport& rep, const std::string& name) {
+  for (const auto& [n, values] : rep.final_values)
+    if (n == name) {
+      std::cout << "validation gap " << rep.validation_before.total.rms << " -> " << rep.validation_after.total.rms
+                << ", " << name << " " << values[0] << "\n";
+      return values[0];
+    }
+  return NAN;
+}
+
+// The sequence's switch a1 - which starts B+ once A is out - slipped 4 mm
+// back along A's travel (planted as the switch's position, not as the
+// fault's shift): B starts before A has arrived. A valve that switches late
+// cannot start B early, a sluggish B cannot either; the diagnosis names the
+// switch, about 4 mm off.
+TEST(DiagnoseDeclared, ASlippedLimitSwitchThatStartsTheNextMoveEarlyIsNamed) {
+  TempDir dir;
+  const std::string text = sequence_ab();
+  const std::string model = dir.write("seq.yaml", text);
+  std::string truth = text;
+  const std::string a1 = "a1:      {type: limit_switch, position: 100 mm}";
+  truth.replace(truth.find(a1), a1.size(), "a1:      {type: limit_switch, position: 96 mm}");
+  write_sequence_runs(dir.path() / "runs", truth);
+  const auto rep = diagnose::diagnose(model, (dir.path() / "runs").string(), "", builtin_registry(),
+                                      declared({"a1", "b1", "valve_B", "cyl_B"}));
   ASSERT_FALSE(rep.verdict.empty());
   EXPECT_EQ(rep.verdict[0], "a1.misplaced");
   EXPECT_GT(rep.validation_before.total.rms, 3.0);
   EXPECT_LT(rep.validation_after.total.rms, 1.5);
-  bool found = false;
-  for (const auto& [name, values] : rep.final_values)
-    if (name == "a1.misplaced") {
-      found = true;
-      std::cout << "validation gap " << rep.validation_before.total.rms << " -> " << rep.validation_after.total.rms
-                << ", a1 off by " << values[0] * 1e3 << " mm\n";
-      EXPECT_NEAR(values[0], -4e-3, 0.5e-3);
-    }
-  EXPECT_TRUE(found);
+  EXPECT_NEAR(fitted(rep, "a1.misplaced"), -4e-3, 0.5e-3);
+}
+
+// The same sequence, B's valve 25 ms late to actuate (planted as an
+// on-delay timer between the sequencer and the valve's command, not as the
+// fault's delay): the valve's delay acts on its command signal, and is
+// named with about that delay - not the switch that starts B+, which
+// cannot start it that late without stopping the sequence.
+TEST(DiagnoseDeclared, ASignalDrivenValveThatActuatesLateIsNamed) {
+  TempDir dir;
+  const std::string text = sequence_ab();
+  const std::string model = dir.write("seq.yaml", text);
+  std::string truth = text;
+  truth.replace(truth.find("connections:"), 12, "  late: {type: timer, delay: 25 ms}\nconnections:");
+  truth.replace(truth.find("[seq.B, valve_B.command]"), 24, "[seq.B, late.in]\n  - [late.y, valve_B.command]");
+  write_sequence_runs(dir.path() / "runs", truth);
+  const auto rep = diagnose::diagnose(model, (dir.path() / "runs").string(), "", builtin_registry(),
+                                      declared({"a1", "b1", "valve_A", "valve_B", "cyl_B"}));
+  ASSERT_FALSE(rep.verdict.empty());
+  EXPECT_EQ(rep.verdict[0], "valve_B.delay_actuate");
+  EXPECT_GT(rep.validation_before.total.rms, 3.0);
+  EXPECT_LT(rep.validation_after.total.rms, 1.5);
+  EXPECT_NEAR(fitted(rep, "valve_B.delay_actuate"), 0.025, 0.003);
 }
 
 }  // namespace

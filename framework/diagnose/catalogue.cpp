@@ -815,16 +815,21 @@ void add_fault_parameter(Effect& e, const FaultParameterSpec& fp, const Paramete
 }
 
 // Why the optional part a fault belongs to is absent from this instance
-// ("" when present): the parameter that gives the part is not written, or
-// the port that drives it is not connected.
+// ("" when present): neither the parameter that gives the part is written
+// nor the port that drives it is connected (a fault that names both is
+// there with either: a valve's delays act on a schedule or on a command
+// signal).
 std::string missing_part(const Netlist& nl, const ComponentDecl& decl, const FaultSpec& f) {
-  if (!f.needs_parameter.empty() && !decl.written(f.needs_parameter))
-    return "the netlist gives no " + f.needs_parameter + " (the part this fault belongs to)";
-  if (f.needs_port.empty()) return "";
-  for (const auto& c : nl.connections)
-    for (const auto& p : c.ports)
-      if (p.component == decl.name && p.port == f.needs_port) return "";
-  return "port " + f.needs_port + " is not connected (the fault acts on what it carries)";
+  if (!f.needs_parameter.empty() && decl.written(f.needs_parameter)) return "";
+  if (!f.needs_port.empty())
+    for (const auto& c : nl.connections)
+      for (const auto& p : c.ports)
+        if (p.component == decl.name && p.port == f.needs_port) return "";
+  if (f.needs_parameter.empty() && f.needs_port.empty()) return "";
+  if (f.needs_port.empty()) return "the netlist gives no " + f.needs_parameter + " (the part this fault belongs to)";
+  if (f.needs_parameter.empty()) return "port " + f.needs_port + " is not connected (the fault acts on what it carries)";
+  return "the netlist gives no " + f.needs_parameter + " and port " + f.needs_port +
+         " is not connected (the fault acts on what they command)";
 }
 
 Effect component_fault(const Netlist& nl, const ComponentDecl& decl, const ComponentInfo& info, const FaultSpec& f,

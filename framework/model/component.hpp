@@ -214,8 +214,9 @@ struct FaultSpec {
   std::vector<FaultParameterSpec> parameters;
   // A fault of an optional part exists only where the part does: where the
   // instance is given this parameter (rod-end cushioning's plug), or where
-  // this port of it is connected (a valve path's opening signal). Empty:
-  // always.
+  // this port of it is connected (a valve path's opening signal); naming
+  // both, where either is (a valve's command: a schedule or a signal).
+  // Empty: always.
   std::string needs_parameter = {};
   std::string needs_port = {};
 };
