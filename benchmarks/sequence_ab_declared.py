@@ -5,9 +5,11 @@ netlists/sequence_ab.yaml: two cylinders on their valves with meter-out
 flow controls, limit switches and a sequencer - 19 components. Measured
 runs with one withheld fault written in a form of its own (an extra
 component, another parameter, an edit of the CSV; never the declared
-fault's own parameter), two such faults in different cylinders, an effect
-no component declares (a limit switch set 3-10 mm early: B starts before A
-is out; a process force against B), or none; supply 5 and 7 bar g
+fault's own parameter: a limit switch set 3-10 mm early as its position, so
+that B starts before A is out; B's valve late to actuate as an on-delay
+timer on its command), two such faults in different cylinders, an effect
+no component declares (a process force against B; a return spring on B),
+or none; supply 5 and 7 bar g
 (calibration) and 6 bar g (validation); both positions and both cap
 pressures at 200 Hz (0.05 mm, 3 kPa noise). Each case is diagnosed by
 `pneumo diagnose` WITHOUT --effects and scored as in
@@ -19,8 +21,8 @@ flagged, nulls clean, invisible cases apart). Run by hand, not in CI:
 import random
 from pathlib import Path
 
-from meter_out_declared import (common_arguments, heavier, needle, piston_leak, process_force, rod_leak, run_plan,
-                                seal_friction, set_param, sluggish, zero_offset)
+from meter_out_declared import (add_components, common_arguments, heavier, needle, piston_leak, process_force,
+                                rod_leak, run_plan, seal_friction, set_param, sluggish, zero_offset)
 
 ROOT = Path(__file__).resolve().parent.parent
 # Outputs every 5 ms (1 ms in the netlist): the fit's rows.
@@ -39,9 +41,22 @@ FORMS = {
     "sluggish_A": sluggish("valve_A", 15, 3.0, 10.0),
     "seal_friction_A": seal_friction("cyl_A", "load_A", 20, 30, 1.5, 3.0),
     "x_B_zero": zero_offset("x_B", 0.3e-3, 2e-3),
-    # undeclared: no component declares a misplaced limit switch
-    "switch_a1_early": (None, 3.0, 10.0, lambda t, k: set_param(t, "a1", "position", "%g mm" % (100 - k)), None),
+    "switch_a1_early": ("a1.misplaced", 3.0, 10.0, lambda t, k: set_param(t, "a1", "position", "%g mm" % (100 - k)),
+                        None),
+    # undeclared: a load force on B's rod
     "process_force_B": process_force("load_B", 10.0, 40.0),
+}
+# Drawn after the cases above (so that those stay as each seed drew them
+# before these were added).
+LATER = {
+    # B's solenoid valve late to actuate: an on-delay timer of k ms on its command
+    "late_valve_B": ("valve_B.delay_actuate", 5.0, 40.0, lambda t, k: add_components(
+        t.replace("  - [seq.B, valve_B.command]", "  - [seq.B, late.in]"), ["late: {type: timer, delay: %g ms}" % k],
+        ["[late.y, valve_B.command]"]), None),
+    # undeclared: a return spring of k N/m on B's load, slack at B's retracted end
+    "spring_B": (None, 300.0, 3000.0, lambda t, k: add_components(
+        t, ["spring: {type: spring_damper, k: %g N/m}" % k, "frame: {type: fixed_position}"],
+        ["[frame.flange, spring.a]", "[spring.b, load_B.flange]"]), None),
 }
 
 # Two faults planted together, in different cylinders: both must be named.
@@ -53,7 +68,8 @@ def main():
     rng = random.Random(a.seed)
     plan = [(f,) for f in FORMS] + DOUBLES + [("null",), ("null",)]
     rng.shuffle(plan)
-    run_plan(a, rng, plan, MODEL, FORMS, SIGNALS, NOISE, INTERVAL, only=a.only)
+    plan += [(f,) for f in LATER]
+    run_plan(a, rng, plan, MODEL, {**FORMS, **LATER}, SIGNALS, NOISE, INTERVAL, only=a.only)
 
 
 if __name__ == "__main__":
