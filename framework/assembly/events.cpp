@@ -2,6 +2,7 @@
 // component's on_event() changes. After such a change the rows that give
 // explicit unknowns are checked again (verify_explicit).
 #include <algorithm>
+#include <cstring>
 #include <cmath>
 #include <stdexcept>
 
@@ -52,6 +53,17 @@ std::vector<double> System::time_events() const {
   return out;
 }
 
+namespace {
+
+// Whether an event left a component's modes as they were, bit for bit: a
+// mode that holds NaN for "none" (a valve's pending command) is unchanged
+// when it still does.
+bool same_modes(const std::vector<double>& before, const double* modes) {
+  return before.empty() || std::memcmp(before.data(), modes, before.size() * sizeof(double)) == 0;
+}
+
+}  // namespace
+
 // One component's event at (t, y, yp): its on_event() may change its
 // modes; then the explicit unknowns may take other values at the same
 // (t, y) - a signal source's step - and the rows that give them are checked
@@ -66,7 +78,7 @@ bool System::fire_event(int bi, double t, const double* y, const double* yp, Eve
   Eval<double> e(*b.component, t, ly, lyp, modes, b.connected.get(), circuit_.gas, &invalid);
   const std::vector<double> before(modes, modes + b.component->info().modes);
   const EventResult res = b.component->on_event(e, modes, kind, root, dir);
-  if (!plan_.unknowns.empty() && !std::equal(before.begin(), before.end(), modes)) {
+  if (!plan_.unknowns.empty() && !same_modes(before, modes)) {
     verify_explicit(bi, t);
     work_.cache_valid = false;
   }
@@ -148,7 +160,7 @@ bool System::handle_input_changes(double t, const double* y, const double* yp, s
     Eval<double> e(*b.component, t, ly, lyp, modes, b.connected.get(), circuit_.gas, &invalid);
     const std::vector<double> before(modes, modes + b.component->info().modes);
     const EventResult res = b.component->on_inputs_changed(e, modes);
-    if (!plan_.unknowns.empty() && !std::equal(before.begin(), before.end(), modes)) {
+    if (!plan_.unknowns.empty() && !same_modes(before, modes)) {
       verify_explicit(static_cast<int>(bi), t);
       work_.cache_valid = false;
     }
