@@ -257,10 +257,14 @@ class SpoolValve : public ComponentT<Derived> {
   std::vector<double> time_events() const override { return spool_.time_events(); }
   void roots(const Eval<double>& e, double* g) const override {
     g[0] = g[1] = 1.0;
-    if (!delayed(e) || std::isnan(e.mode(kHeld))) return;
+    if (!delayed(e)) return;
+    // Read the signals even before the start's level is held (the nearest
+    // level stands in), so that assembly sees what these roots read.
+    const double u = command(e);
     const bool pending = !std::isnan(e.mode(kPending));
+    const double latest = pending ? e.mode(kPending) : std::isnan(e.mode(kHeld)) ? std::round(u) : e.mode(kHeld);
     g[0] = pending ? e.t() - e.mode(kDue) : -1.0;
-    g[1] = 0.5 - std::abs(command(e) - (pending ? e.mode(kPending) : e.mode(kHeld)));
+    g[1] = 0.5 - std::abs(u - latest);
   }
   EventResult on_event(const Eval<double>& e, double* modes, EventKind kind, int root, int) const override {
     if (kind == EventKind::time) return spool_.on_event(e, modes, signal_driven(e));

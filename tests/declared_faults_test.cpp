@@ -409,6 +409,34 @@ TEST(DeclaredFaults, ASignalDrivenValvesDelayShiftsItsResponseAndLosesAShorterPu
   EXPECT_GT(*std::max_element(x_sound_pulse.begin(), x_sound_pulse.end()), 0.5);
 }
 
+// A command that rises continuously (a ramp from 0.05 s over 0.1 s, through
+// two NOT gates, whose outputs are solved inside the residual) is taken at
+// its half level, t = 0.1 s, and acts the delay later: at 0.12 s.
+TEST(DeclaredFaults, ASignalDrivenValveTakesARisingCommandAtItsHalfLevel) {
+  const RunResult r = run_text(
+      "components:\n"
+      "  supply: {type: pressure_source, p: 6 bar}\n"
+      "  go: {type: signal_source, kind: ramp, value: 0, height: 1, t_start: 0.05 s, duration: 0.1 s}\n"
+      "  inv1: {type: not}\n"
+      "  inv2: {type: not}\n"
+      "  valve: {type: directional_valve_32, C: 0.3 dm3/(s*bar), fault_delay_actuate: 20 ms}\n"
+      "  tank: {type: volume, V: 0.5 L}\n"
+      "  air: {type: atmosphere}\n"
+      "connections:\n  - [supply.port, valve.P]\n  - [valve.A, tank.port]\n  - [valve.R, air.port]\n"
+      "  - [go.y, inv1.in]\n  - [inv1.y, inv2.in]\n  - [inv2.y, valve.command]\n"
+      "outputs: {p: tank.p, x: valve.x}\n"
+      "simulation: {t_end: 0.3 s, output_interval: 1 ms}\n",
+      "ramp.yaml");
+  ASSERT_TRUE(r.solver.ok) << r.solver.message;
+  double due = NAN, acted = NAN;
+  for (const auto& e : r.solver.events)
+    if (e.component == "valve" && e.message.find("due") != std::string::npos) due = e.t;
+    else if (e.component == "valve" && e.tag == "command_on") acted = e.t;
+  EXPECT_NEAR(due, 0.10, 1e-6);
+  EXPECT_NEAR(acted, 0.12, 1e-6);
+  EXPECT_GT(column(r.table, "x").back(), 0.99);
+}
+
 // A source at p whose supply line throttles (restriction 1/C_line, b 0.3)
 // feeding a throttle C (b 0.3) to atmosphere; both at one temperature.
 double sagged_port_pressure(double p, double C_line, double C) {
