@@ -273,8 +273,9 @@ struct EndStops {
 struct Cushion {
   double C_bore, b_bore, ramp, C_cushion, b_cushion, C_check, b_check, crack, check_ramp;
   // Faults (diagnosis; 0 in a sound cylinder, CushionFaults below): a leak
-  // past the cushion seal beside the needle, the seal's drag on the plug.
-  double C_seal_leak = 0, F_seal = 0;
+  // past the cushion seal beside the needle, the seal's drag on the plug,
+  // a leak past the cushioning screw's seal to the atmosphere.
+  double C_seal_leak = 0, F_seal = 0, C_screw_leak = 0;
 };
 
 // Flow EC -> ch; `gap` is the travel left before the plug engages, `open`
@@ -303,9 +304,11 @@ T cushion_flow(const Cushion& c, const T& gap, const T& p_EC, const T& p_ch, con
 
 // The faults of one end's cushioning (diagnosis), 0 in a sound cylinder: a
 // worn or damaged cushion seal lets the cushion volume leak into the channel
-// beside the needle (the cushion pressure builds less and later), and a
-// tight or dry one drags on the plug while it is engaged (weighted by the
-// closed share of the bore opening, so it starts over the same ramp). The
+// beside the needle (the cushion pressure builds less and later), a tight
+// or dry one drags on the plug while it is engaged (weighted by the closed
+// share of the bore opening, so it starts over the same ramp), and the
+// cushioning screw's seal (its O-ring, or the screw backed out of its
+// thread) lets the cushion volume leak to the atmosphere outside. The
 // parameters of the end whose names start with `prefix` ("" for
 // cushioned_cylinder's cap end, "rod_", "cap_").
 struct CushionFaults {
@@ -320,6 +323,11 @@ struct CushionFaults {
         P::scalar(prefix + "fault_cushion_seal_F", "N",
                   "fault (diagnosis): drag of the cushion seal on the plug while it is engaged; 0 = none", 0.0)
             .non_negative(),
+        P::scalar(prefix + "fault_cushion_screw_leak_C", "m3/(s*Pa)",
+                  "fault (diagnosis): conductance of a leak past the cushioning screw's seal, cushion volume -> "
+                  "atmosphere; 0 = none",
+                  0.0)
+            .non_negative(),
     };
   }
   // The faults a diagnosis names by them; `needs`: the parameter that gives
@@ -330,11 +338,16 @@ struct CushionFaults {
              needs},
             {prefix + "cushion_seal_friction", "drag of the cushion seal on the plug while cushioning (tight, dry seal)",
              {{"F", prefix + "fault_cushion_seal_F", "N", false, 0.0, 0.0, 200.0, 10.0, false}},
+             needs},
+            {prefix + "cushion_screw_leak",
+             "leak from the cushion volume to the atmosphere past the cushioning screw (worn O-ring, screw backed out)",
+             {{"C", prefix + "fault_cushion_screw_leak_C", "m3/(s*Pa)", false, 0.0, 0.0, 2e-9, 1e-10, false}},
              needs}};
   }
   static void read(const ParameterValues& p, const std::string& prefix, Cushion& c) {
     c.C_seal_leak = fault_or_none(p, prefix + "fault_cushion_seal_leak_C");
     c.F_seal = fault_or_none(p, prefix + "fault_cushion_seal_F");
+    c.C_screw_leak = fault_or_none(p, prefix + "fault_cushion_screw_leak_C");
   }
 };
 
@@ -618,6 +631,7 @@ class CylinderSide {
       c[2] = port.p - g.p;
       c[3] = port.T_out - g.T_gas;
       annulus_equations(e, heat, g, d_dot, walls_at_gas_T, r + at.annulus, r + at.tap);
+      if (c_.C_screw_leak > 0) screw_leak(g, gas, r + at.annulus);
       if (extra) {
         r[at.annulus] -= extra->m_piston;
         r[at.annulus + 1] -= extra->H_piston;
@@ -678,6 +692,17 @@ class CylinderSide {
     r[1] = e.der(k_EC_ + 1) + g.H_x - H_tap + p_dV - heat.Q;
     tap_rows[0] = tap.p - g.p_piston;
     tap_rows[1] = tap.T_out - (walls_at_gas_T ? heat.T : g.T_piston);
+  }
+
+  // The cushioning screw's seal leaking (a fault): annulus -> atmosphere,
+  // into the annulus' balances `r`.
+  template <class T>
+  void screw_leak(const Gas<T>& g, const GasModel& gas, T* r) const {
+    const T zero = 0.0 * g.p_piston;
+    const T p_amb = zero + gas.p_ambient, T_amb = zero + gas.T_ambient;
+    const T m = iso6358_mass_flow(g.p_piston, p_amb, g.T_piston, T_amb, T(zero + c_.C_screw_leak), 0.3, 0.999, gas);
+    r[0] += m;
+    r[1] -= enthalpy_inflow(T(-m), T_amb, g.T_piston, gas);
   }
 
   double A_, V0_, perimeter_;

@@ -46,8 +46,10 @@ class Volume final : public ComponentT<Volume> {
                    "gas law p = (kappa - 1) U / V",
                    "outflow temperature", "wall temperature seen by the heat port",
                    "pressure at port_b",  "outflow temperature at port_b"};
-    i.faults = {fault("volume_off", "volume off its value (a larger line or reservoir, a dent)",
-                      {fault_factor("V", 0.25, 4.0, 1.5)})};
+    // A volume often stands for lines and fittings whose volume was guessed:
+    // a longer hose or an added fitting holds tens of times the drawn value.
+    i.faults = {fault("volume_off", "volume off its value (a longer line or more fittings than drawn, a larger reservoir, a dent)",
+                      {fault_factor("V", 0.1, 100.0, 1.5)})};
     return i;
   }
 

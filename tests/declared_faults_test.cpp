@@ -42,7 +42,7 @@ TEST(DeclaredFaults, EachComponentTypeListsWhatCanFailInIt) {
       {"cushioned_cylinder",
        {"piston_seal_leak", "rod_seal_leak", "friction_running", "friction_breakaway", "wall_heat",
         "cushion_needle_misadjusted", "cushion_check_off", "cushion_seal_leak", "cushion_seal_friction",
-        "friction_chamber_pressure"}},
+        "cushion_screw_leak", "friction_chamber_pressure"}},
       {"single_acting_cylinder", {"piston_seal_leak", "friction_breakaway", "spring_weak"}},
       {"directional_valve_32", {"delay_actuate", "delay_release", "slow_switching", "internal_leak"}},
       {"directional_valve_52", {"delay_actuate", "delay_release", "slow_switching", "internal_leak"}},
@@ -197,6 +197,32 @@ TEST(DeclaredFaults, CushionSealLeakIsAConductanceBesideTheNeedle) {
   for (std::size_t i = 0; i < a.size(); ++i) EXPECT_LT(rel_err(b[i], a[i]), 1e-6) << i;
 }
 
+// A leak past the cushioning screw empties the cushion volume to the
+// atmosphere: with the needle shut, a screw leak of C (b 0.3) empties it as
+// a throttle of C at b 0.3 from a tap on the cushion volume to the
+// atmosphere does, and leaves the channel as it is without the leak (to the
+// solver's tolerance: the runs take their own steps).
+TEST(DeclaredFaults, CushionScrewLeakVentsTheCushionVolumeToTheAtmosphere) {
+  const std::string out = "p_EC: cyl.p_EC, T_EC: cyl.T_EC, p_ch: cyl.p_ch";
+  const RunResult leak =
+      run_text(cushion_held(", z_EC: 0, fault_cushion_screw_leak_C: 0.05 dm3/(s*bar)", out), "screw.yaml");
+  std::string tapped = cushion_held(", z_EC: 0, cushion_taps: yes", out);
+  tapped.replace(tapped.find("connections:"), 12,
+                 "  screw: {type: iso6358_throttle, C: 0.05 dm3/(s*bar), b: 0.3}\n"
+                 "  air_screw: {type: atmosphere}\n"
+                 "connections:\n  - [cyl.EC, screw.a]\n  - [screw.b, air_screw.port]");
+  const RunResult twin = run_text(tapped, "twin.yaml");
+  const RunResult shut = run_text(cushion_held(", z_EC: 0", out), "shut.yaml");
+  for (const char* col : {"p_EC", "T_EC", "p_ch"}) {
+    const auto a = column(twin.table, col), b = column(leak.table, col);
+    ASSERT_EQ(a.size(), b.size());
+    for (std::size_t i = 0; i < a.size(); ++i) EXPECT_LT(rel_err(b[i], a[i]), 1e-6) << col << " " << i;
+  }
+  EXPECT_LT(column(leak.table, "p_EC").back(), 1.5e5);
+  const auto p_ch = column(leak.table, "p_ch"), p_ch0 = column(shut.table, "p_ch");
+  for (std::size_t i = 0; i < p_ch.size(); ++i) EXPECT_LT(rel_err(p_ch[i], p_ch0[i]), 1e-6) << i;
+}
+
 // The cushion seal's drag acts on the plug only: a piston driven at 50 mm/s
 // from mid-stroke into the cushioning zone meets the same friction as the
 // sound cylinder's in the main stroke and F more (against the motion) once
@@ -318,11 +344,13 @@ TEST(DeclaredFaults, AFaultOfAnAbsentPartIsNoCandidate) {
     EXPECT_NE(e, nullptr) << name;
     return e && e->unavailable.empty();
   };
-  for (const char* yes : {"rig.cushion_seal_leak", "rig.cushion_seal_friction", "cyl.rod_cushion_seal_leak",
+  for (const char* yes : {"rig.cushion_seal_leak", "rig.cushion_seal_friction", "rig.cushion_screw_leak",
+                          "cyl.rod_cushion_seal_leak", "cyl.rod_cushion_screw_leak",
                           "cyl.rod_cushion_seal_friction", "driven.opening_late", "valve.slow_switching",
                           "valve.delay_actuate", "valve.delay_release"})
     EXPECT_TRUE(available(yes)) << yes;
-  for (const char* no : {"rig.rod_cushion_seal_leak", "rig.rod_cushion_seal_friction", "cyl.cap_cushion_seal_leak",
+  for (const char* no : {"rig.rod_cushion_seal_leak", "rig.rod_cushion_seal_friction", "rig.rod_cushion_screw_leak",
+                         "cyl.cap_cushion_seal_leak", "cyl.cap_cushion_screw_leak",
                          "cyl.cap_cushion_seal_friction", "fixed.opening_late", "idle.delay_actuate",
                          "idle.delay_release"})
     EXPECT_FALSE(available(no)) << no;
