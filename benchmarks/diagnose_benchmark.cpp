@@ -66,10 +66,13 @@ std::string class_of(const std::string& name) { return name.substr(0, name.find(
 // signals' measurement faults), the declared fault that is each class's
 // physics, so that the verdicts are scored as the catalogue's. The class
 // of leaks out of the cushion volume has two: past the cushion seal into
-// the channel, past the cushioning screw to the atmosphere.
+// the channel, past the cushioning screw to the atmosphere; so has the
+// exhaust side's dead volume: behind the meter-out throttle (line_B) or
+// before it, at the cylinder's port (its channel's).
 const std::map<std::string, std::string> kDeclaredAs = {
     {"cylinder.wall_heat", "heat_transfer"},           {"cylinder.piston_seal_leak", "leakage_piston_seal"},
-    {"line_B.volume_off", "line_volume"},              {"supply.supply_sag", "supply_droop"},
+    {"line_B.volume_off", "line_volume"},              {"cylinder.dead_volume_channel_off", "line_volume"},
+    {"supply.supply_sag", "supply_droop"},
     {"cylinder.friction_pressure", "friction_pressure"}, {"cylinder.friction_running", "friction_pressure"},
     {"cylinder.friction_breakaway", "friction_pressure"}, {"cylinder.friction_chamber_pressure", "friction_pressure"}, {"T_EC.lag", "sensor_lag_T"},
     {"p_A.lag", "sensor_lag_p"},                       {"p_EC.lag", "sensor_lag_p"},

@@ -37,6 +37,7 @@
 #include <vector>
 
 #include "components/iso6358_flow.hpp"
+#include "components/switching.hpp"
 #include "framework/model/component.hpp"
 
 namespace pneumo::components {
@@ -109,7 +110,7 @@ class SpoolDrive {
         delay_release_(p["fault_delay_release"]),
         states_(states) {
     std::string allowed;
-    for (const auto& s : states) allowed += (allowed.empty() ? "" : ", ") + std::to_string(static_cast<int>(s.value));
+    for (const auto& s : states) allowed += (allowed.empty() ? "" : ", ") + format_number(s.value);
     if (!state(x0_)) throw ParameterError("initial", "initial must be one of " + allowed);
     if (!p.has("schedule")) return;
     const Table& rows = p.table("schedule");
@@ -126,10 +127,10 @@ class SpoolDrive {
       }
       const double t_next = i + 1 < rows.size() ? acts[i + 1] : std::numeric_limits<double>::infinity();
       const double rate = s == x ? 0.0 : (s > x ? 1.0 : -1.0) / t_switch_;
-      add(t, rate, "command " + std::to_string(static_cast<int>(s)) + " (" + st->name + ")", "command_" + st->word);
+      add(t, rate, "command " + format_number(s) + " (" + st->name + ")", "command_" + st->word);
       const double t_end = t + std::abs(s - x) * t_switch_;
       if (s != x && t_end <= t_next) {
-        add(t_end, 0.0, "spool at " + std::to_string(static_cast<int>(s)) + ": " + st->name + " fully open",
+        add(t_end, 0.0, "spool at " + format_number(s) + ": " + st->name + " fully open",
             "switched_" + st->word);
         x = s;
       } else if (s != x) {
@@ -306,7 +307,7 @@ class SpoolValve : public ComponentT<Derived> {
   double level(const Eval<double>& e) const { return std::round(command(e)); }
   std::string state_text(double v) const {
     const SpoolState* s = spool_.state(v);
-    return s ? std::to_string(static_cast<int>(v)) + " (" + s->name + ")" : std::to_string(v);
+    return s ? format_number(v) + " (" + s->name + ")" : format_number(v);
   }
   // The pending command acts.
   EventResult act(double* modes) const {
@@ -337,7 +338,7 @@ class SpoolValve : public ComponentT<Derived> {
     }
     modes[kPending] = u;
     modes[kDue] = e.t() + d;
-    return {true, "command " + state_text(u) + " due at t = " + std::to_string(modes[kDue]) + " s", ""};
+    return {true, "command " + state_text(u) + " due at t = " + format_number(modes[kDue]) + " s", ""};
   }
 };
 
