@@ -8,9 +8,13 @@
 // of an ideal gas) are evaluated in place, so the pressure row does not depend
 // on T; T stays an output as an observable. The port temperatures remain
 // unknowns (the connected components read them), all aliases of one.
+// Declared faults: the volume off its value, and - where the volume is a
+// line between two components - the line restricting the flow through it:
+// an ISO 6358 resistance between the gas and port_b.
 #include "components/builtin.hpp"
 #include "components/faults.hpp"
 #include "components/enthalpy_flow.hpp"
+#include "components/iso6358_flow.hpp"
 #include "components/symbols.hpp"
 
 namespace pneumo::components {
@@ -36,6 +40,11 @@ class Volume final : public ComponentT<Volume> {
         ParameterSpec::scalar("T0", "K", "initial gas temperature; default: ambient")
             .positive()
             .ambient_temperature_by_default(),
+        fault_parameter("fault_line_restriction", "Pa*s/m3",
+                        "1/C of a resistance between the gas and port_b (ISO 6358, critical ratio fault_line_b): "
+                        "write e.g. 2 s*bar/dm3 for a line of C = 0.5 dm3/(s*bar)")
+            .non_negative(),
+        ParameterSpec::scalar("fault_line_b", "1", "critical pressure ratio of that resistance", 0.3).range(0.0, 0.99),
     };
     i.ports = {{"port", Domain::pneumatic, Causality::acausal, "gas port"},
                {"heat", Domain::thermal, Causality::acausal, "heat port to the wall (insulated if unconnected)", true},
@@ -49,12 +58,21 @@ class Volume final : public ComponentT<Volume> {
     // A volume often stands for lines and fittings whose volume was guessed:
     // a longer hose or an added fitting holds tens of times the drawn value.
     i.faults = {fault("volume_off", "volume off its value (a longer line or more fittings than drawn, a larger reservoir, a dent)",
-                      {fault_factor("V", 0.1, 100.0, 1.5)})};
+                      {fault_factor("V", 0.1, 100.0, 1.5)}),
+                fault("line_restriction", "the line drawn as this volume restricts the flow through it (long, kinked or "
+                      "undersized hose, a fitting too small)",
+                      {fault_amount("r", "fault_line_restriction", "Pa*s/m3", 0.0, 2e9, 2e8)})};
+    i.faults.back().needs_port = "port_b";
     return i;
   }
 
   explicit Volume(const Construction& c)
-      : ComponentT(c), V_(c.params["V"]), p0_(c.params["p0"]), T0_(c.params["T0"]) {}
+      : ComponentT(c),
+        V_(c.params["V"]),
+        p0_(c.params["p0"]),
+        T0_(c.params["T0"]),
+        restriction_(c.params["fault_line_restriction"]),
+        line_b_(c.params["fault_line_b"]) {}
 
   template <class T>
   void equations(const Eval<T>& e, T* r) const {
@@ -84,8 +102,15 @@ class Volume final : public ComponentT<Volume> {
     // former T variable.
     r[3] = port.T_out - heat.T;
     r[4] = heat.T - Tg;
-    r[5] = port_b.p - port.p;
+    r[5] = restriction_ > 0 ? line_row(port, port_b, heat.T, gas) : T(port_b.p - port.p);
     r[6] = port_b.T_out - heat.T;
+  }
+  // The flow into port_b through the restricting line. Without the fault the
+  // row reads no flow at all: port_b's pressure stays an alias of the gas'.
+  template <class T>
+  T line_row(const GasPortView<T>& port, const GasPortView<T>& port_b, const T& T_gas, const GasModel& gas) const {
+    const T C = 0.0 * port.p + 1.0 / restriction_;
+    return port_b.m_flow - iso6358_mass_flow(port_b.p, port.p, port_b.T_in, T_gas, C, line_b_, 0.999, gas);
   }
 
   double observe(int k, const Eval<double>& e) const override {
@@ -105,7 +130,7 @@ class Volume final : public ComponentT<Volume> {
   }
 
  private:
-  double V_, p0_, T0_;
+  double V_, p0_, T0_, restriction_, line_b_;
 };
 
 void register_volume(Registry& r) { r.add<Volume>(); }

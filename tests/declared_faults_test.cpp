@@ -53,7 +53,7 @@ TEST(DeclaredFaults, EachComponentTypeListsWhatCanFailInIt) {
       {"check_valve", {"leak"}},
       {"pressure_source", {"supply_sag"}},
       {"pressure_regulator", {"supply_sag", "misadjusted"}},
-      {"volume", {"volume_off"}},
+      {"volume", {"volume_off", "line_restriction"}},
       {"hose", {"resistance"}},
       {"translational_mass", {"mass_off"}},
       {"pressure_sensor", {"offset", "gain", "lag"}},
@@ -350,7 +350,7 @@ TEST(DeclaredFaults, AFaultOfAnAbsentPartIsNoCandidate) {
                           "valve.delay_actuate", "valve.delay_release"})
     EXPECT_TRUE(available(yes)) << yes;
   for (const char* no : {"rig.rod_cushion_seal_leak", "rig.rod_cushion_seal_friction", "rig.rod_cushion_screw_leak",
-                         "cyl.cap_cushion_seal_leak", "cyl.cap_cushion_screw_leak",
+                         "cyl.cap_cushion_seal_leak", "cyl.cap_cushion_screw_leak", "tank.line_restriction",
                          "cyl.cap_cushion_seal_friction", "fixed.opening_late", "idle.delay_actuate",
                          "idle.delay_release"})
     EXPECT_FALSE(available(no)) << no;
@@ -491,6 +491,39 @@ TEST(DeclaredFaults, SupplySagIsAThrottlingLineBetweenSourceAndPort) {
     EXPECT_LT(rel_err(sagged_port_pressure(p, C_line, C), q * p), 1e-6) << C_line;
   }
   EXPECT_LT(rel_err(sagged_port_pressure(20e5, 2.25e-9, C), 4.5e5), 0.03);
+}
+
+// A line drawn as a volume that restricts the flow through it is a
+// throttle between its gas and port_b: a tank filled from a 6 bar supply
+// through a valve, the line and its restriction of 1/C (b 0.4) fills as it
+// does through the sound line and a throttle of C, b 0.4 at port_b - in
+// both directions (filled, then vented back through the valve).
+TEST(DeclaredFaults, ARestrictingLineIsAThrottleBetweenItsGasAndPortB) {
+  auto circuit = [](const std::string& line, const std::string& behind) {
+    return "components:\n"
+           "  supply: {type: pressure_source, p: 6 bar}\n"
+           "  valve: {type: directional_valve_32, C: 1 dm3/(s*bar), schedule: [[0.05, 1], [0.6, 0]]}\n"
+           "  air: {type: atmosphere}\n"
+           "  line: {type: volume, V: 5 cm3" + line + "}\n"
+           "  tank: {type: volume, V: 0.1 L}\n" + behind +
+           "connections:\n  - [supply.port, valve.P]\n  - [valve.R, air.port]\n  - [valve.A, line.port]\n" +
+           (behind.empty() ? "  - [line.port_b, tank.port]\n"
+                           : "  - [line.port_b, extra.a]\n  - [extra.b, tank.port]\n") +
+           "outputs: {p_tank: tank.p, p_line: line.p}\n"
+           "simulation: {t_end: 1.2 s, output_interval: 10 ms}\n";
+  };
+  const RunResult fault =
+      run_text(circuit(", fault_line_restriction: 5 s*bar/dm3, fault_line_b: 0.4", ""), "fault.yaml");
+  const RunResult twin =
+      run_text(circuit("", "  extra: {type: iso6358_throttle, C: 0.2 dm3/(s*bar), b: 0.4}\n"), "twin.yaml");
+  for (const char* col : {"p_tank", "p_line"}) {
+    const auto a = column(twin.table, col), b = column(fault.table, col);
+    ASSERT_EQ(a.size(), b.size());
+    for (std::size_t i = 0; i < a.size(); ++i) EXPECT_LT(rel_err(b[i], a[i]), 1e-6) << col << " " << i;
+  }
+  const auto p = column(fault.table, "p_tank");
+  EXPECT_GT(p[60], 5.5e5);  // filled by 0.6 s
+  EXPECT_LT(p.back(), 2e5);  // and vented back
 }
 
 // A pressure sensor with a gain and a zero offset reads gain p + offset.

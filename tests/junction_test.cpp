@@ -91,6 +91,44 @@ simulation: {t_end: 0.1 s, output_interval: 10 ms}
   }
 }
 
+TEST(Junction, AJunctionWhosePathOpensAsAStepJumpsToItsNewBalance) {
+  // The throttles of the choked series above, the second opened by a step
+  // at 10 ms (a valve path drawn as a throttle): shut, no flow and the
+  // junction at the supply's 10 bar; open, both choked and p_j = C1/C2 p_s
+  // = 4 bar at once, the flow C1 rho_ref p_s. The new balance is 6 bar from
+  // the old one through the steep laminar piece of the flow law, which the
+  // consistent-values Newton of IDA crosses only with more iterations than
+  // its default.
+  const RunResult r = run_text(R"(
+components:
+  supply: {type: pressure_source, p: 10 bar, T: 293.15 K}
+  t1:     {type: iso6358_throttle, C: 0.2 dm3/(s*bar), b: 0.5}
+  t2:     {type: iso6358_throttle, C: 0.5 dm3/(s*bar), b: 0.3}
+  cmd:    {type: signal_source, kind: step, value: 0, height: 1, t_start: 10 ms}
+  air:    {type: atmosphere}
+connections:
+  - [supply.port, t1.a]
+  - [t1.b, t2.a]
+  - [t2.b, air.port]
+  - [cmd.y, t2.opening]
+outputs:
+  p_j: t1.b.p
+  m1: t1.m_flow
+  m2: t2.m_flow
+simulation: {t_end: 0.05 s, output_interval: 1 ms}
+)",
+                               "step_series");
+  ASSERT_TRUE(r.solver.ok) << r.solver.message;
+  EXPECT_NEAR(at(r.table, "p_j", 0.005) / 10e5, 1.0, 1e-9);
+  EXPECT_EQ(at(r.table, "m1", 0.005), 0.0);
+  const double m = 0.2e-8 * 1.185 * 10e5;  // C1 rho_ref p_s, T = T_ref
+  for (double t : {0.011, 0.03, 0.05}) {
+    EXPECT_NEAR(at(r.table, "p_j", t) / 4e5, 1.0, 1e-3) << "t = " << t;
+    EXPECT_NEAR(at(r.table, "m1", t) / m, 1.0, 1e-3) << "t = " << t;
+    EXPECT_NEAR(at(r.table, "m2", t) / at(r.table, "m1", t), 1.0, 1e-6) << "t = " << t;
+  }
+}
+
 TEST(Junction, ThrottleIntoThrottleFollowsFlowReversal) {
   // A tank discharged through two throttles in series into a second tank
   // that starts higher: the flow runs from b to a first, then the pressures

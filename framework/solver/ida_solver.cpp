@@ -418,6 +418,18 @@ bool IdaRun::consistent_ic() {
     flag = IDACalcIC(ida_, IDA_YA_YDP_INIT, t_next);
     check(IDASetLineSearchOffIC(ida_, SUNFALSE), "IDASetLineSearchOffIC");
   }
+  if (flag < 0) {
+    // A junction without volume whose neighbour opens as a step (a valve
+    // path drawn as a throttle) must move bars away, through the steep
+    // laminar piece of the flow law, where each Newton step is short: more
+    // iterations than IDA's default 10 (junction_test).
+    check(IDAReInit(ida_, t_, y_.get(), yp_.get()), "IDAReInit");
+    check(IDASetMaxNumItersIC(ida_, 100), "IDASetMaxNumItersIC");
+    check(IDASetMaxNumJacsIC(ida_, 20), "IDASetMaxNumJacsIC");
+    flag = IDACalcIC(ida_, IDA_YA_YDP_INIT, t_next);
+    check(IDASetMaxNumItersIC(ida_, 10), "IDASetMaxNumItersIC");
+    check(IDASetMaxNumJacsIC(ida_, 4), "IDASetMaxNumJacsIC");
+  }
   user_.parts.in_calc_ic = false;
   user_.parts.valid = false;
   if (flag < 0) {
