@@ -62,12 +62,11 @@ TEST(Junction, ValveStraightIntoFlowControlsRunsLikeATinyLine) {
   EXPECT_LT(at(direct.table, "x", 4.0), 1e-3);
 }
 
-TEST(Junction, ChokedThrottlesInSeriesGiveTheClosedFormJunctionPressure) {
-  // Both choked, equal mass flows: C1 rho_ref p_s sqrt(T_ref/T) =
-  // C2 rho_ref p_j sqrt(T_ref/T) (throttling keeps an ideal gas's
-  // temperature), so p_j = C1/C2 p_s = 4 bar; then p_j/p_s = 0.4 < b1 = 0.5
-  // and p_amb/p_j = 0.25 < b2 = 0.3 - both choked indeed.
-  const RunResult r = run_text(R"(
+// A 10 bar supply through throttles t1 (C 0.2, b 0.5) and t2 (C 0.5,
+// b 0.3) in series to the atmosphere, the junction between them without a
+// volume; with `step`, t2's opening a step from 0 to 1 at 10 ms.
+RunResult choked_series(bool step, const std::string& simulation) {
+  std::string text = R"(
 components:
   supply: {type: pressure_source, p: 10 bar, T: 293.15 K}
   t1:     {type: iso6358_throttle, C: 0.2 dm3/(s*bar), b: 0.5}
@@ -81,9 +80,20 @@ outputs:
   p_j: t1.b.p
   m1: t1.m_flow
   m2: t2.m_flow
-simulation: {t_end: 0.1 s, output_interval: 10 ms}
-)",
-                               "choked_series");
+)";
+  if (step) {
+    text = replace_once(text, "  air:", "  cmd:    {type: signal_source, kind: step, value: 0, height: 1, t_start: 10 ms}\n  air:");
+    text = replace_once(text, "outputs:", "  - [cmd.y, t2.opening]\noutputs:");
+  }
+  return run_text(text + "simulation: " + simulation + "\n", step ? "step_series" : "choked_series");
+}
+
+TEST(Junction, ChokedThrottlesInSeriesGiveTheClosedFormJunctionPressure) {
+  // Both choked, equal mass flows: C1 rho_ref p_s sqrt(T_ref/T) =
+  // C2 rho_ref p_j sqrt(T_ref/T) (throttling keeps an ideal gas's
+  // temperature), so p_j = C1/C2 p_s = 4 bar; then p_j/p_s = 0.4 < b1 = 0.5
+  // and p_amb/p_j = 0.25 < b2 = 0.3 - both choked indeed.
+  const RunResult r = choked_series(false, "{t_end: 0.1 s, output_interval: 10 ms}");
   ASSERT_TRUE(r.solver.ok) << r.solver.message;
   for (double t : {0.0, 0.05, 0.1}) {
     EXPECT_NEAR(at(r.table, "p_j", t) / 4e5, 1.0, 1e-3) << "t = " << t;
@@ -92,32 +102,13 @@ simulation: {t_end: 0.1 s, output_interval: 10 ms}
 }
 
 TEST(Junction, AJunctionWhosePathOpensAsAStepJumpsToItsNewBalance) {
-  // The throttles of the choked series above, the second opened by a step
-  // at 10 ms (a valve path drawn as a throttle): shut, no flow and the
-  // junction at the supply's 10 bar; open, both choked and p_j = C1/C2 p_s
-  // = 4 bar at once, the flow C1 rho_ref p_s. The new balance is 6 bar from
-  // the old one through the steep laminar piece of the flow law, which the
-  // consistent-values Newton of IDA crosses only with more iterations than
-  // its default.
-  const RunResult r = run_text(R"(
-components:
-  supply: {type: pressure_source, p: 10 bar, T: 293.15 K}
-  t1:     {type: iso6358_throttle, C: 0.2 dm3/(s*bar), b: 0.5}
-  t2:     {type: iso6358_throttle, C: 0.5 dm3/(s*bar), b: 0.3}
-  cmd:    {type: signal_source, kind: step, value: 0, height: 1, t_start: 10 ms}
-  air:    {type: atmosphere}
-connections:
-  - [supply.port, t1.a]
-  - [t1.b, t2.a]
-  - [t2.b, air.port]
-  - [cmd.y, t2.opening]
-outputs:
-  p_j: t1.b.p
-  m1: t1.m_flow
-  m2: t2.m_flow
-simulation: {t_end: 0.05 s, output_interval: 1 ms}
-)",
-                               "step_series");
+  // The same series, t2 opened by a step at 10 ms (a valve path drawn as a
+  // throttle): shut, no flow and the junction at the supply's 10 bar; open,
+  // both choked and p_j = 4 bar at once, the flow C1 rho_ref p_s. The new
+  // balance is 6 bar from the old one through the steep laminar piece of
+  // the flow law, which the consistent-values Newton of IDA crosses only
+  // with more iterations than its default.
+  const RunResult r = choked_series(true, "{t_end: 0.05 s, output_interval: 1 ms}");
   ASSERT_TRUE(r.solver.ok) << r.solver.message;
   EXPECT_NEAR(at(r.table, "p_j", 0.005) / 10e5, 1.0, 1e-9);
   EXPECT_EQ(at(r.table, "m1", 0.005), 0.0);
