@@ -422,13 +422,16 @@ bool IdaRun::consistent_ic() {
     // A junction without volume whose neighbour opens as a step (a valve
     // path drawn as a throttle) must move bars away, through the steep
     // laminar piece of the flow law, where each Newton step is short: more
-    // iterations than IDA's default 10 (junction_test).
+    // iterations than IDA's default 10 (junction_test), at the one step
+    // size only, so that a restart that cannot succeed stays cheap.
     check(IDAReInit(ida_, t_, y_.get(), yp_.get()), "IDAReInit");
-    check(IDASetMaxNumItersIC(ida_, 100), "IDASetMaxNumItersIC");
-    check(IDASetMaxNumJacsIC(ida_, 20), "IDASetMaxNumJacsIC");
+    check(IDASetMaxNumItersIC(ida_, 60), "IDASetMaxNumItersIC");
+    check(IDASetMaxNumJacsIC(ida_, 4), "IDASetMaxNumJacsIC");
+    check(IDASetMaxNumStepsIC(ida_, 1), "IDASetMaxNumStepsIC");
     flag = IDACalcIC(ida_, IDA_YA_YDP_INIT, t_next);
     check(IDASetMaxNumItersIC(ida_, 10), "IDASetMaxNumItersIC");
     check(IDASetMaxNumJacsIC(ida_, 4), "IDASetMaxNumJacsIC");
+    check(IDASetMaxNumStepsIC(ida_, 5), "IDASetMaxNumStepsIC");
   }
   user_.parts.in_calc_ic = false;
   user_.parts.valid = false;
