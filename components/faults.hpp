@@ -32,4 +32,19 @@ inline ParameterSpec fault_parameter(const std::string& name, const std::string&
   return ParameterSpec::scalar(name, unit, "fault (diagnosis): " + what + "; 0 = none", 0.0);
 }
 
+// A throttling line (ISO 6358: 1/C and its critical ratio) that exists only
+// as a fault, as a supply's sag and a restricted line write it: the two
+// parameters (`what`: where the line sits; `that`: how b names it) and the
+// fault's amount, 0-2e9 Pa*s/m3.
+inline std::vector<ParameterSpec> line_restriction_parameters(const std::string& what, const std::string& that) {
+  return {fault_parameter("fault_line_restriction", "Pa*s/m3",
+                          "1/C of " + what + " (ISO 6358, critical ratio fault_line_b): write e.g. 2 s*bar/dm3 for a "
+                          "line of C = 0.5 dm3/(s*bar)")
+              .non_negative(),
+          ParameterSpec::scalar("fault_line_b", "1", "critical pressure ratio of " + that, 0.3).range(0.0, 0.99)};
+}
+inline FaultParameterSpec line_restriction_amount() {
+  return fault_amount("r", "fault_line_restriction", "Pa*s/m3", 0.0, 2e9, 2e8);
+}
+
 }  // namespace pneumo::components

@@ -25,18 +25,16 @@ class PressureSource final : public ComponentT<PressureSource> {
         ParameterSpec::scalar("T", "K", "temperature of the delivered gas; default: ambient")
             .positive()
             .ambient_temperature_by_default(),
-        fault_parameter("fault_line_restriction", "Pa*s/m3",
-                        "1/C of a throttling supply line between the source and its port (ISO 6358, critical ratio "
-                        "fault_line_b): write e.g. 2 s*bar/dm3 for a line of C = 0.5 dm3/(s*bar)")
-            .non_negative(),
-        ParameterSpec::scalar("fault_line_b", "1", "critical pressure ratio of that supply line", 0.3).range(0.0, 0.99),
     };
+    for (auto& p : line_restriction_parameters("a throttling supply line between the source and its port",
+                                               "that supply line"))
+      i.parameters.push_back(std::move(p));
     i.ports = {{"port", Domain::pneumatic, Causality::acausal, "gas port"},
                {"p_in", Domain::signal, Causality::input, "pressure in Pa abs; replaces p when connected", true}};
     i.equations = {"pressure", "delivered temperature"};
     SignalWatch::declare(i);
     i.faults = {fault("supply_sag", "supply pressure sags under flow (a long, kinked or undersized supply line)",
-                      {fault_amount("r", "fault_line_restriction", "Pa*s/m3", 0.0, 2e9, 2e8)})};
+                      {line_restriction_amount()})};
     return i;
   }
   explicit PressureSource(const Construction& c)

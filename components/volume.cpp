@@ -40,12 +40,9 @@ class Volume final : public ComponentT<Volume> {
         ParameterSpec::scalar("T0", "K", "initial gas temperature; default: ambient")
             .positive()
             .ambient_temperature_by_default(),
-        fault_parameter("fault_line_restriction", "Pa*s/m3",
-                        "1/C of a resistance between the gas and port_b (ISO 6358, critical ratio fault_line_b): "
-                        "write e.g. 2 s*bar/dm3 for a line of C = 0.5 dm3/(s*bar)")
-            .non_negative(),
-        ParameterSpec::scalar("fault_line_b", "1", "critical pressure ratio of that resistance", 0.3).range(0.0, 0.99),
     };
+    for (auto& p : line_restriction_parameters("a resistance between the gas and port_b", "that resistance"))
+      i.parameters.push_back(std::move(p));
     i.ports = {{"port", Domain::pneumatic, Causality::acausal, "gas port"},
                {"heat", Domain::thermal, Causality::acausal, "heat port to the wall (insulated if unconnected)", true},
                {"port_b", Domain::pneumatic, Causality::acausal, "second gas port (closed if unconnected)", true}};
@@ -61,7 +58,7 @@ class Volume final : public ComponentT<Volume> {
                       {fault_factor("V", 0.1, 100.0, 1.5)}),
                 fault("line_restriction", "the line drawn as this volume restricts the flow through it (long, kinked or "
                       "undersized hose, a fitting too small)",
-                      {fault_amount("r", "fault_line_restriction", "Pa*s/m3", 0.0, 2e9, 2e8)})};
+                      {line_restriction_amount()})};
     i.faults.back().needs_port = "port_b";
     return i;
   }
