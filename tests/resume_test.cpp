@@ -31,9 +31,10 @@ Netlist sequence_with_travel() {
   return parse_netlist(s, file);
 }
 
-RunResult run(const Netlist& nl, const Resumption& r = {}) {
+RunResult run(const Netlist& nl, const Resumption& r = {}, long max_total_steps = 0) {
   SolverOptions o = solver_options(nl.simulation);
   o.threads = 1;
+  o.max_total_steps = max_total_steps;
   return run_circuit(elaborate(nl, builtin_registry()), o, r);
 }
 
@@ -83,6 +84,37 @@ TEST(Resume, ACheckpointedRunGoesOnAsTheWholeRunWithItsModesAndIntegrals) {
     EXPECT_NEAR(row[x_B], at(whole, x_B, row[0]), 5e-5) << "t = " << row[0];
     EXPECT_NEAR(row[travel], row[x_A] - x_A0, 5e-5) << "t = " << row[0];
   }
+}
+
+// A budget of steps in all (what the diagnosis gives a disturbed run, a
+// multiple of the kept run's): within it the resumed run is the one without
+// a budget, row for row; past it the run stops there with the budget named,
+// its rows up to where it stopped.
+TEST(Resume, AResumedRunBoundedInStepsStopsWhereTheBudgetRunsOut) {
+  const Netlist nl = sequence_with_travel();
+  const RunResult kept = run(nl, {{0.3}, nullptr});
+  ASSERT_EQ(kept.checkpoints.size(), 1u);
+  const RunResult free = run(nl, {{}, &kept.checkpoints[0]});
+  ASSERT_TRUE(free.solver.ok) << free.solver.message;
+  const long steps = free.solver.stats.steps;
+  ASSERT_GT(steps, 100);
+
+  const RunResult within = run(nl, {{}, &kept.checkpoints[0]}, 2 * steps);
+  ASSERT_TRUE(within.solver.ok) << within.solver.message;
+  ASSERT_EQ(within.table.rows.size(), free.table.rows.size());
+  for (std::size_t i = 0; i < free.table.rows.size(); ++i) EXPECT_EQ(within.table.rows[i], free.table.rows[i]) << i;
+
+  const RunResult short_of = run(nl, {{}, &kept.checkpoints[0]}, steps / 2);
+  EXPECT_FALSE(short_of.solver.ok);
+  EXPECT_NE(short_of.solver.message.find("IDA_TOO_MUCH_WORK (" + std::to_string(steps / 2) + " steps in all)"),
+            std::string::npos)
+      << short_of.solver.message;
+  EXPECT_LE(short_of.solver.stats.steps, steps / 2);
+  ASSERT_FALSE(short_of.table.rows.empty());
+  const double t_end = free.table.rows.back()[0];
+  EXPECT_GT(short_of.table.rows.back()[0], 0.3);
+  EXPECT_LT(short_of.table.rows.back()[0], t_end);
+  EXPECT_NEAR(short_of.solver.t_reached, short_of.table.rows.back()[0], 1e-9);
 }
 
 TEST(Resume, ACheckpointOfAnotherCircuitIsRefused) {

@@ -176,7 +176,8 @@ std::vector<std::vector<double>> Engine::simulate(const Model& m, int k, const s
 }
 
 std::optional<RunResult> Engine::run(const Model& m, int k, const std::vector<Disturbance>& disturbances,
-                                     const Setting& at, const Resumption& resumption, std::string* why) {
+                                     const Setting& at, const Resumption& resumption, std::string* why,
+                                     long max_total_steps) {
   ++simulations;
   try {
     const Netlist nl = netlist_of(m, k, at);
@@ -185,6 +186,7 @@ std::optional<RunResult> Engine::run(const Model& m, int k, const std::vector<Di
     // A disturbance that drives a state out of its domain (a chamber's
     // mass below zero) leaves the solver crawling: such a run fails.
     if (!disturbances.empty()) so.max_steps = kDisturbedMaxSteps;
+    so.max_total_steps = max_total_steps;
     return run_circuit(elaborate(nl, loaded_.registry), so, resumption);
   } catch (const std::exception& ex) {
     note_failure(runs[k].name, ex.what());
@@ -229,7 +231,8 @@ std::vector<std::vector<double>> Engine::simulate_from(const Model& m, int k, co
                                                        const std::vector<Disturbance>& disturbances, std::string* why) {
   if (j >= kept.checkpoints.size()) return simulate(m, k, disturbances, {}, why);
   const RunCheckpoint& from = kept.checkpoints[j];
-  const auto res = run(m, k, disturbances, {}, {{}, &from, &kept.table}, why);
+  const long budget = disturbances.empty() ? 0 : kDisturbedStepsPerKept * std::max(kept.solver.stats.steps, 1L);
+  const auto res = run(m, k, disturbances, {}, {{}, &from, &kept.table}, why, budget);
   return res ? signals_of(m, k, *res, why) : std::vector<std::vector<double>>{};
 }
 

@@ -24,6 +24,12 @@
 namespace pneumo::diagnose::engine {
 
 constexpr long kDisturbedMaxSteps = 20000;  // a disturbed run's step budget (the cushion rig's nominal run takes 1225)
+// A disturbed run resumed from a kept run may take at most this many times
+// the kept run's steps in all: a disturbance that has the model crawl at a
+// fine step all the way (a term that chatters where the piston rests)
+// reaches every output, so only the total shows it - and one such run costs
+// as much as a dozen sound ones.
+constexpr long kDisturbedStepsPerKept = 5;
 constexpr double kFailedResidual = 1e4;  // per sample, for a run the solver could not finish
 constexpr std::size_t kMemoValues = std::size_t{1} << 23;  // remembered signal values (64 MB)
 
@@ -155,7 +161,7 @@ class Engine {
  private:
   PhaseStarts phase_starts(int k, const Setting& at);
   std::optional<RunResult> run(const Model& m, int k, const std::vector<Disturbance>& disturbances, const Setting& at,
-                               const Resumption& resumption, std::string* why);
+                               const Resumption& resumption, std::string* why, long max_total_steps = 0);
   void note_failure(const std::string& run, const std::string& why);
 
   pneumo::Model loaded_;  // the model file with its plugins

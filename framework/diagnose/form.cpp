@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <map>
 #include <optional>
@@ -694,10 +695,19 @@ class Discovery {
   std::string failure;
 
   void run(const std::vector<Eigen::VectorXd>& r0) {
+    const auto start = std::chrono::steady_clock::now();
     std::vector<Eigen::VectorXd> r = r0;
     for (const auto& v : r) ssr += v.squaredNorm(), n += static_cast<double>(v.size());
-    while (static_cast<int>(chosen.size()) < kMaxTerms && ssr > 1.1 * n)
+    while (static_cast<int>(chosen.size()) < kMaxTerms && ssr > 1.1 * n) {
+      const std::size_t had = chosen.size();
       if (!round(r)) break;
+      if (!in_.log) continue;
+      std::string added;
+      for (std::size_t a = had; a < chosen.size(); ++a) added += (added.empty() ? "" : ", ") + terms_[chosen[a]].text;
+      in_.log("  form: + " + added + ": gap " + rounded(std::sqrt(ssr / n), 2) + " [" + std::to_string(sims) +
+              " simulations, " + rounded(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 2) +
+              " s]");
+    }
   }
 
  private:
@@ -753,18 +763,17 @@ class Discovery {
   }
 
   // The linearisation ranks the additions; the best few are simulated
-  // with their refined coefficients, for a large gap moves the model far
-  // from where it was linearised. The one that leaves least (each
-  // parameter it brings at the price of what a term must gain) is kept
-  // when it gains that price.
+  // with their linearised coefficients, for a large gap moves the model far
+  // from where it was linearised. Scored by what each leaves (each
+  // parameter it brings at the price of what a term must gain), they are
+  // refined best first, and the first whose refined form still gains its
+  // price is kept: Gauss-Newton costs a simulation per parameter and run a
+  // step, and refining every trial took most of each round (on a line of
+  // six cylinders, three quarters of the form's simulations).
   bool round(std::vector<Eigen::VectorXd>& r) {
     std::vector<char> usable;
     const Normal N = linearise(r, usable);
     const double price = needed(N, ssr);
-    std::vector<DisturbanceTerm> best_form;
-    std::vector<int> best_chosen;
-    double best_score = INFINITY, best_ssr = ssr;
-    bool best_unfinished = false;
     const auto tried = best_additions(N, chosen, usable, partner_, kTried);
     std::vector<std::vector<int>> sets;  // chosen and each addition
     std::vector<std::vector<DisturbanceTerm>> trials;
@@ -783,30 +792,32 @@ class Discovery {
     std::vector<std::vector<Eigen::VectorXd>> rts;
     std::vector<std::string> whys;
     const std::vector<char> ran = refiner_.residuals_of(trials, rts, whys);
+    std::vector<std::pair<double, std::size_t>> order;  // (score, trial) of those that ran
+    std::vector<double> cost(trials.size(), 0), s(trials.size(), 0);
     for (std::size_t i = 0; i < trials.size(); ++i) {
       if (!ran[i]) {
         if (form.empty() && failure.empty()) failure = whys[i];
         continue;
       }
-      double s = Refiner::stacked(rts[i]).squaredNorm();
-      const bool unfinished = refiner_.refine(trials[i], s, rts[i], range_);
-      double parameters = 0;
-      for (int k : tried[i]) parameters += parameters_of_[k];
-      const double score = s + parameters * price;
-      if (ssr - s >= parameters * price && score < best_score)
-        best_score = score, best_ssr = s, best_form = std::move(trials[i]), best_chosen = std::move(sets[i]),
-        best_unfinished = unfinished;
+      for (int k : tried[i]) cost[i] += parameters_of_[k] * price;
+      s[i] = Refiner::stacked(rts[i]).squaredNorm();
+      order.emplace_back(s[i] + cost[i], i);
     }
-    if (best_form.empty()) return false;
-    form = std::move(best_form), chosen = std::move(best_chosen), ssr = best_ssr;
-    if (!refiner_.residuals(form, r, nullptr)) return false;
-    // Refined on while its steps still pay, before the next round: a term
-    // added later must not take the credit for steps its predecessors had
-    // yet to make (a strong spring's coefficients, four steps from their
-    // linearisation, else carry in a bump that does nothing).
-    if (!best_unfinished) return true;
-    refiner_.refine(form, ssr, r, range_);
-    return refiner_.residuals(form, r, nullptr);
+    std::sort(order.begin(), order.end());
+    for (const auto& [score, i] : order) {
+      const bool unfinished = refiner_.refine(trials[i], s[i], rts[i], range_);
+      if (ssr - s[i] < cost[i]) continue;
+      form = std::move(trials[i]), chosen = std::move(sets[i]), ssr = s[i];
+      if (!refiner_.residuals(form, r, nullptr)) return false;
+      // Refined on while its steps still pay, before the next round: a term
+      // added later must not take the credit for steps its predecessors had
+      // yet to make (a strong spring's coefficients, four steps from their
+      // linearisation, else carry in a bump that does nothing).
+      if (!unfinished) return true;
+      refiner_.refine(form, ssr, r, range_);
+      return refiner_.residuals(form, r, nullptr);
+    }
+    return false;
   }
 
   const FormInput& in_;

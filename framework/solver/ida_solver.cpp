@@ -159,6 +159,7 @@ class IdaRun {
   Next step();
   Next state_events(double t_ret);
   Next stopped_at(double t_event);
+  Next too_much_work(const std::string& budget);
   bool within_event_budget();
   bool recover(double t_ret);
   std::string chatter_message() const;
@@ -191,6 +192,7 @@ class IdaRun {
   OutputGrid grid_;
   RootLocator roots_;
   long steps_without_output_ = 0;
+  long steps_taken_ = 0;  // this integration's, against max_total_steps
   // The event budget between two output times (within_event_budget).
   long grid_k_at_budget_ = -1;
   std::size_t events_at_budget_ = 0;
@@ -781,7 +783,7 @@ IdaRun::Next IdaRun::step() {
     const Next next = state_events(t_ret);
     // A restart is work like a step: it counts against the budgets below
     // (resetting them let a chattering pair of events run forever).
-    if (next == Next::restarted) ++steps_without_output_;
+    if (next == Next::restarted) ++steps_without_output_, ++steps_taken_;
     if (next == Next::restarted && !within_event_budget()) return Next::stop;
     if (next != Next::step) return next;
   }
@@ -795,14 +797,19 @@ IdaRun::Next IdaRun::step() {
   // call, i.e. now one step: keep its meaning, at most max_steps steps
   // between one output (or event) and the next.
   steps_without_output_ = (stopped || grid_.k > k_before) ? 0 : steps_without_output_ + 1;
-  if (steps_without_output_ >= opt_.max_steps) {
-    emit();  // the last state IDA reached, for the partial results
-    fail("integration failed at t = " + std::to_string(t_) + " s: IDA_TOO_MUCH_WORK (" +
-         std::to_string(opt_.max_steps) + " steps without reaching the next output time)");
-    return Next::stop;
-  }
+  ++steps_taken_;
+  if (steps_without_output_ >= opt_.max_steps) return too_much_work(std::to_string(opt_.max_steps) + " steps without reaching the next output time");
+  if (opt_.max_total_steps > 0 && steps_taken_ >= opt_.max_total_steps)
+    return too_much_work(std::to_string(opt_.max_total_steps) + " steps in all");
   if (!within_event_budget()) return Next::stop;
   return stopped ? stopped_at(t_event) : Next::step;
+}
+
+// A step budget ran out: the last state reached, for the partial results.
+IdaRun::Next IdaRun::too_much_work(const std::string& budget) {
+  emit();
+  fail("integration failed at t = " + std::to_string(t_) + " s: IDA_TOO_MUCH_WORK (" + budget + ")");
+  return Next::stop;
 }
 
 // IDA's corrector failed at every step size. The algebraic unknowns (nodes

@@ -66,6 +66,10 @@ struct Disturbance {
 // and what only programs set.
 struct SolverOptions : SimulationSettings {
   long max_steps = 1000000;
+  // Steps of the whole integration (restarts count as steps); 0: no limit.
+  // A caller that knows what the run costs unperturbed bounds a perturbed
+  // one that crawls at a fine step size all the way, reaching every output.
+  long max_total_steps = 0;
   // Whether the outputs read y' (run_system sets it from its ProbeSet):
   // without, the output rows skip interpolating y'.
   bool outputs_read_yp = true;
