@@ -798,7 +798,8 @@ IdaRun::Next IdaRun::step() {
   // between one output (or event) and the next.
   steps_without_output_ = (stopped || grid_.k > k_before) ? 0 : steps_without_output_ + 1;
   ++steps_taken_;
-  if (steps_without_output_ >= opt_.max_steps) return too_much_work(std::to_string(opt_.max_steps) + " steps without reaching the next output time");
+  if (steps_without_output_ >= opt_.max_steps)
+    return too_much_work(std::to_string(opt_.max_steps) + " steps without reaching the next output time");
   if (opt_.max_total_steps > 0 && steps_taken_ >= opt_.max_total_steps)
     return too_much_work(std::to_string(opt_.max_total_steps) + " steps in all");
   if (!within_event_budget()) return Next::stop;
