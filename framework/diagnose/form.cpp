@@ -768,8 +768,8 @@ class Discovery {
   // parameter it brings at the price of what a term must gain), they are
   // refined best first, and the first whose refined form still gains its
   // price is kept: Gauss-Newton costs a simulation per parameter and run a
-  // step, and refining every trial took most of each round (on a line of
-  // six cylinders, three quarters of the form's simulations).
+  // step, and refining every trial took most of each later round (on a
+  // line of six cylinders the form took 810 simulations so, 663 now).
   bool round(std::vector<Eigen::VectorXd>& r) {
     std::vector<char> usable;
     const Normal N = linearise(r, usable);
