@@ -554,9 +554,10 @@ class Refiner {
   }
 
   // Damped Gauss-Newton steps from `terms` while each lowers the simulated
-  // sum of squares by more than a percent, at most four; `terms` and `ssr`
-  // end at the best. Returns whether the fourth still did (not converged).
-  bool refine(std::vector<DisturbanceTerm>& terms, double& ssr, std::vector<Eigen::VectorXd> r, double range) const {
+  // sum of squares by more than a percent, at most four; `terms`, `ssr` and
+  // the runs' residuals `r` end at the best. Returns whether the fourth
+  // still did (not converged).
+  bool refine(std::vector<DisturbanceTerm>& terms, double& ssr, std::vector<Eigen::VectorXd>& r, double range) const {
     const std::vector<Parameter> params = parameters(terms);
     for (int it = 0; it < 4; ++it) {
       const Eigen::VectorXd r_all = stacked(r);
@@ -807,15 +808,13 @@ class Discovery {
     for (const auto& [score, i] : order) {
       const bool unfinished = refiner_.refine(trials[i], s[i], rts[i], range_);
       if (ssr - s[i] < cost[i]) continue;
-      form = std::move(trials[i]), chosen = std::move(sets[i]), ssr = s[i];
-      if (!refiner_.residuals(form, r, nullptr)) return false;
+      form = std::move(trials[i]), chosen = std::move(sets[i]), ssr = s[i], r = std::move(rts[i]);
       // Refined on while its steps still pay, before the next round: a term
       // added later must not take the credit for steps its predecessors had
       // yet to make (a strong spring's coefficients, four steps from their
       // linearisation, else carry in a bump that does nothing).
-      if (!unfinished) return true;
-      refiner_.refine(form, ssr, r, range_);
-      return refiner_.residuals(form, r, nullptr);
+      if (unfinished) refiner_.refine(form, ssr, r, range_);
+      return true;
     }
     return false;
   }
