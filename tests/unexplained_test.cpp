@@ -106,6 +106,37 @@ TEST(Disturbance, AWithdrawalNeverTakesMoreThanTheStateHeldAndARatePerHeldFollow
     EXPECT_NEAR(at(fed.table, "p", t), p0 * (1 + 2.0 * (500 * t - 250 * t * t) / U0), 1e-5 * p0) << "t = " << t;
 }
 
+// A term that reads the state is in IDA's Newton matrix: the closed tank's
+// energy relaxes towards U1 = 250 J at k = 10^4 /s (U' = -k (U - U1)),
+// read once as the unknown U and once as the tank's pressure
+// (p = (kappa - 1) U / V, a quantity the matrix knows only through what it
+// reads). p = p1 + (p0 - p1) exp(-k t) throughout, and the run settles in
+// steps of its own choosing: with a matrix that lacks the term, Newton's
+// iteration converges only for steps under about 1 / k, 500 or more over
+// the 50 ms.
+TEST(Disturbance, AStiffTermThatReadsTheStateIsInTheNewtonMatrix) {
+  const std::string text = R"(
+components:
+  tank: {type: volume, V: 1 L, p0: 2 bar, T0: 300 K}
+  shut: {type: iso6358_throttle, C: 0, b: 0.3}
+  air: {type: atmosphere}
+connections: [[tank.port, shut.a], [shut.b, air.port]]
+outputs: {p: tank.p}
+simulation: {t_end: 50 ms, output_interval: 0.1 ms, rtol: 1e-7}
+)";
+  const double k = 1e4, V = 1e-3, kappa = 1.4, p0 = 2e5, p1 = 1e5;
+  using Of = DisturbanceFactor::Of;
+  const Disturbance on_energy{"tank.U", {}, {}, {{-k, {{Of::value, "tank.U", "", p1 * V / (kappa - 1)}}}}};
+  const Disturbance on_pressure{"tank.U", {}, {}, {{-k * V / (kappa - 1), {{Of::value, "tank.p", "", p1}}}}};
+  for (const auto& d : {on_energy, on_pressure}) {
+    const RunResult r = run_disturbed(text, {d});
+    for (double t : {1e-4, 2e-4, 5e-4, 5e-2})
+      EXPECT_NEAR(at(r.table, "p", t), p1 + (p0 - p1) * std::exp(-k * t), 1e-4 * p1)
+          << "reading " << d.terms[0].factors[0].variable << ", t = " << t;
+    EXPECT_LT(r.solver.stats.steps, 250) << "reading " << d.terms[0].factors[0].variable;
+  }
+}
+
 TEST(Disturbance, AnUnknownVariableIsRefused) {
   const Netlist nl = parse_netlist(kThreePortMixingCircuit, "t.yaml");
   SolverOptions opt = solver_options(nl.simulation);

@@ -26,9 +26,8 @@ namespace pneumo::diagnose::engine {
 constexpr long kDisturbedMaxSteps = 20000;  // a disturbed run's step budget (the cushion rig's nominal run takes 1225)
 // A disturbed run resumed from a kept run may take at most this many times
 // the kept run's steps in all: a disturbance that has the model crawl at a
-// fine step all the way (a form's terms read the state, and the Newton
-// matrix holds none of their derivatives) reaches every output, so only the
-// total shows it - and one such run costs as much as a dozen sound ones.
+// fine step all the way reaches every output, so only the total shows it -
+// and one such run costs as much as a dozen sound ones.
 constexpr long kDisturbedStepsPerKept = 5;
 constexpr double kFailedResidual = 1e4;  // per sample, for a run the solver could not finish
 constexpr std::size_t kMemoValues = std::size_t{1} << 23;  // remembered signal values (64 MB)

@@ -37,25 +37,45 @@ void scale_columns(const UserData& u, double* v) {
     for (auto k = u.col_ptr[c]; k < u.col_ptr[c + 1]; ++k) v[k] *= u.nominal[c];
 }
 
+// The Newton matrix's two parts at (t, y, y') into u.parts, in the
+// matrix's pattern: the System's, or with the disturbances' share.
+int evaluate_parts(UserData& u, double t, N_Vector y, N_Vector yp) {
+  auto& parts = u.parts;
+  const bool shifted = u.shifted.active();
+  if (shifted) u.shift_slopes(t, y, yp);
+  const double* py = u.physical_y(y);
+  const double* pyp = u.disturbed_yp(t, y, yp);
+  auto& dFdy = shifted ? u.system_dFdy : parts.dFdy;
+  auto& dFdyp = shifted ? u.system_dFdyp : parts.dFdyp;
+  dFdy.resize(u.row_idx.size());
+  dFdyp.resize(u.row_idx.size());
+  const int flag = u.system->newton_matrix_parts(t, py, pyp, dFdy.data(), dFdyp.data());
+  scale_columns(u, dFdy.data());
+  scale_columns(u, dFdyp.data());
+  if (shifted) {
+    parts.dFdy.resize(u.shifted.nnz());
+    parts.dFdyp.resize(u.shifted.nnz());
+    u.shifted.assemble(dFdy.data(), dFdyp.data(), u.slopes, u.nominal, parts.dFdy.data(), parts.dFdyp.data());
+  }
+  return flag;
+}
+
 // A fresh Newton matrix: evaluated at once, or from freshly evaluated
-// parts kept for the requests that follow.
+// parts - kept for the requests that follow, or needed for the
+// disturbances' share.
 int fresh_matrix(UserData& u, double t, double cj, N_Vector y, N_Vector yp, double* values, long steps,
                  long convergence_failures) {
   auto& parts = u.parts;
-  const double* py = u.physical_y(y);
-  const double* pyp = u.disturbed_yp(t, y, yp);
   parts.valid = false;
-  if (!parts.enabled || parts.in_calc_ic) {
-    const int flag = u.system->jacobian(t, py, pyp, cj, values);
+  const bool keep = parts.enabled && !parts.in_calc_ic;
+  if (!keep && !u.shifted.active()) {
+    const int flag = u.system->jacobian(t, u.physical_y(y), u.disturbed_yp(t, y, yp), cj, values);
     scale_columns(u, values);
     return flag;
   }
-  parts.dFdy.resize(u.row_idx.size());
-  parts.dFdyp.resize(u.row_idx.size());
-  const int flag = u.system->newton_matrix_parts(t, py, pyp, parts.dFdy.data(), parts.dFdyp.data());
-  scale_columns(u, parts.dFdy.data());
-  scale_columns(u, parts.dFdyp.data());
+  const int flag = evaluate_parts(u, t, y, yp);
   parts.combine(cj, values);
+  if (!keep) return flag;
   parts.valid = flag == 0;
   parts.steps_at = steps;
   parts.convergence_failures_at = convergence_failures;

@@ -6,12 +6,14 @@
 #include <idas/idas.h>
 #include <sunlinsol/sunlinsol_klu.h>
 
+#include <algorithm>
 #include <cmath>
 #include <exception>
 #include <string>
 #include <vector>
 
 #include "framework/assembly/system.hpp"
+#include "framework/solver/disturbed_matrix.hpp"
 #include "framework/solver/ida_solver.hpp"
 #include "framework/solver/newton_matrix.hpp"
 #include "framework/solver/timed_linear_solver.hpp"
@@ -58,7 +60,10 @@ struct UserData {
     double kappa = 0.0;
   };
   std::vector<Disturbed> disturbed;
-  std::vector<double> disturbance_rates;
+  // The Newton matrix's share of the shifts (inactive without disturbances)
+  // and its workspace: the System's parts in its own pattern, the slopes.
+  DisturbedMatrix shifted;
+  std::vector<double> shift, shift_moved, slopes, system_dFdy, system_dFdyp;
   // A steady start's settling integrates in a time of its own with the
   // model's time held at t_start: the equations see frozen_t (NaN: IDA's t).
   double frozen_t = NAN;
@@ -67,16 +72,42 @@ struct UserData {
     physical_yp(yp);
     if (disturbed.empty()) return yp_phys.data();
     physical_y(y);
-    // Every rate first: a term may read the rate of a disturbed unknown.
-    disturbance_rates.resize(disturbed.size());
-    for (std::size_t k = 0; k < disturbed.size(); ++k) disturbance_rates[k] = disturbance_at(disturbed[k], t);
+    shifts(t, shift);  // every shift first: a term may read the rate of a disturbed unknown
     for (std::size_t k = 0; k < disturbed.size(); ++k) {
-      const auto& r = disturbed[k];
-      const double d = disturbance_rates[k];
-      yp_phys[r.i] -= d;
-      if (r.energy >= 0 && y_phys[r.i] > 0) yp_phys[r.energy] -= d * r.kappa * y_phys[r.energy] / y_phys[r.i];
+      yp_phys[disturbed[k].i] -= shift[2 * k];
+      if (disturbed[k].energy >= 0) yp_phys[disturbed[k].energy] -= shift[2 * k + 1];
     }
     return yp_phys.data();
+  }
+  // What the disturbances take off y' at y_phys, yp_phys (undisturbed):
+  // s[2k] off disturbance k's balance, s[2k + 1] off its gas's internal
+  // energy - the gas's enthalpy, kappa U / m per unit of mass.
+  void shifts(double t, std::vector<double>& s) const {
+    s.resize(2 * disturbed.size());
+    for (std::size_t k = 0; k < disturbed.size(); ++k) {
+      const auto& r = disturbed[k];
+      const double d = disturbance_at(r, t);
+      s[2 * k] = d;
+      s[2 * k + 1] = r.energy >= 0 && y_phys[r.i] > 0 ? d * r.kappa * y_phys[r.energy] / y_phys[r.i] : 0.0;
+    }
+  }
+  // The shifts' slopes over shifted.columns() at (t, y, y'), by forward
+  // differences (DisturbedMatrix::assemble's order).
+  void shift_slopes(double t, N_Vector y, N_Vector yp) {
+    physical_y(y);
+    physical_yp(yp);
+    shifts(t, shift);
+    const auto& columns = shifted.columns();
+    slopes.resize(columns.size() * shift.size());
+    for (std::size_t q = 0; q < columns.size(); ++q) {
+      const int c = columns[q];
+      const double held = y_phys[c];
+      y_phys[c] = held + 1e-7 * std::max(std::abs(held), nominal[c]);
+      const double h = y_phys[c] - held;
+      shifts(t, shift_moved);
+      y_phys[c] = held;
+      for (std::size_t k = 0; k < shift.size(); ++k) slopes[q * shift.size() + k] = (shift_moved[k] - shift[k]) / h;
+    }
   }
   double read(const Reader& r, double t) const {
     if (r.unknown >= 0) return y_phys[r.unknown];

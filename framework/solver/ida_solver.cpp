@@ -16,6 +16,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <set>
 #include <stdexcept>
 
 #include "framework/core/interrupt.hpp"
@@ -132,6 +133,9 @@ class IdaRun {
   void use_newton_solver(bool algebraic);
   void init_quadratures();
   void find_disturbed();
+  void share_disturbances_in_matrix();
+  std::vector<int> shift_reads(const UserData::Disturbed& r) const;
+  std::vector<int> probe_reads(const Probe& p) const;
   UserData::Reader reader(const Disturbance& d, const std::string& name, bool rate) const;
   int internal_energy_of(const std::string& unknown) const;
   void check(int flag, const char* what) const {
@@ -222,9 +226,9 @@ IdaRun::IdaRun(System& system, const SolverOptions& opt, OutputFn output, const 
   user_.col_ptr.assign(system.col_ptr().begin(), system.col_ptr().end());
   user_.row_idx.assign(system.row_idx().begin(), system.row_idx().end());
   create_vectors();
+  find_disturbed();
   create_ida();
   if (n_quad_ > 0) init_quadratures();
-  find_disturbed();
 }
 
 // A factor reads a System unknown, else a component's quantity as outputs
@@ -282,6 +286,58 @@ void IdaRun::find_disturbed() {
     }
     user_.disturbed.push_back(std::move(r));
   }
+  share_disturbances_in_matrix();
+}
+
+// The Newton matrix holds what the disturbances' shifts do through the
+// state (disturbed_matrix.hpp): each shift reads its balance, its gas's
+// energy and whatever its terms read.
+void IdaRun::share_disturbances_in_matrix() {
+  if (user_.disturbed.empty()) return;
+  std::vector<DisturbedMatrix::Shift> shifts;
+  for (const auto& r : user_.disturbed) {
+    const auto reads = shift_reads(r);
+    shifts.push_back({r.i, reads});
+    shifts.push_back({r.energy, reads});
+  }
+  user_.shifted = DisturbedMatrix(user_.col_ptr, user_.row_idx, shifts);
+}
+
+std::vector<int> IdaRun::shift_reads(const UserData::Disturbed& r) const {
+  std::set<int> reads{r.i};
+  if (r.energy >= 0) reads.insert(r.energy);
+  for (const auto& term : r.factor_of)
+    for (const auto& [a, b] : term)
+      for (const auto* x : {&a, &b}) {
+        if (x->unknown >= 0) reads.insert(x->unknown);
+        if (x->unknown < 0 && x->probe.index >= 0) {
+          const auto more = probe_reads(x->probe);
+          reads.insert(more.begin(), more.end());
+        }
+      }
+  return {reads.begin(), reads.end()};
+}
+
+// The unknowns a component's quantity reads: each moved in turn, at the
+// start values and at a point off them (a quantity upwinded or switched may
+// read an unknown on one side only).
+std::vector<int> IdaRun::probe_reads(const Probe& p) const {
+  std::vector<double> y0, yp0;
+  system_.start_values(y0, yp0);
+  std::set<int> reads;
+  for (const double off : {0.0, 0.05}) {
+    auto y = y0;
+    for (int c = 0; c < n_; ++c) y[c] += (c % 2 ? off : -off) * std::max(std::abs(y[c]), user_.nominal[c]);
+    const double base = system_.probe(p, opt_.t_start, y.data(), yp0.data());
+    if (!std::isfinite(base)) continue;
+    for (int c = 0; c < n_; ++c) {
+      const double held = y[c];
+      y[c] += 1e-4 * std::max(std::abs(held), user_.nominal[c]);
+      if (!(system_.probe(p, opt_.t_start, y.data(), yp0.data()) == base)) reads.insert(c);
+      y[c] = held;
+    }
+  }
+  return {reads.begin(), reads.end()};
 }
 
 // y and y' scaled by each unknown's nominal magnitude (see UserData).
@@ -311,11 +367,14 @@ void IdaRun::create_vectors() {
 }
 
 void IdaRun::create_ida() {
-  A_.reset(SUNSparseMatrix(n_, n_, std::max<long>(1, system_.nnz()), CSC_MAT, context_.ctx));
+  const bool shifted = user_.shifted.active();
+  const auto& col_ptr = shifted ? user_.shifted.col_ptr() : user_.col_ptr;
+  const auto& row_idx = shifted ? user_.shifted.row_idx() : user_.row_idx;
+  A_.reset(SUNSparseMatrix(n_, n_, std::max<long>(1, static_cast<long>(row_idx.size())), CSC_MAT, context_.ctx));
   if (A_) {
     A_->ops->zero = keep_matrix;
-    std::copy(user_.col_ptr.begin(), user_.col_ptr.end(), SUNSparseMatrix_IndexPointers(A_.get()));
-    std::copy(user_.row_idx.begin(), user_.row_idx.end(), SUNSparseMatrix_IndexValues(A_.get()));
+    std::copy(col_ptr.begin(), col_ptr.end(), SUNSparseMatrix_IndexPointers(A_.get()));
+    std::copy(row_idx.begin(), row_idx.end(), SUNSparseMatrix_IndexValues(A_.get()));
   }
   LS_.reset(SUNLinSol_KLU(y_.get(), A_.get(), context_.ctx));
   if (LS_) timed_LS_.reset(timed_klu(LS_.get(), &lu_, opt_.time_phases, context_.ctx));

@@ -26,9 +26,10 @@ namespace pneumo {
 // mass alone: a disturbance of a gas mass whose component declares its
 // internal energy (VariableSpec::internal_energy) moves that energy by the
 // gas's enthalpy, d kappa U / m - a leak takes the chamber's gas as it is.
-// The terms are not in the Jacobian: IDA's Newton iteration converges on
-// them as on any approximate matrix, slower when they are strong. Set by
-// programs (the diagnosis), not by netlists.
+// The terms' slopes in what they read are in IDA's Newton matrix
+// (disturbed_matrix.hpp; a quantity's unknowns found by moving each in
+// turn), a rate's are not. Set by programs (the diagnosis), not by
+// netlists.
 struct DisturbanceFactor {
   enum class Of { value, rate, magnitude, sign, bump, difference };
   Of of = Of::value;
