@@ -137,6 +137,20 @@ simulation: {t_end: 50 ms, output_interval: 0.1 ms, rtol: 1e-7}
   }
 }
 
+// A term may read a rate (the form search's d[v]/dt): the closed tank's
+// energy relaxing at k = 10 /s towards U1 = 250 J with a term -c U' on its
+// balance is (1 + c) U' = -k (U - U1), so p = p1 + (p0 - p1) exp(-k t /
+// (1 + c)). With c = 3 a Newton matrix that lacks the term's slope in U'
+// oversteps every iteration about fourfold and the run fails.
+TEST(Disturbance, ATermThatReadsARateIsInTheNewtonMatrixToo) {
+  const double k = 10, c = 3, kappa = 1.4, V = 1e-3, p0 = 2e5, p1 = 1e5;
+  using Of = DisturbanceFactor::Of;
+  const Disturbance d{"tank.U", {}, {}, {{-k, {{Of::value, "tank.U", "", p1 * V / (kappa - 1)}}}, {-c, {{Of::rate, "tank.U"}}}}};
+  const RunResult r = run_disturbed(closed_tank(", rtol: 1e-8"), {d});
+  for (double t : {0.05, 0.2, 0.5})
+    EXPECT_NEAR(at(r.table, "p", t), p1 + (p0 - p1) * std::exp(-k * t / (1 + c)), 1e-5 * p1) << "t = " << t;
+}
+
 TEST(Disturbance, AnUnknownVariableIsRefused) {
   const Netlist nl = parse_netlist(kThreePortMixingCircuit, "t.yaml");
   SolverOptions opt = solver_options(nl.simulation);

@@ -55,7 +55,8 @@ int evaluate_parts(UserData& u, double t, N_Vector y, N_Vector yp) {
   if (shifted) {
     parts.dFdy.resize(u.shifted.nnz());
     parts.dFdyp.resize(u.shifted.nnz());
-    u.shifted.assemble(dFdy.data(), dFdyp.data(), u.slopes, u.nominal, parts.dFdy.data(), parts.dFdyp.data());
+    u.shifted.assemble(dFdy.data(), dFdyp.data(), u.slopes, u.rate_slopes, u.nominal, parts.dFdy.data(),
+                       parts.dFdyp.data());
   }
   return flag;
 }

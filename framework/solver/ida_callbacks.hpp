@@ -63,7 +63,7 @@ struct UserData {
   // The Newton matrix's share of the shifts (inactive without disturbances)
   // and its workspace: the System's parts in its own pattern, the slopes.
   DisturbedMatrix shifted;
-  std::vector<double> shift, shift_moved, slopes, system_dFdy, system_dFdyp;
+  std::vector<double> shift, shift_moved, slopes, rate_slopes, system_dFdy, system_dFdyp;
   // A steady start's settling integrates in a time of its own with the
   // model's time held at t_start: the equations see frozen_t (NaN: IDA's t).
   double frozen_t = NAN;
@@ -91,22 +91,27 @@ struct UserData {
       s[2 * k + 1] = r.energy >= 0 && y_phys[r.i] > 0 ? d * r.kappa * y_phys[r.energy] / y_phys[r.i] : 0.0;
     }
   }
-  // The shifts' slopes over shifted.columns() at (t, y, y'), by forward
-  // differences (DisturbedMatrix::assemble's order).
+  // The shifts' slopes over shifted.columns() and over the rates of
+  // shifted.rate_columns() at (t, y, y'), by forward differences
+  // (DisturbedMatrix::assemble's order).
   void shift_slopes(double t, N_Vector y, N_Vector yp) {
     physical_y(y);
     physical_yp(yp);
     shifts(t, shift);
-    const auto& columns = shifted.columns();
-    slopes.resize(columns.size() * shift.size());
+    slopes_over(t, shifted.columns(), y_phys, slopes);
+    slopes_over(t, shifted.rate_columns(), yp_phys, rate_slopes);
+  }
+  // Each of `columns` of `x` (y_phys or yp_phys) moved in turn.
+  void slopes_over(double t, const std::vector<int>& columns, std::vector<double>& x, std::vector<double>& out) {
+    out.resize(columns.size() * shift.size());
     for (std::size_t q = 0; q < columns.size(); ++q) {
       const int c = columns[q];
-      const double held = y_phys[c];
-      y_phys[c] = held + 1e-7 * std::max(std::abs(held), nominal[c]);
-      const double h = y_phys[c] - held;
+      const double held = x[c];
+      x[c] = held + 1e-7 * std::max(std::abs(held), nominal[c]);
+      const double h = x[c] - held;
       shifts(t, shift_moved);
-      y_phys[c] = held;
-      for (std::size_t k = 0; k < shift.size(); ++k) slopes[q * shift.size() + k] = (shift_moved[k] - shift[k]) / h;
+      x[c] = held;
+      for (std::size_t k = 0; k < shift.size(); ++k) out[q * shift.size() + k] = (shift_moved[k] - shift[k]) / h;
     }
   }
   double read(const Reader& r, double t) const {

@@ -134,7 +134,7 @@ class IdaRun {
   void init_quadratures();
   void find_disturbed();
   void share_disturbances_in_matrix();
-  std::vector<int> shift_reads(const UserData::Disturbed& r) const;
+  DisturbedMatrix::Shift shift_reads(const UserData::Disturbed& r) const;
   std::vector<int> probe_reads(const Probe& p) const;
   UserData::Reader reader(const Disturbance& d, const std::string& name, bool rate) const;
   int internal_energy_of(const std::string& unknown) const;
@@ -297,17 +297,19 @@ void IdaRun::share_disturbances_in_matrix() {
   std::vector<DisturbedMatrix::Shift> shifts;
   for (const auto& r : user_.disturbed) {
     const auto reads = shift_reads(r);
-    shifts.push_back({r.i, reads});
-    shifts.push_back({r.energy, reads});
+    shifts.push_back({r.i, reads.reads, reads.rate_reads});
+    shifts.push_back({r.energy, reads.reads, reads.rate_reads});
   }
   user_.shifted = DisturbedMatrix(user_.col_ptr, user_.row_idx, shifts);
 }
 
-std::vector<int> IdaRun::shift_reads(const UserData::Disturbed& r) const {
-  std::set<int> reads{r.i};
+DisturbedMatrix::Shift IdaRun::shift_reads(const UserData::Disturbed& r) const {
+  std::set<int> reads{r.i}, rate_reads;
   if (r.energy >= 0) reads.insert(r.energy);
-  for (const auto& term : r.factor_of)
-    for (const auto& [a, b] : term)
+  for (std::size_t j = 0; j < r.factor_of.size(); ++j)
+    for (std::size_t f = 0; f < r.factor_of[j].size(); ++f) {
+      const auto& [a, b] = r.factor_of[j][f];
+      if (r.d->terms[j].factors[f].of == DisturbanceFactor::Of::rate) rate_reads.insert(a.unknown);
       for (const auto* x : {&a, &b}) {
         if (x->unknown >= 0) reads.insert(x->unknown);
         if (x->unknown < 0 && x->probe.index >= 0) {
@@ -315,17 +317,19 @@ std::vector<int> IdaRun::shift_reads(const UserData::Disturbed& r) const {
           reads.insert(more.begin(), more.end());
         }
       }
-  return {reads.begin(), reads.end()};
+    }
+  return {r.i, {reads.begin(), reads.end()}, {rate_reads.begin(), rate_reads.end()}};
 }
 
 // The unknowns a component's quantity reads: each moved in turn, at the
-// start values and at a point off them (a quantity upwinded or switched may
-// read an unknown on one side only).
+// start values and at two points off them, each unknown's way reversed
+// between them (a quantity upwinded or switched reads the unknowns of one
+// side of a flow at a time).
 std::vector<int> IdaRun::probe_reads(const Probe& p) const {
   std::vector<double> y0, yp0;
   system_.start_values(y0, yp0);
   std::set<int> reads;
-  for (const double off : {0.0, 0.05}) {
+  for (const double off : {0.0, 0.05, -0.05}) {
     auto y = y0;
     for (int c = 0; c < n_; ++c) y[c] += (c % 2 ? off : -off) * std::max(std::abs(y[c]), user_.nominal[c]);
     const double base = system_.probe(p, opt_.t_start, y.data(), yp0.data());
