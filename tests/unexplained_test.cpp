@@ -58,8 +58,8 @@ simulation: {t_end: 20 s, output_interval: 0.5 s, rtol: 1e-8}
 }
 
 // A 1 L tank at 2 bar, 300 K, shut off from the atmosphere, run for 0.5 s
-// (`extra`: more simulation settings).
-std::string closed_tank(const std::string& extra) {
+// (`extra`: more simulation settings; `span`: another run's length).
+std::string closed_tank(const std::string& extra, const std::string& span = "t_end: 0.5 s, output_interval: 10 ms") {
   return R"(
 components:
   tank: {type: volume, V: 1 L, p0: 2 bar, T0: 300 K}
@@ -67,7 +67,7 @@ components:
   air: {type: atmosphere}
 connections: [[tank.port, shut.a], [shut.b, air.port]]
 outputs: {p: tank.p}
-simulation: {t_end: 0.5 s, output_interval: 10 ms)" + extra + "}\n";
+simulation: {)" + span + extra + "}\n";
 }
 
 // A closed tank whose energy balance gets a piecewise-linear heat input
@@ -115,15 +115,7 @@ TEST(Disturbance, AWithdrawalNeverTakesMoreThanTheStateHeldAndARatePerHeldFollow
 // iteration converges only for steps under about 1 / k, 500 or more over
 // the 50 ms.
 TEST(Disturbance, AStiffTermThatReadsTheStateIsInTheNewtonMatrix) {
-  const std::string text = R"(
-components:
-  tank: {type: volume, V: 1 L, p0: 2 bar, T0: 300 K}
-  shut: {type: iso6358_throttle, C: 0, b: 0.3}
-  air: {type: atmosphere}
-connections: [[tank.port, shut.a], [shut.b, air.port]]
-outputs: {p: tank.p}
-simulation: {t_end: 50 ms, output_interval: 0.1 ms, rtol: 1e-7}
-)";
+  const std::string text = closed_tank(", rtol: 1e-7", "t_end: 50 ms, output_interval: 0.1 ms");
   const double k = 1e4, V = 1e-3, kappa = 1.4, p0 = 2e5, p1 = 1e5;
   using Of = DisturbanceFactor::Of;
   const Disturbance on_energy{"tank.U", {}, {}, {{-k, {{Of::value, "tank.U", "", p1 * V / (kappa - 1)}}}}};
@@ -145,7 +137,8 @@ simulation: {t_end: 50 ms, output_interval: 0.1 ms, rtol: 1e-7}
 TEST(Disturbance, ATermThatReadsARateIsInTheNewtonMatrixToo) {
   const double k = 10, c = 3, kappa = 1.4, V = 1e-3, p0 = 2e5, p1 = 1e5;
   using Of = DisturbanceFactor::Of;
-  const Disturbance d{"tank.U", {}, {}, {{-k, {{Of::value, "tank.U", "", p1 * V / (kappa - 1)}}}, {-c, {{Of::rate, "tank.U"}}}}};
+  const Disturbance d{
+      "tank.U", {}, {}, {{-k, {{Of::value, "tank.U", "", p1 * V / (kappa - 1)}}}, {-c, {{Of::rate, "tank.U"}}}}};
   const RunResult r = run_disturbed(closed_tank(", rtol: 1e-8"), {d});
   for (double t : {0.05, 0.2, 0.5})
     EXPECT_NEAR(at(r.table, "p", t), p1 + (p0 - p1) * std::exp(-k * t / (1 + c)), 1e-5 * p1) << "t = " << t;

@@ -9,7 +9,9 @@ namespace pneumo {
 
 namespace {
 
-const std::vector<int>& read_by(const DisturbedMatrix::Shift& s, int kind) { return kind == 0 ? s.reads : s.rate_reads; }
+const std::vector<int>& read_by(const DisturbedMatrix::Shift& s, int kind) {
+  return kind == 0 ? s.reads : s.rate_reads;
+}
 
 }  // namespace
 
@@ -48,7 +50,8 @@ DisturbedMatrix::DisturbedMatrix(const std::vector<sunindextype>& col_ptr, const
       for (int c : read_by(shifts[slot], kind)) {
         const int q = static_cast<int>(std::lower_bound(cols.begin(), cols.end(), c) - cols.begin());
         for (auto k = col_ptr[u]; k < col_ptr[u + 1]; ++k)
-          entries_[kind].push_back({static_cast<int>(k), at.at({static_cast<int>(row_idx[k]), c}), q * slots_ + slot, u, c});
+          entries_[kind].push_back(
+              {static_cast<int>(k), at.at({static_cast<int>(row_idx[k]), c}), q * slots_ + slot, u, c});
       }
     }
 }
