@@ -143,6 +143,8 @@ class IdaRun {
   }
   void fail(const std::string& msg);
   bool consistent_ic();
+  int calc_ic_without_line_search(double t_next);
+  int calc_ic_with_more_iterations(double t_next);
   bool settle();
   bool rest_start();
   bool integrate_to_rest();
@@ -474,41 +476,45 @@ bool IdaRun::consistent_ic() {
       t_ + (settling_ ? 1e-5 : std::min({opt_.output_interval, 1e-5, std::max(opt_.t_end - t_, 1e-9)}));
   user_.parts.in_calc_ic = true;
   int flag = IDACalcIC(ida_, IDA_YA_YDP_INIT, t_next);
-  if (flag < 0) {
-    // IDA's line search can stall on flow laws with flat (choked) pieces,
-    // e.g. a junction without volume fed by choked throttles; a full
-    // Newton without it converges from the same start (conservation_test).
-    check(IDAReInit(ida_, t_, y_.get(), yp_.get()), "IDAReInit");
-    check(IDASetLineSearchOffIC(ida_, SUNTRUE), "IDASetLineSearchOffIC");
-    flag = IDACalcIC(ida_, IDA_YA_YDP_INIT, t_next);
-    check(IDASetLineSearchOffIC(ida_, SUNFALSE), "IDASetLineSearchOffIC");
-  }
-  if (flag < 0) {
-    // A junction without volume whose neighbour opens as a step (a valve
-    // path drawn as a throttle) must move bars away, through the steep
-    // laminar piece of the flow law, where each Newton step is short: more
-    // iterations than IDA's default 10 (junction_test), at the one step
-    // size only, so that a restart that cannot succeed stays cheap.
-    check(IDAReInit(ida_, t_, y_.get(), yp_.get()), "IDAReInit");
-    check(IDASetMaxNumItersIC(ida_, 60), "IDASetMaxNumItersIC");
-    check(IDASetMaxNumJacsIC(ida_, 4), "IDASetMaxNumJacsIC");
-    check(IDASetMaxNumStepsIC(ida_, 1), "IDASetMaxNumStepsIC");
-    flag = IDACalcIC(ida_, IDA_YA_YDP_INIT, t_next);
-    check(IDASetMaxNumItersIC(ida_, 10), "IDASetMaxNumItersIC");
-    check(IDASetMaxNumJacsIC(ida_, 4), "IDASetMaxNumJacsIC");
-    check(IDASetMaxNumStepsIC(ida_, 5), "IDASetMaxNumStepsIC");
-  }
+  if (flag < 0) flag = calc_ic_without_line_search(t_next);
+  if (flag < 0) flag = calc_ic_with_more_iterations(t_next);
   user_.parts.in_calc_ic = false;
   user_.parts.valid = false;
+  IDAGetConsistentIC(ida_, y_.get(), yp_.get());  // on failure, IDA's last iterate, where the equations failed to hold
   if (flag < 0) {
-    // IDA's last iterate, where the equations failed to hold.
-    IDAGetConsistentIC(ida_, y_.get(), yp_.get());
     fail("cannot find consistent initial values at t = " + std::to_string(t_) + " s: " + flag_text(flag, user_) +
          "." + start_failure_report(user_, y_.get(), yp_.get(), t_));
     return false;
   }
-  IDAGetConsistentIC(ida_, y_.get(), yp_.get());
   return true;
+}
+
+// IDA's line search can stall on flow laws with flat (choked) pieces, e.g.
+// a junction without volume fed by choked throttles; a full Newton without
+// it converges from the same start (conservation_test).
+int IdaRun::calc_ic_without_line_search(double t_next) {
+  check(IDAReInit(ida_, t_, y_.get(), yp_.get()), "IDAReInit");
+  check(IDASetLineSearchOffIC(ida_, SUNTRUE), "IDASetLineSearchOffIC");
+  const int flag = IDACalcIC(ida_, IDA_YA_YDP_INIT, t_next);
+  check(IDASetLineSearchOffIC(ida_, SUNFALSE), "IDASetLineSearchOffIC");
+  return flag;
+}
+
+// A junction without volume whose neighbour opens as a step (a valve path
+// drawn as a throttle) must move bars away, through the steep laminar piece
+// of the flow law, where each Newton step is short: more iterations than
+// IDA's default 10 (junction_test), at the one step size only, so that a
+// restart that cannot succeed stays cheap.
+int IdaRun::calc_ic_with_more_iterations(double t_next) {
+  check(IDAReInit(ida_, t_, y_.get(), yp_.get()), "IDAReInit");
+  check(IDASetMaxNumItersIC(ida_, 60), "IDASetMaxNumItersIC");
+  check(IDASetMaxNumJacsIC(ida_, 4), "IDASetMaxNumJacsIC");
+  check(IDASetMaxNumStepsIC(ida_, 1), "IDASetMaxNumStepsIC");
+  const int flag = IDACalcIC(ida_, IDA_YA_YDP_INIT, t_next);
+  check(IDASetMaxNumItersIC(ida_, 10), "IDASetMaxNumItersIC");
+  check(IDASetMaxNumJacsIC(ida_, 4), "IDASetMaxNumJacsIC");
+  check(IDASetMaxNumStepsIC(ida_, 5), "IDASetMaxNumStepsIC");
+  return flag;
 }
 
 // Event iteration: a mode change makes signals jump at the
