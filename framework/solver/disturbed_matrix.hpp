@@ -1,5 +1,5 @@
 // The disturbances' share of IDA's Newton matrix. A disturbed run's
-// equations are G(y, y') = F(y, y' - s(t, y)) (UserData::disturbed_yp): a
+// equations are G(y, y') = F(y, y' - s(t, y, y')) (UserData::disturbed_yp): a
 // shift s_u comes off the rate of unknown u - a disturbed balance, or the
 // internal energy its gas's enthalpy moves - and s_u reads the state (a
 // form's terms read a temperature, a speed, a pressure difference, an

@@ -16,8 +16,10 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <map>
 #include <set>
 #include <stdexcept>
+#include <tuple>
 
 #include "framework/core/interrupt.hpp"
 #include "framework/core/text.hpp"
@@ -134,7 +136,10 @@ class IdaRun {
   void init_quadratures();
   void find_disturbed();
   void share_disturbances_in_matrix();
-  DisturbedMatrix::Shift shift_reads(const UserData::Disturbed& r) const;
+  // The unknowns a component's quantity reads, by (component, kind, index):
+  // a quantity that several terms read is probed once.
+  using ProbedReads = std::map<std::tuple<int, Probe::Kind, int>, std::vector<int>>;
+  DisturbedMatrix::Shift shift_reads(const UserData::Disturbed& r, ProbedReads& probed) const;
   std::vector<int> probe_reads(const Probe& p) const;
   UserData::Reader reader(const Disturbance& d, const std::string& name, bool rate) const;
   int internal_energy_of(const std::string& unknown) const;
@@ -293,19 +298,22 @@ void IdaRun::find_disturbed() {
 
 // The Newton matrix holds what the disturbances' shifts do through the
 // state (disturbed_matrix.hpp): each shift reads its balance, its gas's
-// energy and whatever its terms read.
+// energy and whatever its terms read; its gas's energy reads the same.
 void IdaRun::share_disturbances_in_matrix() {
   if (user_.disturbed.empty()) return;
+  ProbedReads probed;
   std::vector<DisturbedMatrix::Shift> shifts;
   for (const auto& r : user_.disturbed) {
-    const auto reads = shift_reads(r);
-    shifts.push_back({r.i, reads.reads, reads.rate_reads});
-    shifts.push_back({r.energy, reads.reads, reads.rate_reads});
+    auto balance = shift_reads(r, probed);
+    auto energy = balance;
+    energy.unknown = r.energy;
+    shifts.push_back(std::move(balance));
+    shifts.push_back(std::move(energy));
   }
   user_.shifted = DisturbedMatrix(user_.col_ptr, user_.row_idx, shifts);
 }
 
-DisturbedMatrix::Shift IdaRun::shift_reads(const UserData::Disturbed& r) const {
+DisturbedMatrix::Shift IdaRun::shift_reads(const UserData::Disturbed& r, ProbedReads& probed) const {
   std::set<int> reads{r.i}, rate_reads;
   if (r.energy >= 0) reads.insert(r.energy);
   for (std::size_t j = 0; j < r.factor_of.size(); ++j)
@@ -314,10 +322,11 @@ DisturbedMatrix::Shift IdaRun::shift_reads(const UserData::Disturbed& r) const {
       if (r.d->terms[j].factors[f].of == DisturbanceFactor::Of::rate) rate_reads.insert(a.unknown);
       for (const auto* x : {&a, &b}) {
         if (x->unknown >= 0) reads.insert(x->unknown);
-        if (x->unknown < 0 && x->probe.index >= 0) {
-          const auto more = probe_reads(x->probe);
-          reads.insert(more.begin(), more.end());
-        }
+        if (x->unknown >= 0 || x->probe.index < 0) continue;
+        const auto key = std::make_tuple(x->probe.component, x->probe.kind, x->probe.index);
+        auto it = probed.find(key);
+        if (it == probed.end()) it = probed.emplace(key, probe_reads(x->probe)).first;
+        reads.insert(it->second.begin(), it->second.end());
       }
     }
   return {r.i, {reads.begin(), reads.end()}, {rate_reads.begin(), rate_reads.end()}};

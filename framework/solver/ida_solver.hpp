@@ -26,10 +26,9 @@ namespace pneumo {
 // mass alone: a disturbance of a gas mass whose component declares its
 // internal energy (VariableSpec::internal_energy) moves that energy by the
 // gas's enthalpy, d kappa U / m - a leak takes the chamber's gas as it is.
-// The terms' slopes in what they read are in IDA's Newton matrix
-// (disturbed_matrix.hpp; a quantity's unknowns found by moving each in
-// turn), a rate's are not. Set by programs (the diagnosis), not by
-// netlists.
+// The terms' slopes in the values and rates they read are in IDA's Newton
+// matrix (disturbed_matrix.hpp; a quantity's unknowns found by moving each
+// in turn). Set by programs (the diagnosis), not by netlists.
 struct DisturbanceFactor {
   enum class Of { value, rate, magnitude, sign, bump, difference };
   Of of = Of::value;
