@@ -31,6 +31,7 @@
 #include <vector>
 
 #include "components/cylinder_parts.hpp"
+#include "framework/model/per_thread.hpp"
 #include "framework/model/registry.hpp"
 
 namespace pneumo::components {
@@ -187,11 +188,12 @@ class DoubleActingCylinder final : public ComponentT<DoubleActingCylinder> {
       key[0] = e.flange(kFlange).s;
       key[1] = e.flange(kFlange).v;
       for (int k = 0; k < n; ++k) key[2 + k] = e.var(k);
-      if (memo_valid_ && std::equal(key, key + 2 + n, memo_key_)) return memo_state_;
-      memo_state_ = compute_state(e);
-      std::copy_n(key, 2 + n, memo_key_);
-      memo_valid_ = true;
-      return memo_state_;
+      Memo& m = memo_.get();
+      if (m.valid && std::equal(key, key + 2 + n, m.key)) return m.state;
+      m.state = compute_state(e);
+      std::copy_n(key, 2 + n, m.key);
+      m.valid = true;
+      return m.state;
     } else {
       return compute_state(e);
     }
@@ -521,11 +523,15 @@ class DoubleActingCylinder final : public ComponentT<DoubleActingCylinder> {
   std::vector<Root> roots_;
   int z_var_ = 0, force_row_ = 0, friction_row_ = -1;
   std::vector<CylinderQuantity> quantities_;
-  // state<double>() memo: its inputs (s, v, internal variables) and result.
+  // state<double>() memo: its inputs (s, v, internal variables) and result,
+  // one per thread (threads may integrate one System at once).
   static constexpr int kMemoKey = 2 + 9;
-  mutable bool memo_valid_ = false;
-  mutable double memo_key_[kMemoKey] = {};
-  mutable State<double> memo_state_{};
+  struct Memo {
+    bool valid = false;
+    double key[kMemoKey] = {};
+    State<double> state{};
+  };
+  PerThread<Memo> memo_;
 };
 
 }  // namespace pneumo::components

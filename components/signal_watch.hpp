@@ -11,16 +11,17 @@
 // and forwards initial_modes, roots, on_event and on_inputs_changed here.
 // "Told" is no mode: a component with modes is kept out of alias
 // elimination (its rows could change at events), which slowed the cushion
-// rig measurably for a flag that changes no equation. It is the one mutable
-// state of the component, reset at every run's start (initial_modes), like
-// the memo component.hpp allows: a component belongs to one circuit, run by
-// one thread at a time.
+// rig measurably for a flag that changes no equation. It is kept per thread
+// (framework/model/per_thread.hpp: threads may integrate one System at
+// once), reset at every run's start (initial_modes); a thread runs one
+// integration of a System at a time.
 #pragma once
 
 #include <sstream>
 #include <string>
 
 #include "framework/model/component.hpp"
+#include "framework/model/per_thread.hpp"
 
 namespace pneumo::components {
 
@@ -37,33 +38,33 @@ class SignalWatch {
     i.roots += 1;
     i.follows_inputs = true;
   }
-  void reset() const { told_ = false; }
+  void reset() const { told_.get() = false; }
   // Unconnected, the input holds its default, which is in range.
   double root(const Eval<double>& e) const { return e.connected(port_) ? e.signal(port_) - threshold_ : 1.0; }
 
   // At the start and after every event.
   EventResult check(const Eval<double>& e) const {
-    if (told_ || !(root(e) < 0.0)) return {};
+    if (told_.get() || !(root(e) < 0.0)) return {};
     std::ostringstream v;
     v << e.signal(port_) << (unit_.empty() ? "" : " ") << unit_;
     return tell("= " + v.str() + " is out of range");
   }
   // The root crossing: direction < 0 leaves the range.
   EventResult crossed(int direction) const {
-    if (direction > 0 || told_) return {};
+    if (direction > 0 || told_.get()) return {};
     return tell("leaves its range here");
   }
 
  private:
   EventResult tell(const std::string& what) const {
-    told_ = true;
+    told_.get() = true;
     return {false, "warning: input '" + name_ + "' " + what + " (" + range_ + "); " + then_ + " (said once a run)"};
   }
   int port_;
   std::string name_, unit_;
   double threshold_;
   std::string range_, then_;
-  mutable bool told_ = false;
+  PerThread<bool, 64> told_;
 };
 
 }  // namespace pneumo::components

@@ -68,27 +68,28 @@ TEST(AliasElimination, ReducedJacobianMatchesFiniteDifferences) {
   AssemblyOptions opt;
   opt.eliminate_aliases = true;
   System sys(elaborate(nl, builtin_registry()), opt);
+  Evaluator eval(sys);
   const int n = sys.size();
   std::vector<double> y, yp;
   sys.start_values(y, yp);
   for (int i = 0; i < n; ++i) yp[i] = 0.01 * sys.nominal()[i];
   std::vector<double> dFdy, dFdyp;
-  sys.jacobian_parts(0.0, y.data(), yp.data(), dFdy, dFdyp);
+  eval.jacobian_parts(0.0, y.data(), yp.data(), dFdy, dFdyp);
   // Central differences; an entry whose forward and backward differences
   // disagree has a kink inside the stencil (stops, regularised |x| at zero
   // flow) and is skipped, as in jacobian_test. Entries are compared scaled by
   // the variable's magnitude, relative to the largest entry of their row.
   std::vector<double> F0(n), Fp(n), Fm(n);
-  ASSERT_EQ(sys.residual(0.0, y.data(), yp.data(), F0.data()), 0);
+  ASSERT_EQ(eval.residual(0.0, y.data(), yp.data(), F0.data()), 0);
   std::vector<double> fd(static_cast<std::size_t>(n) * n), kink(fd.size()), scale(n);
   for (int j = 0; j < n; ++j) {
     scale[j] = std::max(std::abs(y[j]), sys.nominal()[j]);
     const double h = 1e-6 * scale[j];
     auto yy = y;
     yy[j] = y[j] + h;
-    ASSERT_EQ(sys.residual(0.0, yy.data(), yp.data(), Fp.data()), 0);
+    ASSERT_EQ(eval.residual(0.0, yy.data(), yp.data(), Fp.data()), 0);
     yy[j] = y[j] - h;
-    ASSERT_EQ(sys.residual(0.0, yy.data(), yp.data(), Fm.data()), 0);
+    ASSERT_EQ(eval.residual(0.0, yy.data(), yp.data(), Fm.data()), 0);
     for (int i = 0; i < n; ++i) {
       const std::size_t k = static_cast<std::size_t>(i) * n + j;
       fd[k] = (Fp[i] - Fm[i]) / (2 * h);
@@ -116,8 +117,8 @@ TEST(AliasElimination, ReducedJacobianMatchesFiniteDifferences) {
   // The assembled dF/dy + cj dF/dy' agrees with the parts.
   std::vector<double> values(sys.nnz());
   const double cj = 1e3;
-  sys.jacobian(0.0, y.data(), yp.data(), cj, values.data());
-  EXPECT_EQ(sys.pattern_misses(), 0);
+  eval.jacobian(0.0, y.data(), yp.data(), cj, values.data());
+  EXPECT_EQ(eval.pattern_misses(), 0);
   for (int c = 0; c < n; ++c)
     for (long p = sys.col_ptr()[c]; p < sys.col_ptr()[c + 1]; ++p) {
       const std::size_t k = static_cast<std::size_t>(sys.row_idx()[p]) * n + c;
@@ -284,6 +285,7 @@ outputs: {p: tank.p}
   const std::vector<Netlist> nets = {nl, load_netlist(kRig)};
   for (std::size_t n = 0; n < nets.size(); ++n) {
     System sys(elaborate(nets[n], builtin_registry()));
+    const Evaluator eval(sys);
     ASSERT_GT(sys.explicit_size(), 0);
     std::vector<double> y0, yp0;
     sys.start_values(y0, yp0);
@@ -292,9 +294,9 @@ outputs: {p: tank.p}
       std::vector<double> y = y0;
       for (std::size_t i = 0; i < y.size(); ++i) y[i] *= 1.0 + 0.1 * pass * std::sin(1.0 + static_cast<double>(i));
       const double t = 0.05 * pass;
-      sys.roots(t, y.data(), yp0.data(), partly.data());
-      (void)sys.residual(t, y.data(), yp0.data(), F.data());
-      sys.roots(t, y.data(), yp0.data(), whole.data());
+      eval.roots(t, y.data(), yp0.data(), partly.data());
+      (void)eval.residual(t, y.data(), yp0.data(), F.data());
+      eval.roots(t, y.data(), yp0.data(), whole.data());
       for (int k = 0; k < sys.n_roots(); ++k) EXPECT_EQ(partly[k], whole[k]) << nets[n].file << " root " << k;
       if (n == 0 && pass == 0) {
         ASSERT_EQ(partly.size(), at_start.size());

@@ -426,7 +426,7 @@ namespace {
 // it passed off IDA's interpolant; the rows must still be exactly the grid
 // t_start + k * output_interval (and t_end), each once, plus rows at events.
 // The sampled outputs are evaluated as one ProbeSet (one state() of the
-// cylinder per row): it must give what System::probe gives, probe by probe.
+// cylinder per row): it must give what Evaluator::probe gives, probe by probe.
 // ---------------------------------------------------------------------------
 
 // Newton matrix reuse (the default, SolverOptions::jacobian_reuse) against
@@ -540,21 +540,22 @@ TEST(CushionRigOutputs, ProbeSetEqualsProbeForEveryCylinderQuantity) {
   // friction sliding: every term of the cylinder's state() in play).
   double t_mid = -1;
   std::vector<double> y_mid, yp_mid;
+  Evaluator eval(system);
   const OutputFn capture = [&](double t, const double* y, const double* yp) {
-    if (t_mid < 0 && system.probe(x_probe, t, y, yp) > 0.05) {
+    if (t_mid < 0 && eval.probe(x_probe, t, y, yp) > 0.05) {
       t_mid = t;
       y_mid.assign(y, y + system.size());
       yp_mid.assign(yp, yp + system.size());
     }
   };
-  ASSERT_TRUE(simulate(system, solver_options(nl.simulation), capture).ok);
+  ASSERT_TRUE(simulate(eval, solver_options(nl.simulation), capture).ok);
   ASSERT_GE(t_mid, 0.0);
 
   const ProbeSet set = system.probe_set(probes);
   std::vector<double> all(probes.size(), std::nan(""));
-  system.probe_all(set, t_mid, y_mid.data(), yp_mid.data(), all.data());
+  eval.probe_all(set, t_mid, y_mid.data(), yp_mid.data(), all.data());
   for (std::size_t i = 0; i < probes.size(); ++i)
-    EXPECT_EQ(all[i], system.probe(probes[i], t_mid, y_mid.data(), yp_mid.data())) << probes[i].name;
+    EXPECT_EQ(all[i], eval.probe(probes[i], t_mid, y_mid.data(), yp_mid.data())) << probes[i].name;
   const auto x_slot = std::find_if(probes.begin(), probes.end(), [&](const Probe& p) {
     return p.component == cyl && p.kind == Probe::Kind::observable && p.index == x_obs;
   });
@@ -567,14 +568,14 @@ TEST(CushionRigOutputs, ProbeSetEqualsProbeForEveryCylinderQuantity) {
   // temperatures) come from the cylinder's states alone and read no y': they
   // are evaluated without solving the explicit unknowns and without y', and
   // give the same values (the cylinder answers this set from its gas states
-  // alone; system.probe() goes through its full state()).
+  // alone; eval.probe() goes through its full state()).
   const ProbeSet outputs = system.probe_set(system.circuit().probes);
   EXPECT_FALSE(outputs.reads_explicit);
   EXPECT_FALSE(outputs.reads_yp);
   std::vector<double> out(outputs.size), zero_yp(yp_mid.size(), 0.0);
-  system.probe_all(outputs, t_mid, y_mid.data(), zero_yp.data(), out.data());
+  eval.probe_all(outputs, t_mid, y_mid.data(), zero_yp.data(), out.data());
   for (std::size_t i = 0; i < out.size(); ++i)
-    EXPECT_EQ(out[i], system.probe(system.circuit().probes[i], t_mid, y_mid.data(), yp_mid.data()))
+    EXPECT_EQ(out[i], eval.probe(system.circuit().probes[i], t_mid, y_mid.data(), yp_mid.data()))
         << system.circuit().probes[i].name;
 }
 

@@ -3,9 +3,9 @@
 // What is checked (testkit::check_jacobian), per circuit, at the consistent
 // initial point and at a point after a short simulation (flows, heat and
 // motion under way):
-//  * System::jacobian_parts (forward-mode AD: dF/dy and dF/dy') equals
-//    central finite differences of System::residual;
-//  * System::jacobian(cj), the matrix IDA factorises, equals
+//  * Evaluator::jacobian_parts (forward-mode AD: dF/dy and dF/dy') equals
+//    central finite differences of Evaluator::residual;
+//  * Evaluator::jacobian(cj), the matrix IDA factorises, equals
 //    dF/dy + cj dF/dy' on the structural pattern, has nothing outside it,
 //    and reports no pattern misses.
 // Every registered component type must appear in some circuit below: a new
@@ -567,6 +567,7 @@ TEST(Jacobian, AssembledNewtonMatrixIsLinearInCj) {
   for (const char* name : {"cushion_rig", "cushion_rig_full", "movement_time_rig", "bracha_cylinder"}) {
     const Netlist nl = load_netlist(std::string(PNEUMO_SOURCE_DIR) + "/netlists/" + name + ".yaml");
     const System sys(elaborate(nl, builtin_registry()));
+    const Evaluator eval(sys);
     std::vector<double> y, yp;
     sys.start_values(y, yp);
     for (int point = 0; point < 2; ++point) {
@@ -574,10 +575,10 @@ TEST(Jacobian, AssembledNewtonMatrixIsLinearInCj) {
         for (std::size_t i = 0; i < yp.size(); ++i) yp[i] = 10.0 * (std::abs(y[i]) + 1e-6) * (i % 2 ? 1.0 : -1.0);
       const std::size_t nz = static_cast<std::size_t>(sys.nnz());
       std::vector<double> j0(nz), j1(nz), jc(nz);
-      sys.jacobian(0.0, y.data(), yp.data(), 0.0, j0.data());
-      sys.jacobian(0.0, y.data(), yp.data(), 1.0, j1.data());
+      eval.jacobian(0.0, y.data(), yp.data(), 0.0, j0.data());
+      eval.jacobian(0.0, y.data(), yp.data(), 1.0, j1.data());
       for (const double cj : {0.1, 1e3, 1e8}) {
-        sys.jacobian(0.0, y.data(), yp.data(), cj, jc.data());
+        eval.jacobian(0.0, y.data(), yp.data(), cj, jc.data());
         for (std::size_t k = 0; k < nz; ++k) {
           const double recombined = j0[k] + cj * (j1[k] - j0[k]);
           const double scale = std::abs(j0[k]) + cj * std::abs(j1[k] - j0[k]);

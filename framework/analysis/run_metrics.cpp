@@ -97,9 +97,9 @@ double audit_value(const std::vector<EnergyAudit>& audits, const std::string& re
   return kNaN;
 }
 
-class Evaluator {
+class MetricEvaluator {
  public:
-  Evaluator(const Netlist& nl, const RunResult& run, const std::vector<EnergyAudit>& audits)
+  MetricEvaluator(const Netlist& nl, const RunResult& run, const std::vector<EnergyAudit>& audits)
       : nl_(nl), run_(run), audits_(audits), values_(nl.metrics.size(), kNaN), done_(nl.metrics.size(), false) {}
 
   double value(int i) {
@@ -337,7 +337,7 @@ std::vector<units::DisplayUnit> metric_units(const Netlist& nl, const Circuit& c
 
 std::vector<double> evaluate_metrics(const Netlist& nl, const std::vector<bool>& marked, const RunResult& run,
                                      const std::vector<EnergyAudit>& audits) {
-  Evaluator ev(nl, run, audits);
+  MetricEvaluator ev(nl, run, audits);
   std::vector<double> out(nl.metrics.size(), kNaN);
   for (std::size_t i = 0; i < nl.metrics.size() && i < marked.size(); ++i)
     if (marked[i]) out[i] = ev.value(static_cast<int>(i));

@@ -142,7 +142,7 @@ void System::eliminate_aliases() {
   constexpr double kCheckTimes[3] = {0.0, 0.3711, 97.13};
   std::mt19937 rng(54321);
   bool invalid = false;
-  EvalContext ctx{&circuit_.gas, modes_.data(), &invalid};
+  EvalContext ctx{&circuit_.gas, modes_.data(), &invalid, rest_heat_};
   std::vector<Dual> ly(kMaxLocal), lyp(kMaxLocal), res(kMaxLocal * 2);
   for (int pass = 0; pass < 3 && !cand.empty(); ++pass) {
     std::vector<double> y0, yp0;
@@ -267,7 +267,6 @@ void System::reduce_pattern(AliasClasses& classes, const std::vector<int>& reduc
   }
   id_ = std::move(id);
   n_ = m;
-  work_.F_full.assign(aliases_.n_full, 0.0);
 }
 
 }  // namespace pneumo

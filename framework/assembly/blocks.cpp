@@ -129,20 +129,24 @@ class FixedValueBlock final : public Block {
 
 class RestHeatBlock final : public Block {
  public:
-  const double* conductance = nullptr;
   double T_ambient = 0.0;
   template <class T>
-  void eval(const T* y, T* r) const { r[0] = y[0] - *conductance * (T_ambient - y[1]); }
-  void residual(double, const double* y, const double*, double* r, const EvalContext&) const override { eval(y, r); }
-  void residual(double, const Dual* y, const Dual*, Dual* r, const EvalContext&) const override { eval(y, r); }
-  void residual(double, const Pattern* y, const Pattern*, Pattern* r, const EvalContext&) const override { eval(y, r); }
+  void eval(const T* y, T* r, double conductance) const { r[0] = y[0] - conductance * (T_ambient - y[1]); }
+  void residual(double, const double* y, const double*, double* r, const EvalContext& c) const override {
+    eval(y, r, c.rest_heat);
+  }
+  void residual(double, const Dual* y, const Dual*, Dual* r, const EvalContext& c) const override {
+    eval(y, r, c.rest_heat);
+  }
+  void residual(double, const Pattern* y, const Pattern*, Pattern* r, const EvalContext& c) const override {
+    eval(y, r, c.rest_heat);
+  }
 };
 
 }  // namespace
 
-std::unique_ptr<Block> make_rest_heat_block(const double* conductance, double T_ambient) {
+std::unique_ptr<Block> make_rest_heat_block(double T_ambient) {
   auto b = std::make_unique<RestHeatBlock>();
-  b->conductance = conductance;
   b->T_ambient = T_ambient;
   return b;
 }

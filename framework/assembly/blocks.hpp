@@ -20,6 +20,8 @@ struct EvalContext {
   const GasModel* gas = nullptr;
   const double* modes = nullptr;  // all discrete modes of the system
   bool* invalid = nullptr;
+  // The conductance of the rest-heat rows (make_rest_heat_block).
+  double rest_heat = 0.0;
 };
 
 // One block of residual rows over a gathered set of variables.
@@ -82,9 +84,10 @@ std::unique_ptr<Block> make_kinematic_block();
 // component holds there (Component::unconnected_heat_port_at_ambient),
 // vars: [it].
 std::unique_ptr<Block> make_fixed_value_block(double value);
-// ... the heat flow into an unconnected (insulated) heat port, *conductance
-// (T_ambient - T), vars: [Q, T] (a steady start's rest; 0 in the run),
-std::unique_ptr<Block> make_rest_heat_block(const double* conductance, double T_ambient);
+// ... the heat flow into an unconnected (insulated) heat port, the
+// context's rest_heat conductance times (T_ambient - T), vars: [Q, T] (a
+// steady start's rest; 0 in the run),
+std::unique_ptr<Block> make_rest_heat_block(double T_ambient);
 // The stream-mixing rows: their temperatures stay unknowns of IDA.
 bool is_stream_mix(const Block& b);
 // A group's sums for the mixes of a large node.

@@ -8,19 +8,40 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "framework/assembly/evaluator.hpp"
+
 #include "framework/assembly/blocks.hpp"
-#include "framework/assembly/system.hpp"
 
 namespace pneumo {
 
-void System::block_inputs(double t, const double*& y, const double*& yp, bool read_explicit) const {
-  if (plan_.unknowns.empty()) return;
+Evaluator::Evaluator(const System& system) : s_(system), modes_(system.modes_.size(), 0.0) {
+  work_.F_full.assign(s_.aliases_.n_full, 0.0);
+  work_.j1_values.assign(s_.plan_.j1_row_idx.size(), 0.0);
+  work_.d_values.assign(s_.plan_.d_cols.size(), 0.0);
+  work_.scatter.assign(s_.n_, 0.0);
+  work_.cache_y.assign(s_.n_, 0.0);
+  reset_modes();
+}
+
+EvalContext Evaluator::context(bool* invalid) const {
+  return {&s_.circuit_.gas, modes_.data(), invalid, rest_heat_};
+}
+
+bool Evaluator::set_resting(bool resting) {
+  if (!s_.rest_heat_ports_) return false;
+  rest_heat_ = resting ? System::kRestHeatConductance : 0.0;
+  work_.cache_valid = false;  // the explicit unknowns (the ports' heat flows) change
+  return true;
+}
+
+void Evaluator::block_inputs(double t, const double*& y, const double*& yp, bool read_explicit) const {
+  if (s_.plan_.unknowns.empty()) return;
   if (read_explicit) {
     expand(t, y, yp);
   } else {
-    for (int i = 0; i < n_; ++i) {
-      work_.y[plan_.ida_to_m[i]] = y[i];
-      work_.yp[plan_.ida_to_m[i]] = yp[i];
+    for (int i = 0; i < s_.n_; ++i) {
+      work_.y[s_.plan_.ida_to_m[i]] = y[i];
+      work_.yp[s_.plan_.ida_to_m[i]] = yp[i];
     }
     work_.cache_valid = false;  // work_.y's states no longer match the cached expansion
   }
@@ -28,65 +49,65 @@ void System::block_inputs(double t, const double*& y, const double*& yp, bool re
   yp = work_.yp.data();
 }
 
-void System::load_states(const double* y, const double* yp) const {
-  for (int i = 0; i < n_; ++i) {
-    work_.y[plan_.ida_to_m[i]] = y[i];
-    work_.yp[plan_.ida_to_m[i]] = yp[i];
+void Evaluator::load_states(const double* y, const double* yp) const {
+  for (int i = 0; i < s_.n_; ++i) {
+    work_.y[s_.plan_.ida_to_m[i]] = y[i];
+    work_.yp[s_.plan_.ida_to_m[i]] = yp[i];
   }
   // Each explicit unknown is solved from its start value, not from the last
   // call's: the result is then a function of (t, y) alone, without rounding
   // noise from the call history (which stalled IDA's initialisation Newton
   // at rtol 1e-9); a start value also keeps blocks that read an unknown
   // before its level from seeing zero pressures.
-  for (const auto& x : plan_.unknowns) work_.y[x.var] = plan_.m_start[x.var];
+  for (const auto& x : s_.plan_.unknowns) work_.y[x.var] = s_.plan_.m_start[x.var];
 }
 
-void System::solve_stage(double t, const Stage& stage, const EvalContext& ctx) const {
+void Evaluator::solve_stage(double t, const Stage& stage, const EvalContext& ctx) const {
   double ly[kMaxLocal], lyp[kMaxLocal];
   for (const auto& [bi, list] : stage) {
-    const Block& b = *blocks_[bi];
+    const Block& b = *s_.blocks_[bi];
     gather(b, work_.y.data(), work_.yp.data(), ly, lyp);
     b.residual(t, ly, lyp, work_.F_full.data() + b.row0, ctx);
     for (int e : list) {
-      const auto& x = plan_.unknowns[e];
+      const auto& x = s_.plan_.unknowns[e];
       work_.y[x.var] -= work_.F_full[x.row] / x.coef;
     }
   }
 }
 
-bool System::expand(double t, const double* y, const double* yp) const {
-  if (work_.cache_valid && t == work_.cache_t && std::equal(y, y + n_, work_.cache_y.begin())) {
-    for (int i = 0; i < n_; ++i) work_.yp[plan_.ida_to_m[i]] = yp[i];
+bool Evaluator::expand(double t, const double* y, const double* yp) const {
+  if (work_.cache_valid && t == work_.cache_t && std::equal(y, y + s_.n_, work_.cache_y.begin())) {
+    for (int i = 0; i < s_.n_; ++i) work_.yp[s_.plan_.ida_to_m[i]] = yp[i];
     return work_.cache_invalid;
   }
   load_states(y, yp);
   bool invalid = false;
-  const EvalContext ctx{&circuit_.gas, modes_.data(), &invalid};
-  for (const auto& stage : plan_.stages) solve_stage(t, stage, ctx);
-  std::copy_n(y, n_, work_.cache_y.begin());
+  const EvalContext ctx = context(&invalid);
+  for (const auto& stage : s_.plan_.stages) solve_stage(t, stage, ctx);
+  std::copy_n(y, s_.n_, work_.cache_y.begin());
   work_.cache_t = t;
   work_.cache_valid = true;
   work_.cache_invalid = invalid;
   return invalid;
 }
 
-bool System::expand_part(double t, const double* y, const double* yp, const Stage& part) const {
+bool Evaluator::expand_part(double t, const double* y, const double* yp, const Stage& part) const {
   // The whole expansion at this point is at hand: it holds the part's values.
-  if (work_.cache_valid && t == work_.cache_t && std::equal(y, y + n_, work_.cache_y.begin())) return expand(t, y, yp);
+  if (work_.cache_valid && t == work_.cache_t && std::equal(y, y + s_.n_, work_.cache_y.begin())) return expand(t, y, yp);
   load_states(y, yp);
   bool invalid = false;
-  const EvalContext ctx{&circuit_.gas, modes_.data(), &invalid};
+  const EvalContext ctx = context(&invalid);
   solve_stage(t, part, ctx);
   work_.cache_valid = false;  // the unknowns outside the part keep their start values
   return invalid;
 }
 
-int System::residual(double t, const double* y, const double* yp, double* F) const {
+int Evaluator::residual(double t, const double* y, const double* yp, double* F) const {
   bool invalid = false;
-  EvalContext ctx{&circuit_.gas, modes_.data(), &invalid};
+  EvalContext ctx = context(&invalid);
   double ly[kMaxLocal], lyp[kMaxLocal];
-  const bool reduced = aliases_.n_full != n_;
-  if (!plan_.unknowns.empty()) {
+  const bool reduced = s_.aliases_.n_full != s_.n_;
+  if (!s_.plan_.unknowns.empty()) {
     invalid = expand(t, y, yp);
     y = work_.y.data();
     yp = work_.yp.data();
@@ -96,29 +117,29 @@ int System::residual(double t, const double* y, const double* yp, double* F) con
   // three points and times, and such a block has no discrete modes that
   // could change them. The other blocks' eliminated rows are checked here.
   double* Ff = reduced ? work_.F_full.data() : F;
-  for (int bi : plan_.final_blocks) {
-    const Block& b = *blocks_[bi];
+  for (int bi : s_.plan_.final_blocks) {
+    const Block& b = *s_.blocks_[bi];
     gather(b, y, yp, ly, lyp);
     b.residual(t, ly, lyp, Ff + b.row0, ctx);
   }
   if (reduced)
-    for (const auto& [r, q] : plan_.kept_full_rows) F[q] = Ff[r];
-  for (int e : aliases_.checked) {
-    const int r = aliases_.eliminated[e];
-    if (std::abs(Ff[r]) > 1e-10 * aliases_.eliminated_nominal[e] && std::isfinite(Ff[r])) {
-      throw std::runtime_error("equation '" + equation_name(r) + "', substituted as an alias at assembly, no longer holds at t = " +
+    for (const auto& [r, q] : s_.plan_.kept_full_rows) F[q] = Ff[r];
+  for (int e : s_.aliases_.checked) {
+    const int r = s_.aliases_.eliminated[e];
+    if (std::abs(Ff[r]) > 1e-10 * s_.aliases_.eliminated_nominal[e] && std::isfinite(Ff[r])) {
+      throw std::runtime_error("equation '" + s_.equation_name(r) + "', substituted as an alias at assembly, no longer holds at t = " +
                                std::to_string(t) + " (residual " + std::to_string(Ff[r]) +
                                "); a component must not change such an equation at an event");
     }
   }
   if (invalid) return 1;
-  for (int i = 0; i < n_; ++i)
+  for (int i = 0; i < s_.n_; ++i)
     if (!std::isfinite(F[i])) return 1;
   return 0;
 }
 
-int System::jacobian(double t, const double* y, const double* yp, double cj, double* values) const {
-  if (plan_.unknowns.empty()) return jacobian_blocks(t, y, yp, cj, values);
+int Evaluator::jacobian(double t, const double* y, const double* yp, double cj, double* values) const {
+  if (s_.plan_.unknowns.empty()) return jacobian_blocks(t, y, yp, cj, values);
   const bool invalid = expand(t, y, yp);
   const int flag = jacobian_blocks(t, work_.y.data(), work_.yp.data(), cj, work_.j1_values.data());
   // Adds a dF/d(column c) entry to the row being reduced (work_.scatter, over
@@ -126,23 +147,23 @@ int System::jacobian(double t, const double* y, const double* yp, double cj, dou
   // explicit one.
   auto accumulate = [&](double a, int c) {
     if (a == 0.0) return;
-    const int j = plan_.of_m[c];
+    const int j = s_.plan_.of_m[c];
     if (j < 0) {
-      work_.scatter[plan_.m_to_ida[c]] += a;
+      work_.scatter[s_.plan_.m_to_ida[c]] += a;
       return;
     }
-    const auto& xj = plan_.unknowns[j];
-    for (int k = 0; k < xj.dn; ++k) work_.scatter[plan_.d_cols[xj.d0 + k]] += a * work_.d_values[xj.d0 + k];
+    const auto& xj = s_.plan_.unknowns[j];
+    for (int k = 0; k < xj.dn; ++k) work_.scatter[s_.plan_.d_cols[xj.d0 + k]] += a * work_.d_values[xj.d0 + k];
   };
   // d var / d y_IDA of each explicit unknown, in level order:
   //   coef dvar + sum_c F_row,c dc = 0, dc of an explicit c known already.
-  for (const auto& x : plan_.unknowns) {
-    for (int k = 0; k < x.dn; ++k) work_.scatter[plan_.d_cols[x.d0 + k]] = 0.0;
+  for (const auto& x : s_.plan_.unknowns) {
+    for (int k = 0; k < x.dn; ++k) work_.scatter[s_.plan_.d_cols[x.d0 + k]] = 0.0;
     for (const auto& [p, c] : x.entries) {
       const double a = work_.j1_values[p];
       if (c == x.var) {
         if (std::abs(a - x.coef) > 1e-9 * std::abs(x.coef)) {
-          throw std::runtime_error("equation '" + equation_name(x.row) + "', solved explicitly at assembly (linear, dF/dy " +
+          throw std::runtime_error("equation '" + s_.equation_name(x.row) + "', solved explicitly at assembly (linear, dF/dy " +
                                    std::to_string(x.coef) + "), now has dF/dy " + std::to_string(a) + " at t = " +
                                    std::to_string(t) + "; assemble with eliminate_explicit = false");
         }
@@ -150,11 +171,11 @@ int System::jacobian(double t, const double* y, const double* yp, double cj, dou
       }
       accumulate(a, c);
     }
-    for (int k = 0; k < x.dn; ++k) work_.d_values[x.d0 + k] = -work_.scatter[plan_.d_cols[x.d0 + k]] / x.coef;
+    for (int k = 0; k < x.dn; ++k) work_.d_values[x.d0 + k] = -work_.scatter[s_.plan_.d_cols[x.d0 + k]] / x.coef;
   }
   // IDA's rows: F_row,y + sum over explicit c of F_row,c dc/dy.
-  std::fill(values, values + nnz(), 0.0);
-  for (const auto& kr : plan_.kept_rows) {
+  std::fill(values, values + s_.nnz(), 0.0);
+  for (const auto& kr : s_.plan_.kept_rows) {
     for (const auto& [c, p] : kr.out) work_.scatter[c] = 0.0;
     for (const auto& [p, c] : kr.entries) accumulate(work_.j1_values[p], c);
     for (const auto& [c, p] : kr.out) values[p] = work_.scatter[c];
@@ -162,12 +183,12 @@ int System::jacobian(double t, const double* y, const double* yp, double cj, dou
   return invalid || flag ? 1 : 0;
 }
 
-int System::jacobian_blocks(double t, const double* y, const double* yp, double cj, double* values) const {
-  std::fill(values, values + plan_.j1_row_idx.size(), 0.0);
+int Evaluator::jacobian_blocks(double t, const double* y, const double* yp, double cj, double* values) const {
+  std::fill(values, values + s_.plan_.j1_row_idx.size(), 0.0);
   bool invalid = false;
-  EvalContext ctx{&circuit_.gas, modes_.data(), &invalid};
+  EvalContext ctx = context(&invalid);
   static thread_local std::vector<Dual> ly(kMaxLocal), lyp(kMaxLocal), r(kMaxLocal * 2);
-  for (const auto& b : blocks_) {
+  for (const auto& b : s_.blocks_) {
     if (b->all_eliminated) continue;
     const int nl = static_cast<int>(b->vars.size());
     for (int i = 0; i < nl; ++i) {
@@ -198,7 +219,7 @@ int System::jacobian_blocks(double t, const double* y, const double* yp, double 
     if (static_cast<int>(r.size()) < b->n_rows) r.resize(b->n_rows);
     b->residual(t, ly.data(), lyp.data(), r.data(), ctx);
     for (int k = 0; k < b->n_rows; ++k) {
-      if (aliases_.row_of[b->row0 + k] < 0) continue;
+      if (s_.aliases_.row_of[b->row0 + k] < 0) continue;
       const Dual& f = r[k];
       const int directions = std::min(f.n, static_cast<int>(b->slot_local.size()));  // without the padding
       for (int i = 0; i < directions; ++i) {
@@ -213,34 +234,34 @@ int System::jacobian_blocks(double t, const double* y, const double* yp, double 
   return invalid ? 1 : 0;
 }
 
-int System::newton_matrix_parts(double t, const double* y, const double* yp, double* dFdy, double* dFdyp) const {
+int Evaluator::newton_matrix_parts(double t, const double* y, const double* yp, double* dFdy, double* dFdyp) const {
   // The explicit unknowns have no y': dF/dy' = J(cj = 1) - J(cj = 0).
   int flag = jacobian(t, y, yp, 0.0, dFdy);
   flag |= jacobian(t, y, yp, 1.0, dFdyp);
-  for (long p = 0; p < nnz(); ++p) dFdyp[p] -= dFdy[p];
+  for (long p = 0; p < s_.nnz(); ++p) dFdyp[p] -= dFdy[p];
   return flag;
 }
 
-void System::jacobian_parts(double t, const double* y, const double* yp, std::vector<double>& dFdy,
+void Evaluator::jacobian_parts(double t, const double* y, const double* yp, std::vector<double>& dFdy,
                             std::vector<double>& dFdyp) const {
-  dFdy.assign(static_cast<std::size_t>(n_) * n_, 0.0);
-  dFdyp.assign(static_cast<std::size_t>(n_) * n_, 0.0);
-  if (!plan_.unknowns.empty()) {
-    std::vector<double> j0(nnz()), j1(nnz());
+  dFdy.assign(static_cast<std::size_t>(s_.n_) * s_.n_, 0.0);
+  dFdyp.assign(static_cast<std::size_t>(s_.n_) * s_.n_, 0.0);
+  if (!s_.plan_.unknowns.empty()) {
+    std::vector<double> j0(s_.nnz()), j1(s_.nnz());
     newton_matrix_parts(t, y, yp, j0.data(), j1.data());
-    for (int c = 0; c < n_; ++c)
-      for (long p = col_ptr_[c]; p < col_ptr_[c + 1]; ++p) {
-        const std::size_t k = static_cast<std::size_t>(row_idx_[p]) * n_ + c;
+    for (int c = 0; c < s_.n_; ++c)
+      for (long p = s_.col_ptr_[c]; p < s_.col_ptr_[c + 1]; ++p) {
+        const std::size_t k = static_cast<std::size_t>(s_.row_idx_[p]) * s_.n_ + c;
         dFdy[k] = j0[p];
         dFdyp[k] = j1[p];
       }
     return;
   }
   bool invalid = false;
-  EvalContext ctx{&circuit_.gas, modes_.data(), &invalid};
+  EvalContext ctx = context(&invalid);
   std::vector<Dual> ly(kMaxLocal), lyp(kMaxLocal), r(kMaxLocal * 2);
   for (int part = 0; part < 2; ++part)
-    for (const auto& b : blocks_) {
+    for (const auto& b : s_.blocks_) {
       const int nl = static_cast<int>(b->vars.size());
       for (int i = 0; i < nl; ++i) {
         const int g = b->vars[i];
@@ -252,10 +273,10 @@ void System::jacobian_parts(double t, const double* y, const double* yp, std::ve
       b->residual(t, ly.data(), lyp.data(), r.data(), ctx);
       auto& out = part == 0 ? dFdy : dFdyp;
       for (int k = 0; k < b->n_rows; ++k) {
-        const int row = aliases_.row_of[b->row0 + k];
+        const int row = s_.aliases_.row_of[b->row0 + k];
         if (row < 0) continue;
         for (int i = 0; i < nl; ++i)
-          if (b->vars[i] >= 0) out[static_cast<std::size_t>(row) * n_ + b->vars[i]] += r[k].deriv(i);
+          if (b->vars[i] >= 0) out[static_cast<std::size_t>(row) * s_.n_ + b->vars[i]] += r[k].deriv(i);
       }
     }
 }

@@ -7,27 +7,27 @@
 #include <stdexcept>
 
 #include "framework/assembly/blocks.hpp"
-#include "framework/assembly/system.hpp"
+#include "framework/assembly/evaluator.hpp"
 
 namespace pneumo {
 
-void System::reset_modes() {
-  for (const auto& b : blocks_)
+void Evaluator::reset_modes() {
+  for (const auto& b : s_.blocks_)
     if (b->component) b->component->initial_modes(modes_.data() + b->mode0);
-  work_.y = plan_.m_start;
-  work_.yp.assign(plan_.m_start.size(), 0.0);
+  work_.y = s_.plan_.m_start;
+  work_.yp.assign(s_.plan_.m_start.size(), 0.0);
   work_.cache_valid = false;
 }
 
-void System::restore_modes(const std::vector<double>& modes) {
+void Evaluator::restore_modes(const std::vector<double>& modes) {
   if (modes.size() != modes_.size()) throw std::invalid_argument("restore_modes: the modes of another system");
   modes_ = modes;
   work_.cache_valid = false;
 }
 
-void System::roots(double t, const double* y, const double* yp, double* g) const {
-  if (plan_.any_roots_read_explicit) {
-    expand_part(t, y, yp, plan_.root_stages);
+void Evaluator::roots(double t, const double* y, const double* yp, double* g) const {
+  if (s_.plan_.any_roots_read_explicit) {
+    expand_part(t, y, yp, s_.plan_.root_stages);
     y = work_.y.data();
     yp = work_.yp.data();
   } else {
@@ -35,10 +35,10 @@ void System::roots(double t, const double* y, const double* yp, double* g) const
   }
   bool invalid = false;
   double ly[kMaxLocal], lyp[kMaxLocal];
-  for (int bi : root_blocks_) {
-    const Block& b = *blocks_[bi];
+  for (int bi : s_.root_blocks_) {
+    const Block& b = *s_.blocks_[bi];
     gather(b, y, yp, ly, lyp);
-    Eval<double> e(*b.component, t, ly, lyp, modes_.data() + b.mode0, b.connected.get(), circuit_.gas, &invalid);
+    Eval<double> e(*b.component, t, ly, lyp, modes_.data() + b.mode0, b.connected.get(), s_.circuit_.gas, &invalid);
     b.component->roots(e, g + b.root0);
   }
 }
@@ -68,17 +68,17 @@ bool same_modes(const std::vector<double>& before, const double* modes) {
 // modes; then the explicit unknowns may take other values at the same
 // (t, y) - a signal source's step - and the rows that give them are checked
 // again. Returns whether the modes changed.
-bool System::fire_event(int bi, double t, const double* y, const double* yp, EventKind kind, int root, int dir,
+bool Evaluator::fire_event(int bi, double t, const double* y, const double* yp, EventKind kind, int root, int dir,
                         std::vector<EventLogEntry>& log) {
-  const Block& b = *blocks_[bi];
+  const Block& b = *s_.blocks_[bi];
   double ly[kMaxLocal], lyp[kMaxLocal];
   bool invalid = false;
   gather(b, y, yp, ly, lyp);
   double* modes = modes_.data() + b.mode0;
-  Eval<double> e(*b.component, t, ly, lyp, modes, b.connected.get(), circuit_.gas, &invalid);
+  Eval<double> e(*b.component, t, ly, lyp, modes, b.connected.get(), s_.circuit_.gas, &invalid);
   const std::vector<double> before(modes, modes + b.component->info().modes);
   const EventResult res = b.component->on_event(e, modes, kind, root, dir);
-  if (!plan_.unknowns.empty() && !same_modes(before, modes)) {
+  if (!s_.plan_.unknowns.empty() && !same_modes(before, modes)) {
     verify_explicit(bi, t);
     work_.cache_valid = false;
   }
@@ -86,17 +86,17 @@ bool System::fire_event(int bi, double t, const double* y, const double* yp, Eve
   return res.changed;
 }
 
-std::vector<std::string> System::end_notes(double t, const double* y, const double* yp) {
+std::vector<std::string> Evaluator::end_notes(double t, const double* y, const double* yp) {
   block_inputs(t, y, yp);
   std::vector<std::string> notes;
-  for (const auto& block : blocks_) {
+  for (const auto& block : s_.blocks_) {
     const Block& b = *block;
     if (!b.component) continue;
     double ly[kMaxLocal], lyp[kMaxLocal];
     bool invalid = false;
     gather(b, y, yp, ly, lyp);
     const double* modes = modes_.data() + b.mode0;
-    const Eval<double> e(*b.component, t, ly, lyp, modes, b.connected.get(), circuit_.gas, &invalid);
+    const Eval<double> e(*b.component, t, ly, lyp, modes, b.connected.get(), s_.circuit_.gas, &invalid);
     if (std::string note = b.component->at_end(e, modes); !note.empty())
       notes.push_back(b.component->name() + ": " + note);
   }
@@ -112,18 +112,18 @@ std::vector<ExternalInput> System::external_inputs() const {
   return out;
 }
 
-void System::set_external_input(std::size_t k, double value) {
-  const std::vector<ExternalInput> inputs = external_inputs();
+void Evaluator::set_external_input(std::size_t k, double value) {
+  const std::vector<ExternalInput> inputs = s_.external_inputs();
   if (k >= inputs.size()) throw std::out_of_range("no external input " + std::to_string(k));
   modes_[inputs[k].mode] = value;
   work_.cache_valid = false;
 }
 
-bool System::handle_time_event(double t, const double* y, const double* yp, std::vector<EventLogEntry>& log) {
+bool Evaluator::handle_time_event(double t, const double* y, const double* yp, std::vector<EventLogEntry>& log) {
   block_inputs(t, y, yp);
   bool changed = false;
-  for (std::size_t bi = 0; bi < blocks_.size(); ++bi) {
-    const Block& b = *blocks_[bi];
+  for (std::size_t bi = 0; bi < s_.blocks_.size(); ++bi) {
+    const Block& b = *s_.blocks_[bi];
     if (!b.component) continue;
     bool due = false;
     for (double te : b.component->time_events()) due |= std::abs(te - t) <= 1e-12 * std::max(1.0, std::abs(t));
@@ -132,12 +132,12 @@ bool System::handle_time_event(double t, const double* y, const double* yp, std:
   return changed;
 }
 
-bool System::handle_roots(double t, const double* y, const double* yp, const int* root_info,
+bool Evaluator::handle_roots(double t, const double* y, const double* yp, const int* root_info,
                           std::vector<EventLogEntry>& log) {
   block_inputs(t, y, yp);
   bool changed = false;
-  for (std::size_t bi = 0; bi < blocks_.size(); ++bi) {
-    const Block& b = *blocks_[bi];
+  for (std::size_t bi = 0; bi < s_.blocks_.size(); ++bi) {
+    const Block& b = *s_.blocks_[bi];
     if (!b.component) continue;
     for (int k = 0; k < b.component->info().roots; ++k) {
       const int dir = root_info[b.root0 + k];
@@ -147,20 +147,20 @@ bool System::handle_roots(double t, const double* y, const double* yp, const int
   return changed;
 }
 
-bool System::handle_input_changes(double t, const double* y, const double* yp, std::vector<EventLogEntry>& log,
+bool Evaluator::handle_input_changes(double t, const double* y, const double* yp, std::vector<EventLogEntry>& log,
                                   std::vector<std::string>* changed) {
   block_inputs(t, y, yp);
   bool any = false, invalid = false;
   double ly[kMaxLocal], lyp[kMaxLocal];
-  for (std::size_t bi = 0; bi < blocks_.size(); ++bi) {
-    const Block& b = *blocks_[bi];
+  for (std::size_t bi = 0; bi < s_.blocks_.size(); ++bi) {
+    const Block& b = *s_.blocks_[bi];
     if (!b.component || !b.component->info().follows_inputs) continue;
     gather(b, y, yp, ly, lyp);
     double* modes = modes_.data() + b.mode0;
-    Eval<double> e(*b.component, t, ly, lyp, modes, b.connected.get(), circuit_.gas, &invalid);
+    Eval<double> e(*b.component, t, ly, lyp, modes, b.connected.get(), s_.circuit_.gas, &invalid);
     const std::vector<double> before(modes, modes + b.component->info().modes);
     const EventResult res = b.component->on_inputs_changed(e, modes);
-    if (!plan_.unknowns.empty() && !same_modes(before, modes)) {
+    if (!s_.plan_.unknowns.empty() && !same_modes(before, modes)) {
       verify_explicit(static_cast<int>(bi), t);
       work_.cache_valid = false;
     }

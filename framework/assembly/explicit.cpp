@@ -8,7 +8,7 @@
 #include <set>
 
 #include "framework/assembly/blocks.hpp"
-#include "framework/assembly/system.hpp"
+#include "framework/assembly/evaluator.hpp"
 
 namespace pneumo {
 
@@ -173,10 +173,6 @@ void System::eliminate_explicit() {
   id_ = id;
   n_ = static_cast<int>(plan_.ida_to_m.size());
   find_root_inputs();
-  work_.j1_values.assign(plan_.j1_row_idx.size(), 0.0);
-  work_.d_values.assign(plan_.d_cols.size(), 0.0);
-  work_.scatter.assign(n_, 0.0);
-  work_.cache_y.assign(n_, 0.0);
 }
 
 ExplicitRows System::explicit_rows() const {
@@ -202,7 +198,7 @@ ExplicitRows System::explicit_rows() const {
   constexpr double kCheckTimes[3] = {0.0, 0.3711, 97.13};
   std::mt19937 rng(24680);
   bool invalid = false;
-  EvalContext ctx{&circuit_.gas, modes_.data(), &invalid};
+  EvalContext ctx{&circuit_.gas, modes_.data(), &invalid, rest_heat_};
   std::vector<Pattern> pr;
   std::vector<Dual> dr;
   for (int pass = 0; pass < 3; ++pass) {
@@ -430,15 +426,15 @@ std::vector<int> System::explicit_root_inputs(const Block& b) const {
   return out;
 }
 
-void System::verify_explicit(int block, double t) const {
-  const Block& b = *blocks_[block];
+void Evaluator::verify_explicit(int block, double t) const {
+  const Block& b = *s_.blocks_[block];
   const int nl = static_cast<int>(b.vars.size());
   bool invalid = false;
-  EvalContext ctx{&circuit_.gas, modes_.data(), &invalid};
+  EvalContext ctx = context(&invalid);
   std::vector<Pattern> pr;
   std::vector<Dual> dr;
   evaluate_structure(b, t, work_.y.data(), work_.yp.data(), ctx, pr, dr);
-  for (const auto& x : plan_.unknowns) {
+  for (const auto& x : s_.plan_.unknowns) {
     if (x.row < b.row0 || x.row >= b.row0 + b.n_rows) continue;
     const int k = x.row - b.row0;
     bool ok = true;
@@ -454,7 +450,7 @@ void System::verify_explicit(int block, double t) const {
       }
     }
     if (ok && c == x.coef) continue;
-    throw std::runtime_error("equation '" + equation_name(x.row) + "' of " + b.label + ", solved explicitly for '" + plan_.m_names[x.var] +
+    throw std::runtime_error("equation '" + s_.equation_name(x.row) + "' of " + b.label + ", solved explicitly for '" + s_.plan_.m_names[x.var] +
                              "' at assembly, no longer gives it linearly with the same coefficient after an event "
                              "changed the component's modes; assemble with eliminate_explicit = false");
   }

@@ -6,7 +6,7 @@
 #include <random>
 
 #include "framework/assembly/blocks.hpp"
-#include "framework/assembly/system.hpp"
+#include "framework/assembly/evaluator.hpp"
 
 namespace pneumo {
 
@@ -32,14 +32,14 @@ double local_value(const Block& b, const Probe& p, const double* y) {
 
 }  // namespace
 
-double System::probe(const Probe& p, double t, const double* y, const double* yp) const {
+double Evaluator::probe(const Probe& p, double t, const double* y, const double* yp) const {
   block_inputs(t, y, yp);
-  const Block& b = *blocks_[p.component];  // component blocks come first, in order
+  const Block& b = *s_.blocks_[p.component];  // component blocks come first, in order
   if (p.kind == Probe::Kind::local) return local_value(b, p, y);
   double ly[kMaxLocal], lyp[kMaxLocal];
   gather(b, y, yp, ly, lyp);
   bool invalid = false;
-  Eval<double> e(*b.component, t, ly, lyp, modes_.data() + b.mode0, b.connected.get(), circuit_.gas, &invalid);
+  Eval<double> e(*b.component, t, ly, lyp, modes_.data() + b.mode0, b.connected.get(), s_.circuit_.gas, &invalid);
   return b.component->observe(p.index, e);
 }
 
@@ -107,18 +107,18 @@ ProbeSet System::probe_set(const std::vector<Probe>& probes) const {
   return set;
 }
 
-void System::probe_all(const ProbeSet& set, double t, const double* y, const double* yp, double* out) const {
+void Evaluator::probe_all(const ProbeSet& set, double t, const double* y, const double* yp, double* out) const {
   // Locals too read the inputs expanded only if some probe of the set needs
   // the explicit unknowns: a state read alone costs no explicit solve.
   block_inputs(t, y, yp, set.reads_explicit);
   for (std::size_t i = 0; i < set.locals.size(); ++i)
-    out[set.local_slots[i]] = local_value(*blocks_[set.locals[i].component], set.locals[i], y);
+    out[set.local_slots[i]] = local_value(*s_.blocks_[set.locals[i].component], set.locals[i], y);
   double ly[kMaxLocal], lyp[kMaxLocal];
   bool invalid = false;
   for (const auto& g : set.groups) {
-    const Block& b = *blocks_[g.component];  // component blocks come first, in order
+    const Block& b = *s_.blocks_[g.component];  // component blocks come first, in order
     gather(b, y, yp, ly, lyp);
-    Eval<double> e(*b.component, t, ly, lyp, modes_.data() + b.mode0, b.connected.get(), circuit_.gas, &invalid);
+    Eval<double> e(*b.component, t, ly, lyp, modes_.data() + b.mode0, b.connected.get(), s_.circuit_.gas, &invalid);
     const int n = static_cast<int>(g.observables.size());
     b.component->observe_all(g.observables.data(), n, e, set.scratch.data());
     for (int k = 0; k < n; ++k) out[g.slots[k]] = set.scratch[k];

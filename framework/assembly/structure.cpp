@@ -177,8 +177,9 @@ void System::build_nodes() {
   for (std::size_t ci = 0; ci < c.components.size(); ++ci) add_component_block(static_cast<int>(ci), l, mode, root);
   guess_junction_pressures(l);
   modes_.assign(mode, 0.0);
+  for (const auto& b : blocks_)
+    if (b->component) b->component->initial_modes(modes_.data() + b->mode0);
   n_roots_ = root;
-  reset_modes();
   route_streams(l);
   add_node_balances(l);
   if (l.row != n_)
@@ -460,7 +461,7 @@ void System::add_node_balances(NodeLayout& l) {
       continue;
     }
     if (rest_heat_ports_ && ps.domain == Domain::thermal && ports.size() == 1) {
-      auto rest = make_rest_heat_block(&rest_heat_, c.gas.T_ambient);
+      auto rest = make_rest_heat_block(c.gas.T_ambient);
       rest->vars = {l.vars(ports[0]).flow, l.across[ni]};
       add_node_block(std::move(rest), "heat from the ambient at rest into " + at, {}, l, node);
       continue;
@@ -499,7 +500,7 @@ void System::build_pattern() {
     std::vector<double> y0, yp0;
     check_point(pass, rng, y0, yp0);
     bool invalid = false;
-    EvalContext ctx{&circuit_.gas, modes_.data(), &invalid};
+    EvalContext ctx{&circuit_.gas, modes_.data(), &invalid, rest_heat_};
     std::vector<Pattern> ly(kMaxLocal), lyp(kMaxLocal), r(kMaxLocal * 2);
     for (const auto& b : blocks_) {
       const int nl = static_cast<int>(b->vars.size());

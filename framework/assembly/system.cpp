@@ -23,7 +23,6 @@ System::System(Circuit circuit, const AssemblyOptions& options)
     aliases_.n_full = n_;
     aliases_.row_of.resize(n_);
     std::iota(aliases_.row_of.begin(), aliases_.row_of.end(), 0);
-    work_.F_full.assign(n_, 0.0);
     for (auto& b : blocks_) {
       b->scale.assign(b->vars.size(), 1.0);
       b->offset.assign(b->vars.size(), 0.0);
@@ -57,15 +56,6 @@ System::System(Circuit circuit, const AssemblyOptions& options)
       if (evaluated[bi] && aliases_.eliminated[e] >= b.row0 && aliases_.eliminated[e] < b.row0 + b.n_rows)
         aliases_.checked.push_back(static_cast<int>(e));
     }
-  reset_modes();
-  rest_heat_ = 0.0;
-}
-
-bool System::set_resting(bool resting) {
-  if (!rest_heat_ports_) return false;
-  rest_heat_ = resting ? kRestHeatConductance : 0.0;
-  work_.cache_valid = false;  // the explicit unknowns (the ports' heat flows) change
-  return true;
 }
 
 void System::build_slots() {

@@ -1,5 +1,8 @@
-// Assembly: a Circuit becomes one DAE F(t, y, y') = 0. System is the face
-// the solver, run/ and the tests use; its rooms are one file each:
+// Assembly: a Circuit becomes one DAE F(t, y, y') = 0. System is the
+// assembled model - its structure and reductions, never changed once built,
+// so that integrations and threads share one; an Evaluator
+// (evaluator.hpp) is one integration's view of it, with the modes and the
+// scratch a run changes. The rooms are one file each:
 //
 //  * blocks.cpp     - equation blocks and their gather of locals;
 //  * structure.cpp  - nodes, unknowns, blocks, the sparsity pattern (found
@@ -58,7 +61,7 @@ struct AssemblyOptions {
   // modes are never used (an event could change them).
   bool eliminate_explicit = true;
   // Give every heat port left unconnected (insulated) a conductance to the
-  // ambient temperature that System::set_resting switches on: a steady
+  // ambient temperature that Evaluator::set_resting switches on: a steady
   // start's settling then ends with the gas at the temperature a long rest
   // gives it, where the run's adiabatic walls would keep the heat of
   // filling. Off, the port's heat flow is the constant 0 as always.
@@ -70,7 +73,7 @@ struct AssemblyOptions {
 double nominal_floor(const std::string& unit);
 
 // A fixed list of probes grouped by component (System::probe_set), for
-// evaluating them all at many points (System::probe_all): outputs and
+// evaluating them all at many points (Evaluator::probe_all): outputs and
 // integrands then gather each component's variables and run its
 // observables' shared computation once per point, not once per probe.
 struct ProbeSet {
@@ -103,7 +106,7 @@ struct ExplicitOrder;
 struct ExternalInput {
   std::string name;  // the component's
   ExternalInputSpec spec;
-  int mode = 0;  // index into System::modes()
+  int mode = 0;  // index into Evaluator::modes()
 };
 
 class System {
@@ -123,19 +126,6 @@ class System {
   const Circuit& circuit() const { return circuit_; }
   const GasModel& gas() const { return circuit_.gas; }
 
-  // Residual; returns 0, or 1 if a component rejected the point (p <= 0, ...)
-  // or a residual is not finite: IDA then retries with a smaller step.
-  int residual(double t, const double* y, const double* yp, double* F) const;
-  // dF/dy + cj dF/dy' into `values` (CSC order of col_ptr/row_idx).
-  int jacobian(double t, const double* y, const double* yp, double cj, double* values) const;
-  // The two parts of that matrix (CSC order), so that jacobian(cj) =
-  // dFdy + cj dFdyp for every cj: the matrix is linear in cj, F being linear
-  // in y' and the explicit unknowns having no y'. Returns as jacobian().
-  int newton_matrix_parts(double t, const double* y, const double* yp, double* dFdy, double* dFdyp) const;
-  // dF/dy and dF/dy' separately (dense, row-major n x n), for tests.
-  void jacobian_parts(double t, const double* y, const double* yp, std::vector<double>& dFdy,
-                      std::vector<double>& dFdyp) const;
-
   const std::vector<long>& col_ptr() const { return col_ptr_; }
   const std::vector<long>& row_idx() const { return row_idx_; }
   long nnz() const { return static_cast<long>(row_idx_.size()); }
@@ -153,48 +143,19 @@ class System {
 
   void start_values(std::vector<double>& y0, std::vector<double>& yp0) const;
 
-  // A steady start's settling (AssemblyOptions::rest_heat): unconnected
-  // heat ports exchange heat with the ambient temperature while resting,
-  // not otherwise. Returns false, changing nothing, if the System was
-  // assembled without rest_heat.
-  bool set_resting(bool resting);
+  // Whether the System has rest-heat rows (AssemblyOptions::rest_heat;
+  // Evaluator::set_resting switches them on).
   bool has_rest_heat() const { return rest_heat_ports_; }
   // The conductance of such a port while resting (W/K): fast next to any
   // chamber's filling, a rest of seconds of settling time.
   static constexpr double kRestHeatConductance = 1.0;
 
-  // Discrete modes and events.
-  std::vector<double>& modes() { return modes_; }
-  const std::vector<double>& modes() const { return modes_; }
-  void reset_modes();
-  // The modes a run had at one instant (a checkpoint another run resumes from).
-  void restore_modes(const std::vector<double>& modes);
   int n_roots() const { return n_roots_; }
-  void roots(double t, const double* y, const double* yp, double* g) const;
   std::vector<double> time_events() const;
-  // Apply time events due at t, or the roots flagged in root_info (IDA's
-  // +1/-1/0 per root). Returns true if any mode changed.
-  bool handle_time_event(double t, const double* y, const double* yp, std::vector<EventLogEntry>& log);
-  bool handle_roots(double t, const double* y, const double* yp, const int* root_info,
-                    std::vector<EventLogEntry>& log);
-  // One pass of event iteration at consistent (y, y') after a
-  // re-initialisation: every component re-reads its inputs
-  // (Component::on_inputs_changed). Returns true if any mode changed; the
-  // names of the components that changed go to `changed` if given.
-  bool handle_input_changes(double t, const double* y, const double* yp, std::vector<EventLogEntry>& log,
-                            std::vector<std::string>* changed = nullptr);
-
   // The values programs may set while the circuit runs (Component::
   // external_inputs), in component order.
   std::vector<ExternalInput> external_inputs() const;
-  // Input k's new value: its mode written, the explicit unknowns derived
-  // again. The integration must then restart (Integration::inputs_changed).
-  void set_external_input(std::size_t k, double value);
 
-  // Each component's at_end() at the run's last point, as "NAME: sentence".
-  std::vector<std::string> end_notes(double t, const double* y, const double* yp);
-
-  double probe(const Probe& p, double t, const double* y, const double* yp) const;
   // The components (indices into circuit().components) whose equations read
   // IDA's unknown `i`: a node's unknown is read by every component at the
   // node, a component's internal unknown by that component.
@@ -208,16 +169,12 @@ class System {
   // wall. Always false when the System keeps its aliases.
   bool holds_constant(int component, int local) const;
 
-  // Number of Jacobian entries that AD found outside the structural pattern
-  // (should stay 0; reported in the statistics).
-  long pattern_misses() const { return work_.pattern_misses; }
-
-  // Group `probes` by component; out[i] of probe_all is probes[i]'s value,
-  // equal to probe(probes[i], t, y, yp).
+  // Group `probes` by component (Evaluator::probe_all evaluates them).
   ProbeSet probe_set(const std::vector<Probe>& probes) const;
-  void probe_all(const ProbeSet& set, double t, const double* y, const double* yp, double* out) const;
 
  private:
+  friend class Evaluator;  // reads the structure and the plans
+
   // Explicit unknowns solved together: (block, indices into
   // ExplicitPlan::unknowns the block's rows give), in level order.
   using Stage = std::vector<std::pair<int, std::vector<int>>>;
@@ -258,37 +215,7 @@ class System {
   // functions read: each of its explicit locals set to NaN in turn, at the
   // start values and two perturbations, the roots stay finite if not.
   std::vector<int> explicit_root_inputs(const Block& b) const;
-  // After an event changed the modes of a component that gives explicit
-  // unknowns: its rows must still give them linearly, with the same
-  // coefficient and no new dependencies (throws otherwise).
-  void verify_explicit(int block, double t) const;
-
-  // The evaluator (evaluator.cpp).
-  // Unknowns the blocks read (after alias elimination, before explicit
-  // elimination) from IDA's y: copies the states and solves the explicit
-  // unknowns into work_.y/yp (cached for the last t and y). Returns true if a
-  // component rejected the point.
-  bool expand(double t, const double* y, const double* yp) const;
-  // Only the explicit unknowns of `part` (a subset of the stages closed
-  // under their dependencies) from IDA's y, the others at their start
-  // values; no cache. Returns true if a component rejected the point.
-  bool expand_part(double t, const double* y, const double* yp, const Stage& part) const;
-  // IDA's y and y' into the m-level unknowns, the explicit ones at their
-  // start values (from which expand() and expand_part() solve them).
-  void load_states(const double* y, const double* yp) const;
-  // One stage's blocks evaluated and their unknowns solved into work_.y.
-  void solve_stage(double t, const Stage& stage, const EvalContext& ctx) const;
-  // Points y and yp at the unknowns the blocks read: expanded, or with
-  // `read_explicit` false the states alone (the explicit unknowns then keep
-  // stale values the caller promises not to read). Unchanged without
-  // explicit elimination.
-  void block_inputs(double t, const double*& y, const double*& yp, bool read_explicit = true) const;
-  // AD Jacobian over the alias-reduced unknowns into values (plan_.j1_* pattern).
-  int jacobian_blocks(double t, const double* y, const double* yp, double cj, double* values) const;
-
-  // Events and probes (events.cpp, probes.cpp).
-  bool fire_event(int block, double t, const double* y, const double* yp, EventKind kind, int root, int dir,
-                  std::vector<EventLogEntry>& log);
+  // Probing (probes.cpp).
   // Block b's locals at the start values (perturbed by pass), with the
   // explicit unknowns and/or all y' set to NaN: a root function or probe that
   // stays finite does not read them.
@@ -306,9 +233,12 @@ class System {
   std::vector<double> id_;
   std::vector<long> col_ptr_, row_idx_;
   std::vector<std::vector<int>> dep_y_, dep_yp_;  // per row: structural columns
+  // The components' initial modes: the assembly probes the equations with
+  // them (an Evaluator starts from them too).
   std::vector<double> modes_;
-  // The conductance of the rest-heat rows (kRestHeatConductance while
-  // resting and while the structure is found, else 0); their blocks read it.
+  // The conductance the rest-heat rows have while the structure is found
+  // (kRestHeatConductance if there are any), so that the reductions see
+  // their dependence on T (with 0, Q = 0 would pass for a constant).
   double rest_heat_ = 0.0;
   bool rest_heat_ports_ = false;
   int n_roots_ = 0;
@@ -364,18 +294,6 @@ class System {
     Stage root_stages;
   } plan_;
 
-  // The evaluator's scratch and its cache of the last expansion
-  // (evaluator.cpp); mutable, since evaluating changes no result.
-  struct Workspace {
-    std::vector<double> y, yp;     // the m-level unknowns the blocks read (expand())
-    std::vector<double> F_full;    // every full row's residual
-    std::vector<double> j1_values, d_values, scatter;  // m-level Jacobian, d explicit / d y_IDA, one row's sums
-    std::vector<double> cache_y;   // IDA's y of the last expansion, at cache_t
-    double cache_t = 0.0;
-    bool cache_valid = false, cache_invalid = false;
-    long pattern_misses = 0;       // AD entries outside the pattern (should stay 0)
-  };
-  mutable Workspace work_;
 };
 
 }  // namespace pneumo

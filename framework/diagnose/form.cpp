@@ -192,12 +192,13 @@ std::vector<Variable> record(const FormInput& in, const std::string& balance, co
     y_of[q].resize(read[q].size()), yp_of[q].resize(read[q].size());
     SolverOptions so = solver_options(nl.simulation);
     so.threads = 1;
-    simulate(sys, so, [&](double t, const double* y, const double* yp) {
+    Evaluator eval(sys);
+    simulate(eval, so, [&](double t, const double* y, const double* yp) {
       if (b >= 0) largest_of[q] = std::max(largest_of[q], std::abs(y[b]));
       t_of[q].push_back(t);
       for (std::size_t k = 0; k < read[q].size(); ++k) {
         const Readable& r = read[q][k];
-        y_of[q][k].push_back(r.unknown >= 0 ? y[r.unknown] : sys.probe(r.probe, t, y, yp));
+        y_of[q][k].push_back(r.unknown >= 0 ? y[r.unknown] : eval.probe(r.probe, t, y, yp));
         yp_of[q][k].push_back(r.unknown >= 0 ? yp[r.unknown] : 0.0);
       }
     });

@@ -504,7 +504,8 @@ class Search {
       so.threads = 1;
       std::vector<std::vector<double>> values(content.size());
       ++simulations;
-      const auto result = simulate(sys, so, [&](double t, const double* y, const double*) {
+      Evaluator eval(sys);
+      const auto result = simulate(eval, so, [&](double t, const double* y, const double*) {
         held_t[q].push_back(t);
         for (std::size_t k = 0; k < content.size(); ++k) values[k].push_back(y[content[k]]);
       });

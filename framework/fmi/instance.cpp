@@ -13,11 +13,13 @@ namespace pneumo::fmi {
 // integration and the outputs' probes.
 struct Instance::Run {
   System system;
+  Evaluator eval;
   Integration integration;
   ProbeSet outputs;
   Run(Circuit circuit, const SolverOptions& options)
       : system(std::move(circuit), AssemblyOptions{.rest_heat = options.steady_start}),
-        integration(system, options, [](double, const double*, const double*) {}) {}
+        eval(system),
+        integration(eval, options, [](double, const double*, const double*) {}) {}
 };
 
 namespace {
@@ -92,7 +94,7 @@ void Instance::build() {
   // The integration's constructor set the modes to their initial values.
   for (std::size_t i = 0; i < values_.size(); ++i)
     if (description_.variables[i].causality == Variable::Causality::input)
-      run_->system.set_external_input(description_.variables[i].index, values_[i]);
+      run_->eval.set_external_input(description_.variables[i].index, values_[i]);
   input_changed_.assign(values_.size(), 0);
   if (!run_->integration.start())
     throw FmuError("initialisation failed: " + run_->integration.result().message);
@@ -102,7 +104,7 @@ void Instance::build() {
 
 void Instance::read_outputs() {
   std::vector<double> out(values_.size());  // at most one per variable
-  run_->system.probe_all(run_->outputs, t_, run_->integration.y(), run_->integration.yp(), out.data());
+  run_->eval.probe_all(run_->outputs, t_, run_->integration.y(), run_->integration.yp(), out.data());
   std::size_t k = 0;
   for (std::size_t i = 0; i < values_.size(); ++i)
     if (description_.variables[i].causality == Variable::Causality::output) values_[i] = out[k++];
@@ -114,7 +116,7 @@ void Instance::apply_inputs() {
   bool any = false;
   for (std::size_t i = 0; i < values_.size(); ++i)
     if (input_changed_[i]) {
-      run_->system.set_external_input(description_.variables[i].index, values_[i]);
+      run_->eval.set_external_input(description_.variables[i].index, values_[i]);
       input_changed_[i] = 0;
       any = true;
     }

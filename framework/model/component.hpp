@@ -28,9 +28,10 @@
 // keyed on the exact values it reads, because the framework evaluates one
 // component several times at the same point within one residual call (the
 // explicitly solved unknowns, then IDA's rows, then outputs). The cache must
-// be invisible: bit-identical results to recomputing. It needs no lock: a
-// component instance belongs to one circuit, and a circuit (or each of its
-// independent parts) is integrated by one thread at a time.
+// be invisible: bit-identical results to recomputing. It is kept per thread
+// (PerThread, framework/model/per_thread.hpp): threads may integrate one
+// assembled System at the same time, each with an Evaluator of its own, and
+// nothing in a component instance may change while they do.
 #pragma once
 
 #include <limits>

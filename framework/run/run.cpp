@@ -73,7 +73,7 @@ void kept_rows_first(const Resumption& r, const std::vector<int>& columns, std::
 
 // Part p's run on its System (its disturbances already picked out): a
 // resumed part no disturbance reaches is the kept run's rows.
-PartRun run_part(System& system, const SolverOptions& options, const Resumption& resumption, std::size_t p,
+PartRun run_part(const System& system, const SolverOptions& options, const Resumption& resumption, std::size_t p,
                  std::vector<int> column_of, std::vector<RunCheckpoint>& kept) {
   PartRun out;
   if (resumption.from && resumption.kept && options.disturbances.empty()) {
@@ -99,7 +99,7 @@ PartRun run_part(System& system, const SolverOptions& options, const Resumption&
 
 }  // namespace
 
-RunResult run_system(System& system, const SolverOptions& options, const Resumption& resumption) {
+RunResult run_system(const System& system, const SolverOptions& options, const Resumption& resumption) {
   if (resumption.from && resumption.from->parts.size() != 1)
     throw std::invalid_argument("run_system: a checkpoint of " + std::to_string(resumption.from->parts.size()) + " parts");
   RunResult out;
@@ -130,11 +130,12 @@ RunResult run_system(System& system, const SolverOptions& options, const Resumpt
       sampled_column.push_back(static_cast<int>(i) + 1);
     }
   const ProbeSet sampled_set = system.probe_set(sampled);
+  Evaluator eval(system);
   std::vector<double> values(sampled.size());
   const OutputFn output = [&](double t, const double* y, const double* yp) {
     std::vector<double> row(probes.size() + 1);
     row[0] = t;
-    system.probe_all(sampled_set, t, y, yp, values.data());
+    eval.probe_all(sampled_set, t, y, yp, values.data());
     for (std::size_t i = 0; i < sampled.size(); ++i) row[sampled_column[i]] = values[i];
     for (std::size_t i = 0; i < probes.size(); ++i)
       if (slot[i] >= 0) row[i + 1] = integrals[slot[i]];
@@ -142,7 +143,7 @@ RunResult run_system(System& system, const SolverOptions& options, const Resumpt
   };
   SolverOptions opt = options;
   opt.outputs_read_yp = sampled_set.reads_yp;
-  Integration integration(system, opt, output, quad.integrands.empty() ? nullptr : &quad);
+  Integration integration(eval, opt, output, quad.integrands.empty() ? nullptr : &quad);
   bool ok = resumption.from ? integration.resume(resumption.from->parts[0]) : integration.start();
   // One checkpoint a time kept (one at or before the start: the start's).
   for (double t : resumption.keep_at) {
@@ -159,7 +160,7 @@ RunResult run_system(System& system, const SolverOptions& options, const Resumpt
 
 RunResult run_circuit(Circuit circuit, const SolverOptions& options, const Resumption& resumption) {
   const std::vector<std::vector<int>> parts = independent_parts(circuit);
-  // A steady start's settling needs the rest-heat rows (System::set_resting).
+  // A steady start's settling needs the rest-heat rows (Evaluator::set_resting).
   const AssemblyOptions assembly{.rest_heat = options.steady_start};
   if (parts.size() <= 1) {
     std::vector<int> columns(circuit.probes.size() + 1);

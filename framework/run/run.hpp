@@ -42,7 +42,9 @@ SolverOptions solver_options(const SimulationSettings& s);
 // Throws InputError / StructureError for bad input; solver failures are
 // reported in RunResult::solver (ok == false) with the rows computed so far.
 RunResult run_simulation(const Netlist& netlist, const Registry& registry);
-RunResult run_system(System& system, const SolverOptions& options, const Resumption& resumption = {});
+// One integration of `system` (an Evaluator of its own): Systems are not
+// changed by a run, so threads may run one System at the same time.
+RunResult run_system(const System& system, const SolverOptions& options, const Resumption& resumption = {});
 // A circuit of one part: as run_system on its System. Of several
 // independent parts (framework/run/parts.hpp): each part assembled and
 // integrated by a System and an IDA of its own, on options.threads threads,

@@ -36,10 +36,10 @@ std::string listed(const std::vector<std::string>& items) {
 
 // The equations a component rejects at (t, y, yp): residuals not finite.
 std::string rejected_rows(UserData& u, N_Vector y, N_Vector yp, double t) {
-  const System& s = *u.system;
+  const System& s = u.eval->system();
   std::vector<double> F(s.size(), 0.0);
   const double* py = u.physical_y(y);
-  if (s.residual(t, py, u.disturbed_yp(t, y, yp), F.data()) == 0) return "";
+  if (u.eval->residual(t, py, u.disturbed_yp(t, y, yp), F.data()) == 0) return "";
   std::vector<std::string> rows;
   for (int r = 0; r < s.size() && rows.size() < 3; ++r)
     if (!std::isfinite(F[r])) rows.push_back(s.row_name(r));
@@ -51,7 +51,7 @@ std::string rejected_rows(UserData& u, N_Vector y, N_Vector yp, double t) {
 
 std::string step_failure_report(void* ida, UserData& u, N_Vector y, N_Vector yp, double t,
                                 const std::vector<EventLogEntry>& events) {
-  const System& s = *u.system;
+  const System& s = u.eval->system();
   const int n = s.size();
   std::string out;
   N_Vector ewt = N_VClone(y), ele = N_VClone(y);
@@ -74,13 +74,13 @@ std::string step_failure_report(void* ida, UserData& u, N_Vector y, N_Vector yp,
 }
 
 std::string start_failure_report(UserData& u, N_Vector y, N_Vector yp, double t) {
-  const System& s = *u.system;
+  const System& s = u.eval->system();
   const int n = s.size();
   if (n == 0 || n > 3000) return "";  // the dense matrices below: n^2 numbers
   std::vector<double> py(u.physical_y(y), u.physical_y(y) + n), pyp(u.physical_yp(yp), u.physical_yp(yp) + n);
   std::vector<double> dFdy, dFdyp, F(n, 0.0);
-  s.jacobian_parts(t, py.data(), pyp.data(), dFdy, dFdyp);
-  s.residual(t, py.data(), pyp.data(), F.data());
+  u.eval->jacobian_parts(t, py.data(), pyp.data(), dFdy, dFdyp);
+  u.eval->residual(t, py.data(), pyp.data(), F.data());
   // The consistent-value problem's matrix: algebraic unknowns by y,
   // differential ones by y', each column in its unknown's nominal unit.
   const auto& id = s.differential();

@@ -49,7 +49,7 @@ int evaluate_parts(UserData& u, double t, N_Vector y, N_Vector yp) {
   auto& dFdyp = shifted ? u.system_dFdyp : parts.dFdyp;
   dFdy.resize(u.row_idx.size());
   dFdyp.resize(u.row_idx.size());
-  const int flag = u.system->newton_matrix_parts(t, py, pyp, dFdy.data(), dFdyp.data());
+  const int flag = u.eval->newton_matrix_parts(t, py, pyp, dFdy.data(), dFdyp.data());
   scale_columns(u, dFdy.data());
   scale_columns(u, dFdyp.data());
   if (shifted) {
@@ -70,7 +70,7 @@ int fresh_matrix(UserData& u, double t, double cj, N_Vector y, N_Vector yp, doub
   parts.valid = false;
   const bool keep = parts.enabled && !parts.in_calc_ic;
   if (!keep && !u.shifted.active()) {
-    const int flag = u.system->jacobian(t, u.physical_y(y), u.disturbed_yp(t, y, yp), cj, values);
+    const int flag = u.eval->jacobian(t, u.physical_y(y), u.disturbed_yp(t, y, yp), cj, values);
     scale_columns(u, values);
     return flag;
   }
@@ -90,7 +90,7 @@ int residual_cb(realtype t_ida, N_Vector y, N_Vector yp, N_Vector rr, void* user
   const double t = u->model_t(t_ida);
   const PhaseTimer timer(u->time_phases, u->seconds_residual);
   return guarded(u, [&] {
-    return u->system->residual(t, u->physical_y(y), u->disturbed_yp(t, y, yp), N_VGetArrayPointer(rr));
+    return u->eval->residual(t, u->physical_y(y), u->disturbed_yp(t, y, yp), N_VGetArrayPointer(rr));
   });
 }
 
@@ -122,7 +122,7 @@ int quadrature_cb(realtype t_ida, N_Vector y, N_Vector yp, N_Vector q, void* use
   auto* u = static_cast<UserData*>(user);
   const double t = u->model_t(t_ida);
   return guarded(u, [&] {
-    u->system->probe_all(*u->integrands, t, u->physical_y(y), u->physical_yp(yp), N_VGetArrayPointer(q));
+    u->eval->probe_all(*u->integrands, t, u->physical_y(y), u->physical_yp(yp), N_VGetArrayPointer(q));
     return 0;
   });
 }

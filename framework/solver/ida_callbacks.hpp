@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "framework/assembly/system.hpp"
+#include "framework/assembly/evaluator.hpp"
 #include "framework/solver/disturbed_matrix.hpp"
 #include "framework/solver/ida_solver.hpp"
 #include "framework/solver/newton_matrix.hpp"
@@ -21,7 +21,7 @@
 namespace pneumo {
 
 struct UserData {
-  System* system = nullptr;
+  Evaluator* eval = nullptr;
   std::exception_ptr error;  // exceptions never cross the C callbacks
   std::string last_message;
   std::vector<sunindextype> col_ptr, row_idx;
@@ -116,7 +116,7 @@ struct UserData {
   }
   double read(const Reader& r, double t) const {
     if (r.unknown >= 0) return y_phys[r.unknown];
-    return r.probe.index < 0 ? 0.0 : system->probe(r.probe, t, y_phys.data(), yp_phys.data());
+    return r.probe.index < 0 ? 0.0 : eval->probe(r.probe, t, y_phys.data(), yp_phys.data());
   }
   double disturbance_at(const Disturbed& r, double t) const {
     double d = r.d->t.empty() ? 0.0 : r.d->time_shaped(t);

@@ -116,7 +116,7 @@ int keep_matrix(SUNMatrix) { return SUNMAT_SUCCESS; }
 // stopped at is handled.
 class IdaRun {
  public:
-  IdaRun(System& system, const SolverOptions& opt, OutputFn output, const Quadratures* quad);
+  IdaRun(Evaluator& eval, const SolverOptions& opt, OutputFn output, const Quadratures* quad);
   bool start();
   bool resume(const Checkpoint& from);
   Checkpoint checkpoint();
@@ -176,7 +176,8 @@ class IdaRun {
   std::string chatter_message() const;
   void finish();
 
-  System& system_;
+  Evaluator& eval_;
+  const System& system_;
   const SolverOptions opt_;  // copies: a resumable run outlives its caller's
   const OutputFn output_;
   const Quadratures* quad_;
@@ -216,22 +217,23 @@ class IdaRun {
   bool settling_ = false;
 };
 
-IdaRun::IdaRun(System& system, const SolverOptions& opt, OutputFn output, const Quadratures* quad)
-    : system_(system),
+IdaRun::IdaRun(Evaluator& eval, const SolverOptions& opt, OutputFn output, const Quadratures* quad)
+    : eval_(eval),
+      system_(eval.system()),
       opt_(opt),
       output_(std::move(output)),
       quad_(quad),
-      n_(system.size()),
+      n_(system_.size()),
       n_quad_(quad ? static_cast<int>(quad->integrands.size()) : 0),
       t_(opt.t_start),
       target_(opt.t_start),
       eps_t_(1e-12 * std::max(1.0, std::abs(opt.t_end))),
       grid_(opt.t_start, opt.t_end, opt.output_interval),
-      roots_(system.n_roots()) {
-  user_.system = &system;
+      roots_(system_.n_roots()) {
+  user_.eval = &eval;
   user_.time_phases = opt.time_phases;
-  user_.col_ptr.assign(system.col_ptr().begin(), system.col_ptr().end());
-  user_.row_idx.assign(system.row_idx().begin(), system.row_idx().end());
+  user_.col_ptr.assign(system_.col_ptr().begin(), system_.col_ptr().end());
+  user_.row_idx.assign(system_.row_idx().begin(), system_.row_idx().end());
   create_vectors();
   find_disturbed();
   create_ida();
@@ -343,12 +345,12 @@ std::vector<int> IdaRun::probe_reads(const Probe& p) const {
   for (const double off : {0.0, 0.05, -0.05}) {
     auto y = y0;
     for (int c = 0; c < n_; ++c) y[c] += (c % 2 ? off : -off) * std::max(std::abs(y[c]), user_.nominal[c]);
-    const double base = system_.probe(p, opt_.t_start, y.data(), yp0.data());
+    const double base = eval_.probe(p, opt_.t_start, y.data(), yp0.data());
     if (!std::isfinite(base)) continue;
     for (int c = 0; c < n_; ++c) {
       const double held = y[c];
       y[c] += 1e-4 * std::max(std::abs(held), user_.nominal[c]);
-      if (!(system_.probe(p, opt_.t_start, y.data(), yp0.data()) == base)) reads.insert(c);
+      if (!(eval_.probe(p, opt_.t_start, y.data(), yp0.data()) == base)) reads.insert(c);
       y[c] = held;
     }
   }
@@ -368,7 +370,7 @@ void IdaRun::create_vectors() {
   use_compiled_serial_ops(y_.get());
   use_compiled_serial_ops(yp_.get());
   std::vector<double> y0, yp0;
-  system_.reset_modes();
+  eval_.reset_modes();
   system_.start_values(y0, yp0);
   user_.nominal = system_.nominal();
   user_.y_phys.assign(n_, 0.0);
@@ -535,7 +537,7 @@ bool IdaRun::settle() {
   for (int pass = 0;; ++pass) {
     user_.parts.valid = false;
     std::vector<std::string> changed;
-    if (!system_.handle_input_changes(model_t(t_), user_.physical_y(y_.get()), user_.physical_yp(yp_.get()), result_.events,
+    if (!eval_.handle_input_changes(model_t(t_), user_.physical_y(y_.get()), user_.physical_yp(yp_.get()), result_.events,
                                       &changed))
       return true;
     if (pass == kMaxPasses) {
@@ -562,13 +564,13 @@ bool IdaRun::settle() {
 // sequencer its state triggers acts (a circuit whose logic keeps cycling
 // never rests: an error, as the event budget's); their log entries are
 // dropped, they happened before the run. Unconnected heat ports exchange
-// heat with the ambient meanwhile (System::set_resting): at rest the gas
+// heat with the ambient meanwhile (Evaluator::set_resting): at rest the gas
 // is at the ambient temperature.
 constexpr double kMaxSettleTime = 1e6;  // s of settling time
 constexpr long kMaxSettleSteps = 100000;
 
 bool IdaRun::rest_start() {
-  if (!system_.set_resting(true))
+  if (!eval_.set_resting(true))
     throw std::invalid_argument("a steady start needs the System assembled with AssemblyOptions::rest_heat");
   settling_ = true;
   user_.frozen_t = opt_.t_start;
@@ -587,7 +589,7 @@ bool IdaRun::rest_start() {
   };
   const bool ok = reinit_at(0.0) && integrate_to_rest();
   result_.events.resize(std::min(result_.events.size(), logged));
-  system_.set_resting(false);
+  eval_.set_resting(false);
   settling_ = false;
   user_.frozen_t = NAN;
   grid_k_at_budget_ = -1;
@@ -691,7 +693,7 @@ void IdaRun::restart_roots(const std::vector<int>* fired) {
 }
 
 void IdaRun::roots_at(double tr, N_Vector yy, N_Vector yyp, std::vector<double>& g) {
-  system_.roots(model_t(tr), user_.physical_y(yy), user_.physical_yp(yyp), g.data());
+  eval_.roots(model_t(tr), user_.physical_y(yy), user_.physical_yp(yyp), g.data());
   ++result_.stats.root_evals;
 }
 
@@ -726,7 +728,7 @@ bool IdaRun::start() {
   prepare_run();
   // Events at (or before) t_start set the initial modes.
   while (next_event_ < events_.size() && events_[next_event_] <= opt_.t_start + eps_t_) {
-    system_.handle_time_event(events_[next_event_], user_.physical_y(y_.get()), user_.physical_yp(yp_.get()),
+    eval_.handle_time_event(events_[next_event_], user_.physical_y(y_.get()), user_.physical_yp(yp_.get()),
                               result_.events);
     ++next_event_;
   }
@@ -746,7 +748,7 @@ bool IdaRun::resume(const Checkpoint& from) {
   t_ = from.t;
   next_event_ = std::upper_bound(events_.begin(), events_.end(), t_ + eps_t_) - events_.begin();
   while (grid_.pending() && grid_.next() <= t_ + eps_t_) ++grid_.k;
-  system_.restore_modes(from.modes);
+  eval_.restore_modes(from.modes);
   for (int i = 0; i < n_; ++i) {
     N_VGetArrayPointer(y_.get())[i] = from.y[i] / user_.nominal[i];
     N_VGetArrayPointer(yp_.get())[i] = from.yp[i] / user_.nominal[i];
@@ -769,7 +771,7 @@ Checkpoint IdaRun::checkpoint() {
   c.y.assign(y, y + n_);
   const double* yp = user_.physical_yp(yp_.get());
   c.yp.assign(yp, yp + n_);
-  c.modes = system_.modes();
+  c.modes = eval_.modes();
   if (n_quad_ > 0) {
     check(IDAGetQuadDky(ida_, t_, 0, q_.get()), "IDAGetQuadDky");
     c.integrals.assign(N_VGetArrayPointer(q_.get()), N_VGetArrayPointer(q_.get()) + n_quad_);
@@ -814,7 +816,7 @@ bool IdaRun::advance_to(double target) {
   return result_.message.empty();
 }
 
-// A program changed the circuit's external inputs (System::set_external_input)
+// A program changed the circuit's external inputs (Evaluator::set_external_input)
 // at the present time: a discontinuity, handled as after an event -
 // consistent values, event iteration, the roots' sides read again.
 bool IdaRun::inputs_changed() {
@@ -983,7 +985,7 @@ IdaRun::Next IdaRun::state_events(double t_ret) {
     interpolate(t_root, y_ev_.get(), yp_ev_.get(), true);
     const std::vector<int> fired = roots_.root_info();
     user_.parts.valid = false;  // the modes may have changed
-    const bool reinit = system_.handle_roots(model_t(t_root), user_.physical_y(y_ev_.get()), user_.physical_yp(yp_ev_.get()),
+    const bool reinit = eval_.handle_roots(model_t(t_root), user_.physical_y(y_ev_.get()), user_.physical_yp(yp_ev_.get()),
                                              fired.data(), result_.events);
     if (!settling_ && grid_.pending() && std::abs(t_root - grid_.next()) <= eps_t_) ++grid_.k;
     if (reinit) {
@@ -1009,7 +1011,7 @@ IdaRun::Next IdaRun::stopped_at(double t_event) {
   bool reinit = false;
   if (next_event_ < events_.size() && std::abs(t_ - t_event) <= eps_t_) {
     user_.parts.valid = false;
-    reinit = system_.handle_time_event(t_, user_.physical_y(y_.get()), user_.physical_yp(yp_.get()), result_.events);
+    reinit = eval_.handle_time_event(t_, user_.physical_y(y_.get()), user_.physical_yp(yp_.get()), result_.events);
     ++next_event_;
   }
   if (reinit && !restart(nullptr)) return Next::stop;
@@ -1024,7 +1026,7 @@ void IdaRun::finish() {
   if (result_.message.empty()) {
     result_.ok = true;
     result_.t_reached = t_;
-    result_.warnings = system_.end_notes(t_, user_.physical_y(y_.get()), user_.physical_yp(yp_.get()));
+    result_.warnings = eval_.end_notes(t_, user_.physical_y(y_.get()), user_.physical_yp(yp_.get()));
   }
   accumulate_stats();
   auto& s = result_.stats;
@@ -1032,7 +1034,7 @@ void IdaRun::finish() {
   s.jacobian_recombinations = user_.parts.recombined;
   s.recombined_retries = user_.parts.retried;
   s.jacobian_evals -= user_.parts.recombined;
-  s.pattern_misses = system_.pattern_misses();
+  s.pattern_misses = eval_.pattern_misses();
   s.part_steps_max = s.steps;
   s.lu = lu_;
   s.seconds_residual = user_.seconds_residual;
@@ -1075,8 +1077,8 @@ double Disturbance::withdrawal_share(double time, double y) const {
   return h > 0 ? std::clamp(y / h, 0.0, 1.0) : 1.0;
 }
 
-Integration::Integration(System& system, const SolverOptions& options, OutputFn output, const Quadratures* quad)
-    : run_(std::make_unique<IdaRun>(system, options, std::move(output), quad)) {}
+Integration::Integration(Evaluator& eval, const SolverOptions& options, OutputFn output, const Quadratures* quad)
+    : run_(std::make_unique<IdaRun>(eval, options, std::move(output), quad)) {}
 Integration::~Integration() = default;
 bool Integration::start() { return run_->start(); }
 bool Integration::resume(const Checkpoint& from) { return run_->resume(from); }
@@ -1089,8 +1091,8 @@ const double* Integration::yp() { return run_->yp(); }
 const SolverResult& Integration::result() const { return run_->result(); }
 SolverResult Integration::finish() { return run_->finish_run(); }
 
-SolverResult simulate(System& system, const SolverOptions& opt, const OutputFn& output, const Quadratures* quad) {
-  Integration integration(system, opt, output, quad);
+SolverResult simulate(Evaluator& eval, const SolverOptions& opt, const OutputFn& output, const Quadratures* quad) {
+  Integration integration(eval, opt, output, quad);
   if (integration.start()) integration.advance_to(opt.t_end);
   return integration.finish();
 }

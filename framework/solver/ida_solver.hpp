@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "framework/assembly/system.hpp"
+#include "framework/assembly/evaluator.hpp"
 #include "framework/model/simulation_options.hpp"
 #include "framework/solver/timed_linear_solver.hpp"
 
@@ -151,7 +151,7 @@ struct Quadratures {
 // Integrate from the system's start values. Never throws on solver failure:
 // the result says what happened and where (t_reached); throws only for
 // programming errors in components (exceptions from residuals).
-SolverResult simulate(System& system, const SolverOptions& options, const OutputFn& output,
+SolverResult simulate(Evaluator& eval, const SolverOptions& options, const OutputFn& output,
                       const Quadratures* quadratures = nullptr);
 
 }  // namespace pneumo

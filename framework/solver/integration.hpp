@@ -15,8 +15,10 @@ class IdaRun;
 
 class Integration {
  public:
-  // The System must outlive the Integration; options and output are copied.
-  Integration(System& system, const SolverOptions& options, OutputFn output, const Quadratures* quad = nullptr);
+  // Integrates the System of `eval`, whose modes it changes (one Evaluator
+  // an integration at a time). The Evaluator must outlive the Integration;
+  // options and output are copied.
+  Integration(Evaluator& eval, const SolverOptions& options, OutputFn output, const Quadratures* quad = nullptr);
   ~Integration();
   Integration(const Integration&) = delete;
   Integration& operator=(const Integration&) = delete;

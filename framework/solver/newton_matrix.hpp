@@ -12,7 +12,7 @@ namespace pneumo {
 // IDA asks for a new matrix once cj is more than 25 % off the one the
 // factorisation used; most of its requests are these, while the state has
 // hardly moved. Recombining is exact in cj, since F is linear in y' and the
-// explicitly solved unknowns have no y' (System::newton_matrix_parts). The parts
+// explicitly solved unknowns have no y' (Evaluator::newton_matrix_parts). The parts
 // are evaluated afresh when they may be too old for the Newton iteration:
 // after a nonlinear convergence failure, after kMaxAgeSteps steps (CVODE's
 // limit), after an event or a re-initialisation, after KLU rejected a

@@ -158,9 +158,9 @@ class RunJournal {
   std::mutex mutex_;
 };
 
-class Evaluator {
+class DesignEvaluator {
  public:
-  Evaluator(const Model& model, const OptimizeProblem& p, const OptimizeOptions& o)
+  DesignEvaluator(const Model& model, const OptimizeProblem& p, const OptimizeOptions& o)
       : problem_(p), options_(o), registry_(model.registry), netlist_(model.netlist) {
     const Netlist& nl = model.netlist;
     std::vector<std::string> names = p.objectives;
@@ -295,7 +295,7 @@ constexpr double kConstraintTolerance = 1e-6;
 // One NLopt run in the unit cube of the design variables.
 class Search {
  public:
-  Search(Evaluator& ev, const OptimizeProblem& p, const OptimizeOptions& o, int objective,
+  Search(DesignEvaluator& ev, const OptimizeProblem& p, const OptimizeOptions& o, int objective,
          std::vector<Constraint> constraints)
       : ev_(ev), p_(p), o_(o), objective_(objective), constraints_(std::move(constraints)),
         t0_(std::chrono::steady_clock::now()) {}
@@ -434,7 +434,7 @@ class Search {
     std::cerr << "\r" << line.str() << "        " << std::flush;
   }
 
-  Evaluator& ev_;
+  DesignEvaluator& ev_;
   const OptimizeProblem& p_;
   const OptimizeOptions& o_;
   int objective_;
@@ -479,7 +479,7 @@ std::vector<ParetoPoint> front_of(const std::vector<PointResult>& history, const
 
 // The feasible interval of the single design variable around the optimum:
 // a scan of the bounds, then bisection of each edge.
-void feasible_interval(Evaluator& ev, Search& s, const OptimizeProblem& p, OptimizeResult& r) {
+void feasible_interval(DesignEvaluator& ev, Search& s, const OptimizeProblem& p, OptimizeResult& r) {
   const double lo = p.design[0].lo, hi = p.design[0].hi, x0 = r.best.x[0];
   auto ok = [&](double x) { return s.feasible(ev.evaluate({x})); };
   auto edge = [&](double in, double out) {
@@ -638,7 +638,7 @@ std::vector<Range> parse_design(const Netlist& nl, const Registry& registry, con
 bool PointResult::feasible() const { return feasible_runs && violation <= kConstraintTolerance; }
 
 OptimizeResult optimize(const Model& model, const OptimizeProblem& p, const OptimizeOptions& o) {
-  Evaluator ev(model, p, o);
+  DesignEvaluator ev(model, p, o);
   OptimizeResult r;
   for (const auto& m : ev.metrics()) {
     r.metric_names.push_back(m.name);
@@ -686,7 +686,7 @@ OptimizeResult optimize(const Model& model, const OptimizeProblem& p, const Opti
 
 OptimizeResult evaluate_design(const Model& model, const OptimizeProblem& p, const OptimizeOptions& o,
                                const std::vector<double>& x) {
-  Evaluator ev(model, p, o);
+  DesignEvaluator ev(model, p, o);
   Search s(ev, p, o, ev.index_of(p.objectives[0]), p.constraints);
   OptimizeResult r;
   for (const auto& m : ev.metrics()) {

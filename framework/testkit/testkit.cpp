@@ -20,8 +20,9 @@ Registry with_builtin(const std::function<void(Registry&)>& add) {
 namespace {
 
 // Central differences of the residual against the AD part dF/dy (or dF/dy').
-void compare_part(const System& sys, double t, const std::vector<double>& y0, const std::vector<double>& yp0,
+void compare_part(const Evaluator& eval, double t, const std::vector<double>& y0, const std::vector<double>& yp0,
                   bool wrt_yp, const std::vector<double>& J_ad, JacobianCheck& out) {
+  const System& sys = eval.system();
   const int n = sys.size();
   std::vector<double> scale(n);
   const auto& base = wrt_yp ? yp0 : y0;
@@ -30,15 +31,15 @@ void compare_part(const System& sys, double t, const std::vector<double>& y0, co
   // J_fd column by column, plus the one-sided differences for the kink test.
   std::vector<double> Jc(static_cast<std::size_t>(n) * n), Jf(Jc.size()), Jb(Jc.size());
   std::vector<double> F0(n), Fp(n), Fm(n);
-  sys.residual(t, y0.data(), yp0.data(), F0.data());
+  eval.residual(t, y0.data(), yp0.data(), F0.data());
   for (int j = 0; j < n; ++j) {
     const double h = 1e-6 * scale[j];
     std::vector<double> y = y0, yp = yp0;
     auto& v = wrt_yp ? yp : y;
     v[j] = base[j] + h;
-    sys.residual(t, y.data(), yp.data(), Fp.data());
+    eval.residual(t, y.data(), yp.data(), Fp.data());
     v[j] = base[j] - h;
-    sys.residual(t, y.data(), yp.data(), Fm.data());
+    eval.residual(t, y.data(), yp.data(), Fm.data());
     for (int i = 0; i < n; ++i) {
       const std::size_t k = static_cast<std::size_t>(i) * n + j;
       Jc[k] = (Fp[i] - Fm[i]) / (2 * h);
@@ -78,14 +79,15 @@ void compare_part(const System& sys, double t, const std::vector<double>& y0, co
 }
 
 // jacobian(cj) against the two parts on the pattern; zero outside it.
-void check_assembled(System& sys, double t, const std::vector<double>& y, const std::vector<double>& yp,
+void check_assembled(const Evaluator& eval, double t, const std::vector<double>& y, const std::vector<double>& yp,
                      const std::vector<double>& dFdy, const std::vector<double>& dFdyp, JacobianCheck& out) {
+  const System& sys = eval.system();
   const int n = sys.size();
   const double cj = 1e3;  // 1/h for a 1 ms step
   std::vector<double> values(sys.nnz());
-  sys.jacobian(t, y.data(), yp.data(), cj, values.data());
-  // Cumulative: misses during an earlier run of the system count as well.
-  out.pattern_misses = sys.pattern_misses();
+  eval.jacobian(t, y.data(), yp.data(), cj, values.data());
+  // Cumulative: misses during the evaluator's run count as well.
+  out.pattern_misses = eval.pattern_misses();
   auto problem = [&](const std::string& s) {
     if (out.problems.size() < 10) out.problems.push_back(s);
   };
@@ -140,20 +142,20 @@ std::string JacobianCheck::report() const {
   return s.str();
 }
 
-JacobianCheck check_jacobian_at(System& system, double t, const std::vector<double>& y,
+JacobianCheck check_jacobian_at(const Evaluator& eval, double t, const std::vector<double>& y,
                                 const std::vector<double>& yp) {
   JacobianCheck out;
   out.t = t;
-  out.variables = system.size();
+  out.variables = eval.system().size();
   std::vector<double> dFdy, dFdyp;
-  system.jacobian_parts(t, y.data(), yp.data(), dFdy, dFdyp);
-  compare_part(system, t, y, yp, false, dFdy, out);
-  compare_part(system, t, y, yp, true, dFdyp, out);
-  check_assembled(system, t, y, yp, dFdy, dFdyp, out);
+  eval.jacobian_parts(t, y.data(), yp.data(), dFdy, dFdyp);
+  compare_part(eval, t, y, yp, false, dFdy, out);
+  compare_part(eval, t, y, yp, true, dFdyp, out);
+  check_assembled(eval, t, y, yp, dFdy, dFdyp, out);
   return out;
 }
 
-std::vector<JacobianCheck> check_jacobian(System& system, const SolverOptions& options, double t_short) {
+std::vector<JacobianCheck> check_jacobian(const System& system, const SolverOptions& options, double t_short) {
   struct Point {
     double t;
     std::vector<double> y, yp, modes;
@@ -163,16 +165,17 @@ std::vector<JacobianCheck> check_jacobian(System& system, const SolverOptions& o
   opt.t_end = opt.t_start + t_short;
   opt.output_interval = t_short;
   const int n = system.size();
-  const SolverResult res = simulate(system, opt, [&](double t, const double* y, const double* yp) {
-    points.push_back({t, std::vector<double>(y, y + n), std::vector<double>(yp, yp + n), system.modes()});
+  Evaluator eval(system);
+  const SolverResult res = simulate(eval, opt, [&](double t, const double* y, const double* yp) {
+    points.push_back({t, std::vector<double>(y, y + n), std::vector<double>(yp, yp + n), eval.modes()});
   });
   if (!res.ok) throw std::runtime_error("check_jacobian: the run to t = " + std::to_string(opt.t_end) +
                                         " s failed: " + res.message);
   if (points.size() < 2) throw std::runtime_error("check_jacobian: the run produced fewer than two points");
   std::vector<JacobianCheck> out;
   for (const Point* pt : {&points.front(), &points.back()}) {
-    system.modes() = pt->modes;
-    out.push_back(check_jacobian_at(system, pt->t, pt->y, pt->yp));
+    eval.modes() = pt->modes;
+    out.push_back(check_jacobian_at(eval, pt->t, pt->y, pt->yp));
   }
   return out;
 }

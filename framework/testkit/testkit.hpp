@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-#include "framework/assembly/system.hpp"
+#include "framework/assembly/evaluator.hpp"
 #include "framework/model/registry.hpp"
 #include "framework/solver/ida_solver.hpp"
 
@@ -37,7 +37,7 @@ Registry with_builtin(const std::function<void(Registry&)>& add);
 // entry is |S_ad - S_fd| / max(|S_ad|, 1e-3 max_j |S_ij|). Where the
 // residual has a kink inside the stencil (choked/subsonic switch, end stop
 // contact) forward and backward differences disagree; such entries are
-// skipped and counted, and must stay rare. Also checked: System::jacobian(cj)
+// skipped and counted, and must stay rare. Also checked: Evaluator::jacobian(cj)
 // (the matrix IDA factorises) equals dF/dy + cj dF/dy' on the structural
 // pattern and has nothing outside it, and every variable whose derivative
 // appears is flagged differential.
@@ -48,7 +48,7 @@ struct JacobianCheck {
   std::string worst_where;  // "dF/dy row 3, tank.m: AD ..., FD ..."
   int compared = 0;         // entries compared
   int kinks = 0;            // entries skipped at kinks
-  long pattern_misses = 0;  // AD entries outside the structural pattern (System's count so far)
+  long pattern_misses = 0;  // AD entries outside the structural pattern (the evaluator's count so far)
   std::vector<std::string> problems;  // assembled matrix and pattern findings
 
   // worst < tolerance, more entries compared than variables, kinks at most
@@ -57,14 +57,14 @@ struct JacobianCheck {
   std::string report() const;
 };
 
-// At one point; the system's discrete modes must be those of the point.
-JacobianCheck check_jacobian_at(System& system, double t, const std::vector<double>& y,
+// At one point; the evaluator's discrete modes must be those of the point.
+JacobianCheck check_jacobian_at(const Evaluator& eval, double t, const std::vector<double>& y,
                                 const std::vector<double>& yp);
 
 // Integrates `t_short` from the consistent initial point with `options`'
 // tolerances and checks at the initial point and at t_short (flows, heat
 // and motion under way). Throws std::runtime_error if the integration fails.
-std::vector<JacobianCheck> check_jacobian(System& system, const SolverOptions& options, double t_short);
+std::vector<JacobianCheck> check_jacobian(const System& system, const SolverOptions& options, double t_short);
 // The same for a netlist given as YAML text (its simulation tolerances).
 std::vector<JacobianCheck> check_jacobian(const std::string& netlist_yaml, const Registry& registry,
                                           double t_short = 0.05, const std::string& name = "snippet.yaml");
