@@ -243,7 +243,7 @@ int Evaluator::newton_matrix_parts(double t, const double* y, const double* yp, 
 }
 
 void Evaluator::jacobian_parts(double t, const double* y, const double* yp, std::vector<double>& dFdy,
-                            std::vector<double>& dFdyp) const {
+                               std::vector<double>& dFdyp) const {
   dFdy.assign(static_cast<std::size_t>(s_.n_) * s_.n_, 0.0);
   dFdyp.assign(static_cast<std::size_t>(s_.n_) * s_.n_, 0.0);
   if (!s_.plan_.unknowns.empty()) {

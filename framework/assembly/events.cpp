@@ -69,7 +69,7 @@ bool same_modes(const std::vector<double>& before, const double* modes) {
 // (t, y) - a signal source's step - and the rows that give them are checked
 // again. Returns whether the modes changed.
 bool Evaluator::fire_event(int bi, double t, const double* y, const double* yp, EventKind kind, int root, int dir,
-                        std::vector<EventLogEntry>& log) {
+                           std::vector<EventLogEntry>& log) {
   const Block& b = *s_.blocks_[bi];
   double ly[kMaxLocal], lyp[kMaxLocal];
   bool invalid = false;
@@ -133,7 +133,7 @@ bool Evaluator::handle_time_event(double t, const double* y, const double* yp, s
 }
 
 bool Evaluator::handle_roots(double t, const double* y, const double* yp, const int* root_info,
-                          std::vector<EventLogEntry>& log) {
+                             std::vector<EventLogEntry>& log) {
   block_inputs(t, y, yp);
   bool changed = false;
   for (std::size_t bi = 0; bi < s_.blocks_.size(); ++bi) {
@@ -148,7 +148,7 @@ bool Evaluator::handle_roots(double t, const double* y, const double* yp, const 
 }
 
 bool Evaluator::handle_input_changes(double t, const double* y, const double* yp, std::vector<EventLogEntry>& log,
-                                  std::vector<std::string>* changed) {
+                                     std::vector<std::string>* changed) {
   block_inputs(t, y, yp);
   bool any = false, invalid = false;
   double ly[kMaxLocal], lyp[kMaxLocal];

@@ -10,6 +10,7 @@
 #include "framework/core/parallel.hpp"
 #include "framework/diagnose/statistics.hpp"
 #include "framework/fit/bounded_lm.hpp"
+#include "framework/run/parts.hpp"
 #include "framework/run/run.hpp"
 
 namespace pneumo::diagnose::engine {
@@ -187,12 +188,31 @@ std::optional<RunResult> Engine::run(const Model& m, int k, const std::vector<Di
     // mass below zero) leaves the solver crawling: such a run fails.
     if (!disturbances.empty()) so.max_steps = kDisturbedMaxSteps;
     so.max_total_steps = max_total_steps;
+    if (!disturbances.empty() && at.empty())
+      if (auto system = assembled(m, k, nl, so)) return run_assembled(*system, so, resumption);
     return run_circuit(elaborate(nl, loaded_.registry), so, resumption);
   } catch (const std::exception& ex) {
     note_failure(runs[k].name, ex.what());
     if (why) *why = ex.what();
     return std::nullopt;
   }
+}
+
+std::shared_ptr<const System> Engine::assembled(const Model& m, int k, const Netlist& nl, const SolverOptions& so) {
+  if (!m.memo_key) return nullptr;
+  const std::string key = *m.memo_key + "@" + std::to_string(k);
+  {
+    std::lock_guard lock(assembled_mutex_);
+    if (auto it = assembled_.find(key); it != assembled_.end()) return it->second;
+  }
+  Circuit circuit = elaborate(nl, loaded_.registry);
+  std::shared_ptr<const System> system;
+  if (independent_parts(circuit).size() <= 1)
+    system = std::make_shared<const System>(std::move(circuit), assembly_options(so));
+  std::lock_guard lock(assembled_mutex_);
+  // The models one stage runs many times are few; a later stage's replace them.
+  if (assembled_.size() >= kAssembledModels) assembled_.clear();
+  return assembled_.emplace(key, std::move(system)).first->second;
 }
 
 std::vector<std::vector<double>> Engine::signals_of(const Model& m, int k, const RunResult& res, std::string* why) {

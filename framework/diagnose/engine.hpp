@@ -6,6 +6,7 @@
 
 #include <Eigen/Dense>
 #include <atomic>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -31,6 +32,7 @@ constexpr long kDisturbedMaxSteps = 20000;  // a disturbed run's step budget (th
 constexpr long kDisturbedStepsPerKept = 5;
 constexpr double kFailedResidual = 1e4;  // per sample, for a run the solver could not finish
 constexpr std::size_t kMemoValues = std::size_t{1} << 23;  // remembered signal values (64 MB)
+constexpr std::size_t kAssembledModels = 64;  // Systems kept for disturbed runs (Engine::assembled)
 
 // One measured signal of one run inside a concatenated residual vector.
 struct Segment {
@@ -162,6 +164,13 @@ class Engine {
   std::optional<RunResult> run(const Model& m, int k, const std::vector<Disturbance>& disturbances, const Setting& at,
                                const Resumption& resumption, std::string* why, long max_total_steps = 0);
   void note_failure(const std::string& run, const std::string& why);
+  // Model m's circuit at run k (its netlist `nl`), assembled once and
+  // shared by the threads, each run with an Evaluator of its own: the
+  // disturbed runs of one model - the unexplained search's, many a run -
+  // need no assembly of their own. Null when the model has no memo key
+  // (nothing names it) or the circuit has independent parts (run_circuit
+  // splits those).
+  std::shared_ptr<const System> assembled(const Model& m, int k, const Netlist& nl, const SolverOptions& so);
 
   pneumo::Model loaded_;  // the model file with its plugins
   DiagnoseOptions options_;
@@ -172,6 +181,8 @@ class Engine {
   std::vector<PhaseStarts> phase_starts_;  // per measured run
   std::set<const Effect*> vanishing_;       // learn_nulls()
   SignalMemo memo_{kMemoValues};
+  std::mutex assembled_mutex_;
+  std::map<std::string, std::shared_ptr<const System>> assembled_;  // by memo key @ run; null: not shareable
 };
 
 }  // namespace pneumo::diagnose::engine

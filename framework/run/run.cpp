@@ -158,18 +158,20 @@ RunResult run_system(const System& system, const SolverOptions& options, const R
 }
 
 
+AssemblyOptions assembly_options(const SolverOptions& options) { return {.rest_heat = options.steady_start}; }
+
+RunResult run_assembled(const System& system, const SolverOptions& options, const Resumption& resumption) {
+  std::vector<int> columns(system.circuit().probes.size() + 1);
+  std::iota(columns.begin(), columns.end(), 0);
+  RunResult r = run_system(system, options, resumption);
+  kept_rows_first(resumption, columns, r.table.rows);
+  return r;
+}
+
 RunResult run_circuit(Circuit circuit, const SolverOptions& options, const Resumption& resumption) {
   const std::vector<std::vector<int>> parts = independent_parts(circuit);
-  // A steady start's settling needs the rest-heat rows (Evaluator::set_resting).
-  const AssemblyOptions assembly{.rest_heat = options.steady_start};
-  if (parts.size() <= 1) {
-    std::vector<int> columns(circuit.probes.size() + 1);
-    std::iota(columns.begin(), columns.end(), 0);
-    System system(std::move(circuit), assembly);
-    RunResult r = run_system(system, options, resumption);
-    kept_rows_first(resumption, columns, r.table.rows);
-    return r;
-  }
+  const AssemblyOptions assembly = assembly_options(options);
+  if (parts.size() <= 1) return run_assembled(System(std::move(circuit), assembly), options, resumption);
   if (resumption.from && resumption.from->parts.size() != parts.size())
     throw std::invalid_argument("run_circuit: a checkpoint of " + std::to_string(resumption.from->parts.size()) +
                                 " parts for a circuit of " + std::to_string(parts.size()));

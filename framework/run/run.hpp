@@ -52,5 +52,12 @@ RunResult run_system(const System& system, const SolverOptions& options, const R
 // circuit's: "t", then its probes in order). Assembly errors of the parts
 // are thrown as the first part's in component order.
 RunResult run_circuit(Circuit circuit, const SolverOptions& options, const Resumption& resumption = {});
+// A circuit of one part assembled beforehand (assembly_options(options)):
+// as run_circuit, without assembling it again - a program that runs one
+// circuit many times, with other disturbances, on threads that share it.
+RunResult run_assembled(const System& system, const SolverOptions& options, const Resumption& resumption = {});
+// The assembly options run_circuit assembles with: a steady start's
+// settling needs the rest-heat rows (Evaluator::set_resting).
+AssemblyOptions assembly_options(const SolverOptions& options);
 
 }  // namespace pneumo
