@@ -64,6 +64,39 @@ bool same_modes(const std::vector<double>& before, const double* modes) {
 
 }  // namespace
 
+// After an event changed a component's modes: the rows that give explicit
+// unknowns must still give them linearly, with the same coefficient and no
+// new dependencies (the plan's, explicit.cpp).
+void Evaluator::verify_explicit(int block, double t) const {
+  const Block& b = *s_.blocks_[block];
+  const int nl = static_cast<int>(b.vars.size());
+  bool invalid = false;
+  EvalContext ctx = context(&invalid);
+  std::vector<Pattern> pr;
+  std::vector<Dual> dr;
+  evaluate_structure(b, t, work_.y.data(), work_.yp.data(), ctx, pr, dr);
+  for (const auto& x : s_.plan_.unknowns) {
+    if (x.row < b.row0 || x.row >= b.row0 + b.n_rows) continue;
+    const int k = x.row - b.row0;
+    bool ok = true;
+    double c = 0.0;
+    for (int i = 0; i < nl; ++i) {
+      const int g = b.vars[i];
+      if (g < 0) continue;
+      if (pr[k].deps.test(kMaxLocal + i)) ok = false;
+      if (pr[k].deps.test(i) && !std::binary_search(x.deps.begin(), x.deps.end(), g)) ok = false;
+      if (g == x.var) {
+        if (pr[k].nonlin.test(i)) ok = false;
+        c += dr[k].deriv(i);
+      }
+    }
+    if (ok && c == x.coef) continue;
+    throw std::runtime_error("equation '" + s_.equation_name(x.row) + "' of " + b.label + ", solved explicitly for '" + s_.plan_.m_names[x.var] +
+                             "' at assembly, no longer gives it linearly with the same coefficient after an event "
+                             "changed the component's modes; assemble with eliminate_explicit = false");
+  }
+}
+
 // One component's event at (t, y, yp): its on_event() may change its
 // modes; then the explicit unknowns may take other values at the same
 // (t, y) - a signal source's step - and the rows that give them are checked

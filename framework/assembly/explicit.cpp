@@ -8,7 +8,7 @@
 #include <set>
 
 #include "framework/assembly/blocks.hpp"
-#include "framework/assembly/evaluator.hpp"
+#include "framework/assembly/system.hpp"
 
 namespace pneumo {
 
@@ -424,36 +424,6 @@ std::vector<int> System::explicit_root_inputs(const Block& b) const {
     if (reads) out.push_back(plan_.of_m[v]);
   }
   return out;
-}
-
-void Evaluator::verify_explicit(int block, double t) const {
-  const Block& b = *s_.blocks_[block];
-  const int nl = static_cast<int>(b.vars.size());
-  bool invalid = false;
-  EvalContext ctx = context(&invalid);
-  std::vector<Pattern> pr;
-  std::vector<Dual> dr;
-  evaluate_structure(b, t, work_.y.data(), work_.yp.data(), ctx, pr, dr);
-  for (const auto& x : s_.plan_.unknowns) {
-    if (x.row < b.row0 || x.row >= b.row0 + b.n_rows) continue;
-    const int k = x.row - b.row0;
-    bool ok = true;
-    double c = 0.0;
-    for (int i = 0; i < nl; ++i) {
-      const int g = b.vars[i];
-      if (g < 0) continue;
-      if (pr[k].deps.test(kMaxLocal + i)) ok = false;
-      if (pr[k].deps.test(i) && !std::binary_search(x.deps.begin(), x.deps.end(), g)) ok = false;
-      if (g == x.var) {
-        if (pr[k].nonlin.test(i)) ok = false;
-        c += dr[k].deriv(i);
-      }
-    }
-    if (ok && c == x.coef) continue;
-    throw std::runtime_error("equation '" + s_.equation_name(x.row) + "' of " + b.label + ", solved explicitly for '" + s_.plan_.m_names[x.var] +
-                             "' at assembly, no longer gives it linearly with the same coefficient after an event "
-                             "changed the component's modes; assemble with eliminate_explicit = false");
-  }
 }
 
 }  // namespace pneumo
