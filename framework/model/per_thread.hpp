@@ -23,7 +23,11 @@ class PerThread {
  public:
   PerThread() = default;
   PerThread(const PerThread&) : serial_(next()) {}
-  PerThread& operator=(const PerThread&) { return *this; }
+  // Assigned, an instance becomes another: its slots of before are not its.
+  PerThread& operator=(const PerThread&) {
+    serial_ = next();
+    return *this;
+  }
 
   // This thread's value for this instance.
   T& get() const {
