@@ -80,6 +80,15 @@ void make_runs(const fs::path& dir, const std::string& truth, const std::vector<
   }
 }
 
+// kTwoCylinders with the components `parts` (YAML lines) added and the
+// text `from` replaced by `to`: a truth the model does not draw.
+std::string two_cylinders_with(const std::string& parts, const std::string& from, const std::string& to) {
+  std::string text = kTwoCylinders;
+  text.replace(text.find("connections:"), 12, parts + "connections:");
+  text.replace(text.find(from), from.size(), to);
+  return text;
+}
+
 diagnose::DiagnoseOptions declared(std::vector<std::string> faults) {
   diagnose::DiagnoseOptions opt;
   opt.progress = false;
@@ -96,11 +105,9 @@ diagnose::DiagnoseOptions declared(std::vector<std::string> faults) {
 TEST(DiagnoseDeclared, OfTwoCylindersTheLeakingOneIsNamed) {
   TempDir dir;
   const std::string model = dir.write("two.yaml", kTwoCylinders);
-  std::string truth = kTwoCylinders;
-  truth.replace(truth.find("connections:"), 12,
-                "  true_leak: {type: iso6358_throttle, C: 0.01 dm3/(s*bar), b: 0.1}\n"
-                "  true_air: {type: atmosphere}\nconnections:\n  - [cyl_b.rod, true_leak.a]\n"
-                "  - [true_leak.b, true_air.port]");
+  const std::string truth = two_cylinders_with(
+      "  true_leak: {type: iso6358_throttle, C: 0.01 dm3/(s*bar), b: 0.1}\n  true_air: {type: atmosphere}\n",
+      "connections:", "connections:\n  - [cyl_b.rod, true_leak.a]\n  - [true_leak.b, true_air.port]");
   make_runs(dir.path() / "runs", truth, {"x_a", "p_a", "x_b", "p_b"});
   const auto rep =
       diagnose::diagnose(model, (dir.path() / "runs").string(), "", builtin_registry(), declared({"cyl_a", "cyl_b"}));
@@ -125,10 +132,8 @@ TEST(DiagnoseDeclared, OfTwoCylindersTheLeakingOneIsNamed) {
 TEST(DiagnoseDeclared, ATransducerOffsetIsNamedWithoutACatalogue) {
   TempDir dir;
   const std::string model = dir.write("two.yaml", kTwoCylinders);
-  std::string truth = kTwoCylinders;
-  truth.replace(truth.find("connections:"), 12,
-                "  sensor_b: {type: pressure_sensor, fault_offset: 0.2 bar}\nconnections:");
-  truth.replace(truth.find("  - [cyl_a.flange"), 0, "  - [cyl_b.rod, sensor_b.port]\n");
+  std::string truth = two_cylinders_with("  sensor_b: {type: pressure_sensor, fault_offset: 0.2 bar}\n",
+                                         "  - [cyl_a.flange", "  - [cyl_b.rod, sensor_b.port]\n  - [cyl_a.flange");
   truth.replace(truth.find("p_b: cyl_b.p_rod"), 16, "p_b: sensor_b.p");
   make_runs(dir.path() / "runs", truth, {"x_a", "p_a", "x_b", "p_b"});
   const auto rep = diagnose::diagnose(model, (dir.path() / "runs").string(), "", builtin_registry(),
@@ -303,13 +308,11 @@ TEST(DiagnoseDeclared, ALongHoseDrawnAsASmallVolumeIsNamedAsTheLinesVolumeAndRes
 TEST(DiagnoseDeclared, AServiceLineWithAReceiverIsNamedAsTheSupplysSagWithTheGasItHolds) {
   TempDir dir;
   const std::string model = dir.write("two.yaml", kTwoCylinders);
-  std::string truth = kTwoCylinders;
-  truth.replace(truth.find("connections:"), 12,
-                "  service: {type: hose, D: 4 mm, L: 3 m, segments: 2, p0: 7 bar}\n"
-                "  receiver: {type: volume, V: 200 cm3, p0: 7 bar}\nconnections:");
-  const std::string joint = "[supply.port, valve_a.P, valve_b.P]";
-  truth.replace(truth.find(joint), joint.size(),
-                "[supply.port, service.a]\n  - [service.b, receiver.port, valve_a.P, valve_b.P]");
+  const std::string truth = two_cylinders_with(
+      "  service: {type: hose, D: 4 mm, L: 3 m, segments: 2, p0: 7 bar}\n"
+      "  receiver: {type: volume, V: 200 cm3, p0: 7 bar}\n",
+      "[supply.port, valve_a.P, valve_b.P]",
+      "[supply.port, service.a]\n  - [service.b, receiver.port, valve_a.P, valve_b.P]");
   make_runs(dir.path() / "runs", truth, {"x_a", "p_a", "x_b", "p_b"});
   const auto rep = diagnose::diagnose(model, (dir.path() / "runs").string(), "", builtin_registry(),
                                       declared({"supply", "valve_a", "valve_b", "cyl_a", "cyl_b"}));
