@@ -203,7 +203,9 @@ class DoubleActingCylinder final : public ComponentT<DoubleActingCylinder> {
   void equations(const Eval<T>& e, T* r) const {
     const auto& s = state(e);
     const bool faulty = chamber_faults_.any();
-    const auto ff = faulty ? chamber_faults_.flows(s.cap, &s.rod, e.gas()) : ChamberFaults::Flows<T>{};
+    const auto ff = faulty ? chamber_faults_.flows(s.cap, &s.rod, e.gas(), side(End::cap).wall_area(travel(End::cap, s.x)),
+                                                   side(End::rod).wall_area(travel(End::rod, s.x)))
+                           : ChamberFaults::Flows<T>{};
     for (End end : {End::cap, End::rod})
       side(end).equations(e, e.gas_port(port(end)), e.heat_port(heat(end)), gas(s, end), travel(end, s.x),
                           rate(end, s.v), wall_alpha_, r, faulty ? &(end == End::cap ? ff.cap : ff.rod) : nullptr,

@@ -638,9 +638,15 @@ class CylinderSide {
       }
     }
     if (wall_alpha > 0)
-      r[at.wall] = heat.Q - wall_alpha * chamber_wall_area(A_, perimeter_, d, V0_ + V0_EC_) * (heat.T - g.T_piston);
+      r[at.wall] = heat.Q - wall_alpha * wall_area(d) * (heat.T - g.T_piston);
     else
       r[at.wall] = heat.T - g.T_piston;
+  }
+
+  // The walls of the gas at the piston at travel d from this end (m2).
+  template <class T>
+  T wall_area(const T& d) const {
+    return chamber_wall_area(A_, perimeter_, d, V0_ + V0_EC_);
   }
 
   void start(StartValues& sv, const GasModel& gas, int port, int heat, double p0, double T0, double d) const {
@@ -833,15 +839,15 @@ struct StopEvents {
 
 // Faults (diagnosis) of a piston's chambers, all 0 in a sound cylinder:
 // leak conductances across the piston seal and past the rod seal, heat
-// exchange of each chamber's gas with the surroundings. A cylinder that
-// declares none of their parameters has none of them.
+// exchange of each chamber's gas with walls at the ambient temperature. A
+// cylinder that declares none of their parameters has none of them.
 struct ChamberFaults {
-  double leak_piston_C = 0, leak_rod_C = 0, wall_kA = 0;
+  double leak_piston_C = 0, leak_rod_C = 0, wall_alpha = 0;
 
   explicit ChamberFaults(const ParameterValues& p)
       : leak_piston_C(fault_or_none(p, "fault_piston_leak_C")),
         leak_rod_C(fault_or_none(p, "fault_rod_leak_C")),
-        wall_kA(fault_or_none(p, "fault_wall_kA")) {}
+        wall_alpha(fault_or_none(p, "fault_wall_alpha")) {}
 
   // Their parameters and the faults a diagnosis names by them.
   static std::vector<ParameterSpec> parameters() {
@@ -853,9 +859,9 @@ struct ChamberFaults {
         P::scalar("fault_rod_leak_C", "m3/(s*Pa)",
                   "fault (diagnosis): conductance of a leak past the rod seal to the atmosphere; 0 = none", 0.0)
             .non_negative(),
-        P::scalar("fault_wall_kA", "W/K",
-                  "fault (diagnosis): heat exchange of each chamber's gas with surroundings at ambient temperature; "
-                  "0 = none",
+        P::scalar("fault_wall_alpha", "W/(m2*K)",
+                  "fault (diagnosis): heat transfer coefficient of each chamber's gas with its walls, at the ambient "
+                  "temperature, over the chamber's wetted area (as wall_alpha's); 0 = none",
                   0.0)
             .non_negative(),
     };
@@ -867,7 +873,7 @@ struct ChamberFaults {
         {"rod_seal_leak", "leak past the rod seal to the atmosphere (worn rod seal, scored rod)",
          {{"C", "fault_rod_leak_C", "m3/(s*Pa)", false, 0.0, 0.0, 2e-9, 1e-10, false}}},
         {"wall_heat", "heat exchange of the chamber gas with the walls and surroundings (unmodelled)",
-         {{"kA", "fault_wall_kA", "W/K", false, 0.0, 0.0, 2.0, 0.1, false}}},
+         {{"alpha", "fault_wall_alpha", "W/(m2*K)", false, 0.0, 0.0, 600.0, 30.0, false}}},
     };
   }
 
@@ -876,16 +882,19 @@ struct ChamberFaults {
   // vented spring side, where the leak goes to the atmosphere), the
   // rod-seal leak from the gas behind the rod side's port (at the head, where
   // the rod seal is) and the wall heat of the gas at the piston (the
-  // chambers whose walls the heat ports are; a channel is adiabatic).
+  // chambers whose walls the heat ports are; a channel is adiabatic) over
+  // each one's wetted area `wall_cap`, `wall_rod` (m2): a cushion volume's
+  // short wall takes less heat than a long chamber's.
   // Null when the cylinder has none of these faults: the sound cylinder's
   // rows are untouched.
   template <class T>
   struct Flows {
     ExtraInflow<T> cap, rod;
   };
-  bool any() const { return leak_piston_C > 0 || leak_rod_C > 0 || wall_kA > 0; }
+  bool any() const { return leak_piston_C > 0 || leak_rod_C > 0 || wall_alpha > 0; }
   template <class T>
-  Flows<T> flows(const CylinderSide::Gas<T>& cap, const CylinderSide::Gas<T>* rod, const GasModel& gas) const {
+  Flows<T> flows(const CylinderSide::Gas<T>& cap, const CylinderSide::Gas<T>* rod, const GasModel& gas,
+                 const T& wall_cap, const T& wall_rod) const {
     const T zero = 0.0 * cap.p;
     Flows<T> f{{zero, zero, zero, zero}, {zero, zero, zero, zero}};
     const T p_amb = zero + gas.p_ambient, T_amb = zero + gas.T_ambient;
@@ -904,9 +913,9 @@ struct ChamberFaults {
       f.rod.m -= m;
       f.rod.H += enthalpy_inflow(T(-m), T_amb, rod->T_gas, gas);
     }
-    if (wall_kA > 0) {
-      f.cap.H_piston += wall_kA * (T_amb - cap.T_piston);
-      if (rod) f.rod.H_piston += wall_kA * (T_amb - rod->T_piston);
+    if (wall_alpha > 0) {
+      f.cap.H_piston += wall_alpha * wall_cap * (T_amb - cap.T_piston);
+      if (rod) f.rod.H_piston += wall_alpha * wall_rod * (T_amb - rod->T_piston);
     }
     return f;
   }
@@ -991,10 +1000,11 @@ struct Piston {
   template <class T>
   using FaultFlows = ChamberFaults::Flows<T>;
   bool has_fault_flows() const { return chamber_faults.any(); }
+  // `x`: the piston's position (the cap side's travel).
   template <class T>
-  FaultFlows<T> fault_flows(const CylinderSide::Gas<T>& cap, const CylinderSide::Gas<T>* rod,
-                            const GasModel& gas) const {
-    return chamber_faults.flows(cap, rod, gas);
+  FaultFlows<T> fault_flows(const CylinderSide::Gas<T>& cap, const CylinderSide::Gas<T>* rod, const GasModel& gas,
+                            const T& x) const {
+    return chamber_faults.flows(cap, rod, gas, this->cap.wall_area(x), this->rod.wall_area(T(stroke - x)));
   }
   // Roots 0 and 1: the stops at x = 0 and x = stroke.
   void stop_roots(double x, double* g) const {

@@ -147,7 +147,7 @@ class SingleActingCylinder final : public ComponentT<SingleActingCylinder> {
     const State<T> s = state(e);
     const auto fl = e.flange(kFlange);
     const bool faulty = p_.has_fault_flows();
-    const auto ff = faulty ? p_.fault_flows(s.cap, closed_ ? &s.rod : nullptr, e.gas()) : Piston::FaultFlows<T>{};
+    const auto ff = faulty ? p_.fault_flows(s.cap, closed_ ? &s.rod : nullptr, e.gas(), fl.s) : Piston::FaultFlows<T>{};
     p_.cap.equations(e, e.gas_port(kCap), e.heat_port(kHeatCap), s.cap, fl.s, fl.v, p_.wall_alpha, r,
                      faulty ? &ff.cap : nullptr);
     r[5] = fl.f + s.F_pressure - s.F_spring + s.F_fric + s.F_stop;  // f = -F on the cylinder
