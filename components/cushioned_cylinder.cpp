@@ -252,9 +252,10 @@ ComponentInfo describe() {
   for (auto& f : ChamberFaults::faults()) i.faults.push_back(std::move(f));
   for (auto& f : CushionFaults::faults("", "")) i.faults.push_back(std::move(f));
   for (auto& f : CushionFaults::faults("rod_", "rod_plug_diameter")) i.faults.push_back(std::move(f));
+  // The rod side's and the channel's gas are at the ports; the cushion
+  // volume is inside the end cap.
   for (const char* v : {"dead_volume_rod_side", "dead_volume_cushion", "dead_volume_channel"})
-    i.faults.push_back({std::string(v) + "_off", std::string("volume ") + v + " off (fittings, machining)",
-                        {{"k", v, "1", true, 1.0, 0.3, 3.0, 1.5, true}}});
+    i.faults.push_back(Piston::dead_volume_fault(v, std::string(v) != "dead_volume_cushion"));
   return i;
 }
 

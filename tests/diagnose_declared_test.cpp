@@ -304,6 +304,27 @@ TEST(DiagnoseDeclared, ALongHoseDrawnAsASmallVolumeIsNamedAsTheLinesVolumeAndRes
   EXPECT_LT(k, 30.0);
 }
 
+// The second cylinder's rod port is in truth joined to its valve by a hose
+// the drawing leaves out (20 cm3 behind a push-in fitting of 2 dm3/(s*bar),
+// drawn as nothing): the gas at the port is the cylinder's dead volume,
+// about 21 times the drawn 1 cm3 - a port's fittings and undrawn hose,
+// which a range of a few times the drawn value would stop at its bound.
+TEST(DiagnoseDeclared, AnUndrawnHoseAtACylindersPortIsItsDeadVolume) {
+  TempDir dir;
+  const std::string model = dir.write("two.yaml", kTwoCylinders);
+  const std::string truth = two_cylinders_with(
+      "  hose_b: {type: volume, V: 20 cm3, p0: 7 bar}\n"
+      "  fitting_b: {type: iso6358_throttle, C: 2 dm3/(s*bar), b: 0.3}\n",
+      "[valve_b.B, cyl_b.rod]", "[valve_b.B, hose_b.port, fitting_b.a]\n  - [fitting_b.b, cyl_b.rod]");
+  make_runs(dir.path() / "runs", truth, {"x_a", "p_a", "x_b", "p_b"});
+  const auto rep =
+      diagnose::diagnose(model, (dir.path() / "runs").string(), "", builtin_registry(), declared({"cyl_b", "valve_b"}));
+  expect_named_closing_the_gap(rep, "cyl_b.dead_volume_rod_off");
+  const double k = fitted(rep, "cyl_b.dead_volume_rod_off");
+  EXPECT_GT(k, 15.0);
+  EXPECT_LT(k, 28.0);
+}
+
 // The supply drawn as an ideal source is in truth a service line - a 3 m
 // hose of 4 mm bore in two segments, with the flow resistance of its
 // length - feeding a 200 cm3 air receiver at the valves (not the fault's
