@@ -118,6 +118,16 @@ double fitted(const diagnose::DiagnosisReport& rep, const std::string& name) {
   return values.empty() ? NAN : values[0];
 }
 
+// The diagnosis of kTwoCylinders from runs of `truth` (both positions and
+// rod-side pressures measured) among the declared faults `faults`.
+diagnose::DiagnosisReport diagnose_two_cylinders(const std::string& truth, std::vector<std::string> faults) {
+  TempDir dir;
+  const std::string model = dir.write("two.yaml", kTwoCylinders);
+  make_runs(dir.path() / "runs", truth, {"x_a", "p_a", "x_b", "p_b"});
+  return diagnose::diagnose(model, (dir.path() / "runs").string(), "", builtin_registry(),
+                            declared(std::move(faults)));
+}
+
 // The verdict names `first` first and closes a gap of over 3 x noise to
 // under 1.5.
 void expect_named_closing_the_gap(const diagnose::DiagnosisReport& rep, const std::string& first) {
@@ -131,14 +141,10 @@ void expect_named_closing_the_gap(const diagnose::DiagnosisReport& rep, const st
 // atmosphere, b = 0.1, not the fault's own b): among both cylinders'
 // faults, the diagnosis names the second's rod-seal leak.
 TEST(DiagnoseDeclared, OfTwoCylindersTheLeakingOneIsNamed) {
-  TempDir dir;
-  const std::string model = dir.write("two.yaml", kTwoCylinders);
   const std::string truth = two_cylinders_with(
       "  true_leak: {type: iso6358_throttle, C: 0.01 dm3/(s*bar), b: 0.1}\n  true_air: {type: atmosphere}\n",
       "connections:", "connections:\n  - [cyl_b.rod, true_leak.a]\n  - [true_leak.b, true_air.port]");
-  make_runs(dir.path() / "runs", truth, {"x_a", "p_a", "x_b", "p_b"});
-  const auto rep =
-      diagnose::diagnose(model, (dir.path() / "runs").string(), "", builtin_registry(), declared({"cyl_a", "cyl_b"}));
+  const auto rep = diagnose_two_cylinders(truth, {"cyl_a", "cyl_b"});
   std::cout << "validation gap " << rep.validation_before.total.rms << " -> " << rep.validation_after.total.rms
             << ", verdict:";
   for (const auto& v : rep.verdict) std::cout << " " << v;
@@ -155,14 +161,10 @@ TEST(DiagnoseDeclared, OfTwoCylindersTheLeakingOneIsNamed) {
 // A pressure transducer reading 0.2 bar high, no catalogue: the measured
 // signal's own offset fault is named, with about that offset.
 TEST(DiagnoseDeclared, ATransducerOffsetIsNamedWithoutACatalogue) {
-  TempDir dir;
-  const std::string model = dir.write("two.yaml", kTwoCylinders);
   std::string truth = two_cylinders_with("  sensor_b: {type: pressure_sensor, fault_offset: 0.2 bar}\n",
                                          "  - [cyl_a.flange", "  - [cyl_b.rod, sensor_b.port]\n  - [cyl_a.flange");
   truth.replace(truth.find("p_b: cyl_b.p_rod"), 16, "p_b: sensor_b.p");
-  make_runs(dir.path() / "runs", truth, {"x_a", "p_a", "x_b", "p_b"});
-  const auto rep = diagnose::diagnose(model, (dir.path() / "runs").string(), "", builtin_registry(),
-                                      declared({"p_a", "p_b", "cyl_b"}));
+  const auto rep = diagnose_two_cylinders(truth, {"p_a", "p_b", "cyl_b"});
   ASSERT_FALSE(rep.verdict.empty());
   EXPECT_EQ(rep.verdict[0], "p_b.offset");
   for (const auto& [name, values] : rep.final_values)
@@ -176,14 +178,10 @@ TEST(DiagnoseDeclared, ATransducerOffsetIsNamedWithoutACatalogue) {
 // so it is named, with about those factors - not the pressure-dependent
 // friction, whose extra force would follow the pressure across the seal.
 TEST(DiagnoseDeclared, DryFrictionGrownAloneIsTheRunningFrictionWithItsTwoFactors) {
-  TempDir dir;
-  const std::string model = dir.write("two.yaml", kTwoCylinders);
   std::string truth = kTwoCylinders;
   const std::string b_law = "friction_FC: 20 N, friction_viscous: 100 N*s/m}\n  load_a";
   truth.replace(truth.find(b_law), b_law.size(), "friction_FC: 40 N, friction_viscous: 100 N*s/m}\n  load_a");
-  make_runs(dir.path() / "runs", truth, {"x_a", "p_a", "x_b", "p_b"});
-  const auto rep =
-      diagnose::diagnose(model, (dir.path() / "runs").string(), "", builtin_registry(), declared({"cyl_b"}));
+  const auto rep = diagnose_two_cylinders(truth, {"cyl_b"});
   ASSERT_FALSE(rep.verdict.empty());
   EXPECT_EQ(rep.verdict[0], "cyl_b.friction_running");
   EXPECT_LT(rep.validation_after.total.rms, 1.5);
@@ -310,15 +308,11 @@ TEST(DiagnoseDeclared, ALongHoseDrawnAsASmallVolumeIsNamedAsTheLinesVolumeAndRes
 // about 21 times the drawn 1 cm3 - a port's fittings and undrawn hose,
 // which a range of a few times the drawn value would stop at its bound.
 TEST(DiagnoseDeclared, AnUndrawnHoseAtACylindersPortIsItsDeadVolume) {
-  TempDir dir;
-  const std::string model = dir.write("two.yaml", kTwoCylinders);
   const std::string truth = two_cylinders_with(
       "  hose_b: {type: volume, V: 20 cm3, p0: 7 bar}\n"
       "  fitting_b: {type: iso6358_throttle, C: 2 dm3/(s*bar), b: 0.3}\n",
       "[valve_b.B, cyl_b.rod]", "[valve_b.B, hose_b.port, fitting_b.a]\n  - [fitting_b.b, cyl_b.rod]");
-  make_runs(dir.path() / "runs", truth, {"x_a", "p_a", "x_b", "p_b"});
-  const auto rep =
-      diagnose::diagnose(model, (dir.path() / "runs").string(), "", builtin_registry(), declared({"cyl_b", "valve_b"}));
+  const auto rep = diagnose_two_cylinders(truth, {"cyl_b", "valve_b"});
   expect_named_closing_the_gap(rep, "cyl_b.dead_volume_rod_off");
   const double k = fitted(rep, "cyl_b.dead_volume_rod_off");
   EXPECT_GT(k, 15.0);
@@ -335,16 +329,12 @@ TEST(DiagnoseDeclared, AnUndrawnHoseAtACylindersPortIsItsDeadVolume) {
 // hose's 238 cm3 (about 100: the lumped line holds all of its gas behind
 // all of its resistance, the hose along it).
 TEST(DiagnoseDeclared, AServiceLineWithAReceiverIsNamedAsTheSupplysSagWithTheGasItHolds) {
-  TempDir dir;
-  const std::string model = dir.write("two.yaml", kTwoCylinders);
   const std::string truth = two_cylinders_with(
       "  service: {type: hose, D: 4 mm, L: 3 m, segments: 2, p0: 7 bar}\n"
       "  receiver: {type: volume, V: 200 cm3, p0: 7 bar}\n",
       "[supply.port, valve_a.P, valve_b.P]",
       "[supply.port, service.a]\n  - [service.b, receiver.port, valve_a.P, valve_b.P]");
-  make_runs(dir.path() / "runs", truth, {"x_a", "p_a", "x_b", "p_b"});
-  const auto rep = diagnose::diagnose(model, (dir.path() / "runs").string(), "", builtin_registry(),
-                                      declared({"supply", "valve_a", "valve_b", "cyl_a", "cyl_b"}));
+  const auto rep = diagnose_two_cylinders(truth, {"supply", "valve_a", "valve_b", "cyl_a", "cyl_b"});
   expect_named_closing_the_gap(rep, "supply.supply_sag");
   const auto sag = fitted_values(rep, "supply.supply_sag");  // restriction (Pa*s/m3), volume (m3)
   ASSERT_EQ(sag.size(), 2u);
