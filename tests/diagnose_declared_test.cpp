@@ -158,6 +158,20 @@ TEST(DiagnoseDeclared, OfTwoCylindersTheLeakingOneIsNamed) {
     }
 }
 
+// The runs set the loads' mass (m_load: 2 kg for calibration, 4 kg for
+// validation), and the second cylinder carries a second tool as heavy as
+// its load in every run (another mass on its flange, not the fault's
+// factor): its load's mass fault acts on each run's own mass - it is not
+// unavailable because the runs set it - and is named, about twice.
+TEST(DiagnoseDeclared, AHeavierLoadInEveryRunIsNamedWhenTheRunsSetTheLoad) {
+  const std::string truth = two_cylinders_with("  tool_b: {type: translational_mass, m: m_load}\n",
+                                               "[cyl_b.flange, load_b.flange]",
+                                               "[cyl_b.flange, load_b.flange, tool_b.flange]");
+  const auto rep = diagnose_two_cylinders(truth, {"load_a", "load_b", "cyl_b"});
+  expect_named_closing_the_gap(rep, "load_b.mass_off");
+  EXPECT_NEAR(fitted(rep, "load_b.mass_off"), 2.0, 0.1);
+}
+
 // A pressure transducer reading 0.2 bar high, no catalogue: the measured
 // signal's own offset fault is named, with about that offset.
 TEST(DiagnoseDeclared, ATransducerOffsetIsNamedWithoutACatalogue) {

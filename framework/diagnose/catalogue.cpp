@@ -214,7 +214,14 @@ void set_top_parameter(TopParameter& p, const ValueDecl& v, double p_ambient, co
   }
 }
 
-void apply_set(Netlist& out, const SetPatch& s, const Effect& e, const std::vector<double>& values) {
+void apply_set(Netlist& out, const SetPatch& s, const Effect& e, const std::vector<double>& values,
+               std::vector<RunFactor>* run_factors) {
+  if (!s.per_run_of.empty()) {
+    const RunFactor f{ParameterPath::parse(s.target), s.per_run_of, *substitute(s.value, e, values).si};
+    if (run_factors) run_factors->push_back(f);
+    else apply_run_factors(out, {f});
+    return;
+  }
   const auto dot = s.target.find('.');
   if (dot == std::string::npos)
     fail(s.where, e.name, s.target, "set: key must be COMPONENT.PARAMETER or parameters.NAME");
@@ -235,7 +242,8 @@ void apply_set(Netlist& out, const SetPatch& s, const Effect& e, const std::vect
   c->type_where = v.where;
 }
 
-void apply_effect(Netlist& out, const EffectInstance& inst, MeasurementModel* measurement) {
+void apply_effect(Netlist& out, const EffectInstance& inst, MeasurementModel* measurement,
+                  std::vector<RunFactor>* run_factors) {
   const Effect& e = *inst.effect;
   for (const auto& d : e.disconnect) {
     const auto want = port_set(d);
@@ -255,7 +263,7 @@ void apply_effect(Netlist& out, const EffectInstance& inst, MeasurementModel* me
     if (!old) fail(c.where, e.name, "", "replace_components: the model has no component '" + c.name + "'");
     *old = substitute(c, e, inst.values);
   }
-  for (const auto& s : e.set) apply_set(out, s, e, inst.values);
+  for (const auto& s : e.set) apply_set(out, s, e, inst.values, run_factors);
   out.connections.insert(out.connections.end(), e.connect.begin(), e.connect.end());
   if (measurement)
     for (const auto& m : e.measure)
@@ -268,10 +276,14 @@ void apply_effect(Netlist& out, const EffectInstance& inst, MeasurementModel* me
 }  // namespace
 
 Netlist apply_effects(const Netlist& model, const std::vector<EffectInstance>& effects,
-                      MeasurementModel* measurement) {
+                      MeasurementModel* measurement, std::vector<RunFactor>* run_factors) {
   Netlist out = model;
-  for (const auto& inst : effects) apply_effect(out, inst, measurement);
+  for (const auto& inst : effects) apply_effect(out, inst, measurement, run_factors);
   return out;
+}
+
+void apply_run_factors(Netlist& run, const std::vector<RunFactor>& run_factors) {
+  for (const auto& f : run_factors) set_si_value(run, f.target, f.factor * run.parameter(f.of)->si_value);
 }
 
 bool effects_conflict(const Effect& a, const Effect& b) {
@@ -762,18 +774,19 @@ namespace {
 
 // The SI value the netlist gives component parameter `spec` of `decl` (its
 // default when left out); nullopt, with `why`, when a factor cannot act on
-// it: no value, not a positive number, or a top-level parameter a run's
-// operating point sets (the run would override the factor).
+// it: no value or not a positive number. A parameter written as a top-level
+// parameter that the runs' operating points set (a load `m: m_load`) is
+// moved per run, its name in `per_run_of`: a heavier tool weighs on every
+// load the runs were made with.
 std::optional<double> factor_base(const Netlist& nl, const ComponentDecl& decl, const ParameterSpec& spec,
-                                  const std::vector<std::string>& per_run, std::string& why) {
+                                  const std::vector<std::string>& per_run, std::string& why,
+                                  std::string& per_run_of) {
   double v = 0;
   if (const ValueDecl* written = decl.written(spec.name)) {
     const ValueDecl& given = *written;
     if (given.shape == ValueDecl::Shape::scalar && !given.si &&
-        std::find(per_run.begin(), per_run.end(), given.text) != per_run.end()) {
-      why = spec.name + " is the top-level parameter '" + given.text + "', which the runs' operating points set";
-      return std::nullopt;
-    }
+        std::find(per_run.begin(), per_run.end(), given.text) != per_run.end())
+      per_run_of = given.text;
     v = parameter_value(nl, decl, spec, given);
   } else if (spec.default_value) {
     v = *spec.default_value;
@@ -791,7 +804,8 @@ std::optional<double> factor_base(const Netlist& nl, const ComponentDecl& decl, 
 // A declared fault parameter as the effect's: the range kept within what the
 // component accepts (an exclusive limit kept off by a hair), and the `set`
 // that writes it (a factor: its product with the netlist's value).
-void add_fault_parameter(Effect& e, const FaultParameterSpec& fp, const ParameterSpec& spec, double base) {
+void add_fault_parameter(Effect& e, const FaultParameterSpec& fp, const ParameterSpec& spec, double base,
+                         const std::string& per_run_of) {
   EffectParameter ep;
   ep.name = fp.name;
   ep.unit = fp.unit;
@@ -808,9 +822,9 @@ void add_fault_parameter(Effect& e, const FaultParameterSpec& fp, const Paramete
     return;
   }
   ValueDecl value;
-  value.text = fp.factor ? "${" + fp.name + " * " + format_number(base) + "}" : "${" + fp.name + "}";
+  value.text = fp.factor && per_run_of.empty() ? "${" + fp.name + " * " + format_number(base) + "}" : "${" + fp.name + "}";
   value.where = e.where;
-  e.set.push_back({e.component + "." + fp.parameter, e.where, value});
+  e.set.push_back({e.component + "." + fp.parameter, e.where, value, per_run_of});
   e.parameters.push_back(ep);
 }
 
@@ -843,17 +857,17 @@ Effect component_fault(const Netlist& nl, const ComponentDecl& decl, const Compo
   if (const std::string why = missing_part(nl, decl, f); !why.empty()) e.unavailable = "unavailable: " + why;
   for (const auto& fp : f.parameters) {
     const ParameterSpec* spec = info.parameter(fp.parameter);
-    std::string why;
+    std::string why, per_run_of;
     std::optional<double> base = 1.0;
     if (!spec || spec->kind != ParameterKind::scalar)
       why = "type " + info.type + " declares it on '" + fp.parameter + "', which is not one of its scalar parameters";
     else if (fp.factor)
-      base = factor_base(nl, decl, *spec, per_run, why);
+      base = factor_base(nl, decl, *spec, per_run, why, per_run_of);
     if (!why.empty() || !base) {
       if (e.unavailable.empty()) e.unavailable = "unavailable: " + why;
       continue;
     }
-    add_fault_parameter(e, fp, *spec, *base);
+    add_fault_parameter(e, fp, *spec, *base, per_run_of);
   }
   return e;
 }

@@ -68,6 +68,10 @@ struct SetPatch {
   std::string target;
   SourceLocation where;  // of the key
   ValueDecl value;
+  // Non-empty: `value` is a factor on this top-level parameter, which the
+  // runs' operating points set and `target` is written as (a load's mass
+  // `m: m_load`): the target is the factor times each run's own value.
+  std::string per_run_of = {};
 };
 
 // `measure: {OUTPUT: {lag: SECONDS, offset: SI, gain: FACTOR}}`; each may
@@ -135,6 +139,15 @@ struct MeasurementModel {
   std::map<std::string, double> lag, offset, gain;
 };
 
+// A value set per run (SetPatch::per_run_of): `target` is `factor` times the
+// run's value of top-level parameter `of`, once the run's operating point is
+// applied (apply_run_factors).
+struct RunFactor {
+  ParameterPath target;
+  std::string of;
+  double factor = 1.0;
+};
+
 // Reads and checks a catalogue; each effect is applied at its initial values
 // to `model` (its `file` names it in errors) and elaborated, so that a broken
 // patch is reported at load time with the catalogue's file:line, the effect
@@ -186,8 +199,12 @@ Catalogue narrow_catalogue(Catalogue cat, const std::vector<std::string>& keep);
 // The model with the effects applied in order (later `set`s win). A value
 // that is exactly ${expr} becomes its SI number (ValueDecl::number); patched
 // declarations keep the catalogue's file:line.
+// A set per run goes to `run_factors` when given; else it is applied at the
+// model's own value of its top-level parameter (a model not run per run).
 Netlist apply_effects(const Netlist& model, const std::vector<EffectInstance>& effects,
-                      MeasurementModel* measurement);
+                      MeasurementModel* measurement, std::vector<RunFactor>* run_factors = nullptr);
+// The sets per run on a run's netlist, after its operating point.
+void apply_run_factors(Netlist& run, const std::vector<RunFactor>& run_factors);
 
 // The parameter names two effects both `set`, replace or disconnect (a conflict for combining them).
 bool effects_conflict(const Effect& a, const Effect& b);

@@ -142,7 +142,7 @@ Engine::Engine(const std::string& model_file, const Registry& base, const Diagno
 
 Model Engine::model(const std::vector<EffectInstance>& effects) const {
   Model m;
-  m.netlist = apply_effects(loaded_.netlist, effects, &m.measurement);
+  m.netlist = apply_effects(loaded_.netlist, effects, &m.measurement, &m.run_factors);
   m.memo_key = memo_key(effects, vanishing_);
   return m;
 }
@@ -157,6 +157,7 @@ Netlist Engine::netlist_of(const Model& m, int k, const Setting& at) const {
   Netlist nl = m.netlist;
   for (const auto& op : run.operating_point) op.apply(nl);
   for (const auto& [name, value] : at) set_si_value(nl, ParameterPath::parse(name), value);
+  apply_run_factors(nl, m.run_factors);
   nl.simulation.t_end = run.t.back() + 1e-9;
   const double dt = (run.t.back() - run.t.front()) / std::max<std::size_t>(1, run.t.size() - 1);
   nl.simulation.output_interval = std::min(nl.simulation.output_interval, dt);

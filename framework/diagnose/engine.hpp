@@ -52,6 +52,7 @@ using Setting = std::vector<std::pair<std::string, double>>;
 struct Model {  // a patched model ready to run
   Netlist netlist;
   MeasurementModel measurement;
+  std::vector<RunFactor> run_factors;  // set on each run's netlist after its operating point
   // Its effects' instances as the memo names them; none: not remembered.
   std::optional<std::string> memo_key;
 };
