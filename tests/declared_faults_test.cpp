@@ -795,6 +795,39 @@ Netlist meter_out() {
   return parse_netlist(ss.str(), kMeterOut);
 }
 
+// A load written as the top-level m_load, which the runs set: its mass
+// fault is a factor on each run's own mass, applied on the run's netlist
+// after its operating point (1.3 x 4 kg = 5.2 kg where the netlist says
+// 2 kg). A run that sets the load's mass itself (load.m) would replace the
+// factor's value: then the fault is unavailable, saying why.
+TEST(DeclaredFaults, AFactorOnAValueTheRunsSetActsOnEachRunsOwnValue) {
+  const std::string text =
+      "parameters:\n  m_load: 2 kg\n"
+      "components:\n  load: {type: translational_mass, m: m_load}\n  push: {type: force_source, F: 10 N}\n"
+      "connections:\n  - [load.flange, push.flange]\n"
+      "outputs: {x: load.s}\n"
+      "simulation: {t_end: 0.1 s, output_interval: 10 ms}\n";
+  const Netlist nl = parse_netlist(text, "load.yaml");
+  const auto cat = diagnose::declared_faults(nl, builtin_registry(), {}, {"m_load"});
+  const diagnose::Effect* mass = cat.find("load.mass_off");
+  ASSERT_NE(mass, nullptr);
+  EXPECT_TRUE(mass->unavailable.empty()) << mass->unavailable;
+  std::vector<diagnose::RunFactor> per_run;
+  diagnose::MeasurementModel mm;
+  Netlist run = diagnose::apply_effects(nl, {{mass, {1.3}}}, &mm, &per_run);
+  ASSERT_EQ(per_run.size(), 1u);
+  apply_override(run, "m_load=4 kg");  // the run's operating point
+  diagnose::apply_run_factors(run, per_run);
+  const ValueDecl* m = value_of(run, ParameterPath::parse("load.m"));
+  ASSERT_NE(m, nullptr);
+  ASSERT_TRUE(m->si.has_value());
+  EXPECT_NEAR(*m->si, 5.2, 1e-12);
+
+  const auto set_by_run = diagnose::declared_faults(nl, builtin_registry(), {}, {"load.m"});
+  const std::string why = set_by_run.find("load.mass_off")->unavailable;
+  EXPECT_NE(why.find("load.m is set by the runs' operating points"), std::string::npos) << why;
+}
+
 // The meter-out cylinder's candidates without any catalogue: its
 // components' faults as COMPONENT.FAULT and each measured signal's
 // measurement faults; a factor fault sets its product with the netlist's

@@ -774,13 +774,19 @@ namespace {
 
 // The SI value the netlist gives component parameter `spec` of `decl` (its
 // default when left out); nullopt, with `why`, when a factor cannot act on
-// it: no value or not a positive number. A parameter written as a top-level
-// parameter that the runs' operating points set (a load `m: m_load`) is
-// moved per run, its name in `per_run_of`: a heavier tool weighs on every
-// load the runs were made with.
+// it: no value, not a positive number, or set by the runs' operating points
+// as COMPONENT.PARAMETER (the run's value would replace the factor's). A
+// parameter written as a top-level parameter that the runs' operating
+// points set (a load `m: m_load`) is moved per run, its name in
+// `per_run_of`: a heavier tool weighs on every load the runs were made with.
 std::optional<double> factor_base(const Netlist& nl, const ComponentDecl& decl, const ParameterSpec& spec,
                                   const std::vector<std::string>& per_run, std::string& why,
                                   std::string& per_run_of) {
+  const std::string path = decl.name + "." + spec.name;
+  if (std::find(per_run.begin(), per_run.end(), path) != per_run.end()) {
+    why = path + " is set by the runs' operating points";
+    return std::nullopt;
+  }
   double v = 0;
   if (const ValueDecl* written = decl.written(spec.name)) {
     const ValueDecl& given = *written;
@@ -803,7 +809,8 @@ std::optional<double> factor_base(const Netlist& nl, const ComponentDecl& decl, 
 
 // A declared fault parameter as the effect's: the range kept within what the
 // component accepts (an exclusive limit kept off by a hair), and the `set`
-// that writes it (a factor: its product with the netlist's value).
+// that writes it (a factor: its product with the netlist's value, or with
+// each run's value of the top-level parameter `per_run_of`).
 void add_fault_parameter(Effect& e, const FaultParameterSpec& fp, const ParameterSpec& spec, double base,
                          const std::string& per_run_of) {
   EffectParameter ep;

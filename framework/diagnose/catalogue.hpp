@@ -172,10 +172,12 @@ std::vector<Effect> measurement_faults(const MeasuredSignal& s, const SourceLoca
 // parameters (a factor fault: a factor on the netlist's value, within the
 // component's range), plus for each measured signal whose component
 // declares no offset of its own the measurement faults OUTPUT.offset,
-// OUTPUT.gain and OUTPUT.lag. A fault that cannot be used here - a factor on
-// a parameter the netlist leaves without value or gives as a top-level
-// parameter that a run's operating point sets (`per_run`), a patch the
-// model does not accept - is unavailable, with the reason, not an error.
+// OUTPUT.gain and OUTPUT.lag. A factor on a parameter the netlist gives as a
+// top-level parameter that a run's operating point sets (`per_run`) acts on
+// each run's value (SetPatch::per_run_of). A fault that cannot be used here
+// - a factor on a parameter the netlist leaves without value or that a
+// run's operating point sets as COMPONENT.PARAMETER, a patch the model does
+// not accept - is unavailable, with the reason, not an error.
 Catalogue declared_faults(const Netlist& model, const Registry& registry, const std::vector<MeasuredSignal>& signals,
                           const std::vector<std::string>& per_run);
 
