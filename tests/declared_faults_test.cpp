@@ -610,16 +610,24 @@ std::pair<double, double> first_event(const RunResult& r, const std::string& com
   return {NAN, NAN};
 }
 
+const char* kMeterOut = PNEUMO_SOURCE_DIR "/netlists/meter_out_cylinder.yaml";
+
+std::string meter_out_text() {
+  std::ifstream in(kMeterOut);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+Netlist meter_out() { return parse_netlist(meter_out_text(), kMeterOut); }
+
 // The wall heat fault is the cylinder's own wall law: at alpha it is the
 // meter-out cylinder with wall_alpha = alpha and both chamber walls held at
 // the ambient temperature, row for row (to the solver's tolerance: the two
 // runs take their own steps), over strokes that move the gas's temperature
 // by tens of kelvin.
 TEST(DeclaredFaults, WallHeatIsTheCylindersOwnWallLawWithWallsAtAmbient) {
-  std::ifstream in(PNEUMO_SOURCE_DIR "/netlists/meter_out_cylinder.yaml");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  std::string text = ss.str();
+  std::string text = meter_out_text();
   const std::string last_output = "  p_rod: cyl.p_rod\n";
   text.replace(text.find(last_output), last_output.size(), last_output + "  T_cap: cyl.T_cap\n  T_rod: cyl.T_rod\n");
   const RunResult fault = run_with_fault(text, "cyl.wall_heat", {40.0});
@@ -784,15 +792,6 @@ TEST(DeclaredFaults, RunningFrictionScalesItsDryAndViscousPartsApart) {
         "running_friction.yaml");
     EXPECT_LT(rel_err(column(r.table, "v").back(), (F - kc * FC) / (kv * d)), 1e-5) << law;
   }
-}
-
-const char* kMeterOut = PNEUMO_SOURCE_DIR "/netlists/meter_out_cylinder.yaml";
-
-Netlist meter_out() {
-  std::ifstream in(kMeterOut);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return parse_netlist(ss.str(), kMeterOut);
 }
 
 // A load written as the top-level m_load, which the runs set: its mass
