@@ -62,6 +62,7 @@
 
 #include "components/builtin.hpp"
 #include "components/cylinder.hpp"
+#include "components/faults.hpp"
 #include "components/symbols.hpp"
 
 namespace pneumo::components {
@@ -228,8 +229,8 @@ ComponentInfo describe() {
   DoubleActingCylinder::add_parts(layout(), i, true, true, true, FrictionState::lugre);
   i.faults = {
       FrictionFaults::running_friction_fault(),
-      {"cushion_needle_misadjusted", "cushion needle opening off its setting (turned, clogged)",
-       {{"k", "z_EC", "1", true, 1.0, 0.2, 5.0, 1.3, true}}},
+      setting_fault("cushion_needle_misadjusted", "cushion needle opening off its setting (turned, clogged)",
+                    {{"k", "z_EC", "1", true, 1.0, 0.2, 5.0, 1.3, true}}),
       {"cushion_check_off", "cushion check valve conductance off (sticking, leaking)",
        {{"k", "check_C", "1", true, 1.0, 0.1, 10.0, 2.0, true}}},
       {"bore_opening_off", "bore opening conductance off (worn or tight cushion seal)",

@@ -34,6 +34,7 @@
 
 #include "components/builtin.hpp"
 #include "components/cylinder.hpp"
+#include "components/faults.hpp"
 #include "components/symbols.hpp"
 
 namespace pneumo::components {
@@ -79,9 +80,9 @@ ComponentInfo describe() {
     i.events.push_back({end + "_bore_open", "the " + end + "-end bore opening is fully open (cushioned ends)"});
   }
   for (const char* end : {"cap", "rod"})
-    i.faults.push_back({std::string(end) + "_cushion_misadjusted",
-                        std::string("cushion needle at the ") + end + " end off its setting (turned, clogged)",
-                        {{"k", std::string(end) + "_cushion_C", "1", true, 1.0, 0.1, 10.0, 1.5, true}}});
+    i.faults.push_back(setting_fault(std::string(end) + "_cushion_misadjusted",
+                                     std::string("cushion needle at the ") + end + " end off its setting (turned, clogged)",
+                                     {{"k", std::string(end) + "_cushion_C", "1", true, 1.0, 0.1, 10.0, 1.5, true}}));
   for (const std::string end : {"cap", "rod"})
     for (auto& f : CushionFaults::faults(end + "_", end + "_cushion_length")) i.faults.push_back(std::move(f));
   return i;

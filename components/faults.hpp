@@ -27,6 +27,14 @@ inline FaultSpec fault(std::string name, std::string description, std::vector<Fa
   return {std::move(name), std::move(description), std::move(parameters)};
 }
 
+// A hand-set value off its setting (FaultSpec::setting): a needle turned, a
+// knob, a dial, a set screw.
+inline FaultSpec setting_fault(std::string name, std::string description, std::vector<FaultParameterSpec> parameters) {
+  FaultSpec f = fault(std::move(name), std::move(description), std::move(parameters));
+  f.setting = true;
+  return f;
+}
+
 // A fault-only parameter the equations read; its default is the null (0).
 inline ParameterSpec fault_parameter(const std::string& name, const std::string& unit, const std::string& what) {
   return ParameterSpec::scalar(name, unit, "fault (diagnosis): " + what + "; 0 = none", 0.0);

@@ -37,7 +37,7 @@ class LimitSwitch final : public WindowSwitchComponent<LimitSwitch> {
     i.roots = 2;
     i.events = {{"on", "switches on"}, {"off", "switches off"}};
     i.follows_inputs = true;  // its state at the start is read from the initial position
-    i.faults = {fault("misplaced", "switches early or late: the switch slipped on its mounting or the cam is bent",
+    i.faults = {setting_fault("misplaced", "switches early or late: the switch slipped on its mounting or the cam is bent",
                       {fault_amount("ds", "fault_shift", "m", -20e-3, 20e-3, 1e-3)})};
     i.faults.back().needs_port = "y";
     return i;

@@ -44,7 +44,7 @@ class OneWayFlowControl final : public ComponentT<OneWayFlowControl> {
     i.observables = {{"m_flow", "kg/s", "mass flow from a to b"},
                      {"m_flow_check", "kg/s", "part of it through the check valve"}};
     i.equations = {"throttle + check valve mass flow", "mass balance", "stream temperature a", "stream temperature b"};
-    i.faults = {fault("misadjusted", "throttle conductance off its setting (needle misadjusted or clogged)",
+    i.faults = {setting_fault("misadjusted", "throttle conductance off its setting (needle misadjusted or clogged)",
                       {fault_factor("C", 0.1, 4.0, 0.7)}),
                 fault("check_leak", "check valve not closing tight (a fraction of its conductance always open)",
                       {fault_amount("leak", "check_leakage", "1", 0.0, 0.2, 0.02)})};

@@ -57,7 +57,7 @@ class PressureRegulator final : public ComponentT<PressureRegulator> {
     i.equations = series_port_equations("in", "out", "exhaust");
     i.faults = {fault("supply_sag", "outlet pressure sags under flow (throttled supply path, worn spring)",
                       {fault_factor("C", 0.05, 2.0, 0.5), fault_factor("droop", 0.25, 10.0, 2.0)}),
-                fault("misadjusted", "regulates below or above its setting (knob turned, spring drifted)",
+                setting_fault("misadjusted", "regulates below or above its setting (knob turned, spring drifted)",
                       {fault_amount("dp", "fault_p_set_shift", "Pa", -1e5, 1e5, 1e4)})};
     return i;
   }

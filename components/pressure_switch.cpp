@@ -35,7 +35,7 @@ class PressureSwitch final : public WindowSwitchComponent<PressureSwitch> {
     i.roots = 2;
     i.events = {{"on", "switches on"}, {"off", "switches off"}};
     i.follows_inputs = true;  // its state at the start is read from the initial pressure
-    i.faults = {fault("misadjusted", "switches below or above its setting (set screw turned, spring drifted)",
+    i.faults = {setting_fault("misadjusted", "switches below or above its setting (set screw turned, spring drifted)",
                       {fault_amount("dp", "fault_p_on_shift", "Pa", -1e5, 1e5, 1e4)})};
     i.faults.back().needs_port = "y";
     return i;

@@ -39,7 +39,7 @@ class ReliefValve final : public ComponentT<ReliefValve> {
                {"out", Domain::pneumatic, Causality::acausal, "outlet: exhaust or atmosphere (3)"}};
     i.observables = {{"m_flow", "kg/s", "relieved mass flow in -> out"}, {"opening", "1", "open fraction of C"}};
     i.equations = {"relief mass flow", "mass balance", "stream temperature in", "stream temperature out"};
-    i.faults = {fault("misadjusted", "opens below or above its setting (spring drifted, set screw turned)",
+    i.faults = {setting_fault("misadjusted", "opens below or above its setting (spring drifted, set screw turned)",
                       {fault_amount("dp", "fault_p_set_shift", "Pa", -1e5, 1e5, 1e4)}),
                 fault("seat_leak", "not closing tight below its setting (worn or dirty seat): a fraction of C open",
                       {fault_amount("leak", "leakage", "1", 0.0, 0.2, 0.02)})};

@@ -41,7 +41,7 @@ class Timer final : public ComponentT<Timer> {
                 {"set", "off_delay: the output goes to 1 with the input"},
                 {"reset", "on_delay: the output goes to 0 with the input"}};
     i.follows_inputs = true;
-    i.faults = {fault("misadjusted", "delay off its setting (dial turned, drifted)", {fault_factor("delay", 0.5, 2.0, 1.1)})};
+    i.faults = {setting_fault("misadjusted", "delay off its setting (dial turned, drifted)", {fault_factor("delay", 0.5, 2.0, 1.1)})};
     i.faults.back().needs_port = "y";
     return i;
   }

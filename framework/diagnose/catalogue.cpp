@@ -861,6 +861,7 @@ Effect component_fault(const Netlist& nl, const ComponentDecl& decl, const Compo
   e.where = decl.where;
   e.component = decl.name;
   e.fault = f.name;
+  e.setting = f.setting;
   if (const std::string why = missing_part(nl, decl, f); !why.empty()) e.unavailable = "unavailable: " + why;
   for (const auto& fp : f.parameters) {
     const ParameterSpec* spec = info.parameter(fp.parameter);

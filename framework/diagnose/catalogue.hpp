@@ -97,6 +97,7 @@ struct Effect {
   // A fault a component declares (ComponentInfo::faults) or a measured
   // signal's measurement fault: the component (or output) and the fault.
   std::string component, fault;
+  bool setting = false;  // a hand-set value off its setting (FaultSpec::setting)
 
   int parameter_index(const std::string& n) const;
   // The parameters' initial values, in the catalogue's order.

@@ -418,6 +418,7 @@ class Diagnosis {
       er.description = e.description;
       er.component = e.component;
       er.fault = e.fault;
+      er.setting = e.setting;
       er.unavailable = e.unavailable;
       for (const auto& p : e.parameters) {
         er.parameter_names.push_back(p.name);
@@ -611,6 +612,45 @@ class Diagnosis {
     return aa > 0 && bb > 0 ? ab / std::sqrt(aa * bb) : 0.0;
   }
 
+  // Among effects the runs cannot tell apart, a setting turned off is named
+  // before a part that fails (FaultSpec::setting): settings are turned far
+  // more often than parts fail - unless the part's fit is clearly the better
+  // one on the validation runs (Vuong's test of the two fits, z > 3): a group
+  // says neither is practically better, not that the data are silent. Three
+  // standard errors, not two: the residuals of two fits that both miss the
+  // truth's form stay correlated beyond the whitening's AR(5), which
+  // inflates z. The best-ranked such setting in er's group, or er itself.
+  static constexpr double kClearlyBetter = 3.0;
+  bool setting_first(const std::string& part, const std::vector<double>& r_part, const std::string& setting,
+                     const std::vector<double>& r_setting) const {
+    const double z = eng_.preference(r_part, r_setting, val_);
+    const bool first = z < kClearlyBetter;
+    log("  " + setting + (first ? " is named before " : " is not named before ") + part +
+        fmt(" (a setting; the part's fit better by Vuong's z = %.2f)", z));
+    return first;
+  }
+  const EffectResult& setting_before_part(const EffectResult& er) const {
+    const Cand* c = cand_of(er.name);
+    if (er.setting || !c) return er;
+    for (int k : order_) {
+      const EffectResult& o = results_[k];
+      const Cand* oc = cand_of(o.name);
+      if (o.setting && o.significant && oc && std::find(er.group.begin(), er.group.end(), o.name) != er.group.end() &&
+          setting_first(er.name, c->r_val, o.name, oc->r_val))
+        return o;
+    }
+    return er;
+  }
+  std::vector<Step>::const_iterator setting_before_part(const std::vector<Step>& passed,
+                                                        std::vector<Step>::const_iterator bs) const {
+    if (bs->e->setting) return bs;
+    for (auto it = passed.begin(); it != passed.end(); ++it)
+      if (it->e->setting && indistinguishable(r_val_cur_, *bs, *it) &&
+          setting_first(bs->e->name, bs->r_val, it->e->name, it->r_val))
+        return it;
+    return bs;
+  }
+
   // A verdict slot: the effect named, then those the data cannot tell apart
   // from it there, each with the effects it was fitted with (for the sensor
   // that would decide).
@@ -625,13 +665,14 @@ class Diagnosis {
   // first cannot do (a joint fit would otherwise also get the first effect's
   // unfinished iterations). False: no effect is significant.
   bool name_first_effect() {
-    const Cand* best = nullptr;
+    const EffectResult* first = nullptr;
     for (int k : order_)
       if (results_[k].significant) {
-        best = cand_of(results_[k].name);
+        first = &setting_before_part(results_[k]);
         break;
       }
-    if (!best) return false;
+    if (!first) return false;
+    const Cand* best = cand_of(first->name);
     chosen_ = best->fit.effects;
     r_val_cur_ = best->r_val;
     r_cal_cur_ = best->fit.r_cal;
@@ -803,9 +844,10 @@ class Diagnosis {
         passed.push_back(std::move(st));
     }
     if (passed.empty()) return false;
-    const auto bs = std::min_element(passed.begin(), passed.end(), [](const Step& a, const Step& b) {
-      return a.gap.total.rms < b.gap.total.rms;
-    });
+    const auto bs = setting_before_part(
+        passed, std::min_element(passed.cbegin(), passed.cend(), [](const Step& a, const Step& b) {
+          return a.gap.total.rms < b.gap.total.rms;
+        }));
     std::vector<std::string> group = {bs->e->name};
     SlotFits fits = {{bs->e->name, bs->fit.effects}};
     for (const auto& other : passed)

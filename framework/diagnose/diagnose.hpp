@@ -132,6 +132,7 @@ struct GapTable {
 struct EffectResult {
   std::string name, description;
   std::string component, fault;  // a declared fault: its component (or measured output) and fault
+  bool setting = false;          // a hand-set value off its setting (FaultSpec::setting)
   std::string unavailable;  // non-empty: not evaluated
   bool screened_out = false;
   double screening_improvement = 0;  // linearised share of the calibration SSR removed

@@ -340,6 +340,12 @@ Engine::Significance Engine::significance(const std::vector<double>& r0, const s
   return s;
 }
 
+double Engine::preference(const std::vector<double>& r0, const std::vector<double>& r1, const Layout& L) const {
+  VuongSums d;
+  for (const auto& seg : L.segments) add_vuong_terms(&r0[seg.offset], &r1[seg.offset], seg.n, d);
+  return vuong_z(d);
+}
+
 Engine::Fit Engine::fit(std::vector<EffectInstance> start, const Layout& cal, const std::vector<double>& r_start_hint,
                         int max_iterations, bool grid_start) {
   const ScaledParameters sp(std::move(start));

@@ -122,6 +122,10 @@ class Engine {
   // own series), less a BIC penalty per added parameter.
   Significance significance(const std::vector<double>& r0, const std::vector<double>& r1, const Layout& L,
                             int added_parameters) const;
+  // Vuong's statistic of model 0 against model 1 (not nested in each other)
+  // on L's series, each whitened as in significance(): above about 2, model
+  // 0 fits significantly better.
+  double preference(const std::vector<double>& r0, const std::vector<double>& r1, const Layout& L) const;
 
   struct Fit {
     std::vector<EffectInstance> effects;

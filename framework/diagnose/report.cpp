@@ -266,6 +266,15 @@ std::string form_clause(const DiagnosisReport& r) {
          rounded(f.gap_after, 2) + ")";
 }
 
+namespace {
+// Whether the effect named is a setting (FaultSpec::setting).
+bool is_setting(const DiagnosisReport& r, const std::string& effect) {
+  for (const auto& e : r.effects)
+    if (e.name == effect) return e.setting;
+  return false;
+}
+}  // namespace
+
 std::string verdict_sentence(const DiagnosisReport& r) {
   std::string named;
   for (const auto& v : r.verdict) named += (named.empty() ? "" : ", then ") + v;
@@ -329,7 +338,9 @@ void write_report_json(const DiagnosisReport& r, const std::string& path) {
   for (std::size_t i = 0; i < r.effects.size(); ++i) {
     const auto& e = r.effects[i];
     o << (i ? ",\n  " : "\n  ") << "{\"name\": " << str(e.name) << ", \"rank\": " << e.rank;
-    if (!e.component.empty()) o << ", \"component\": " << str(e.component) << ", \"fault\": " << str(e.fault);
+    if (!e.component.empty())
+      o << ", \"component\": " << str(e.component) << ", \"fault\": " << str(e.fault)
+        << ", \"setting\": " << (e.setting ? "true" : "false");
     o << ", \"description\": " << str(e.description);
     if (!e.unavailable.empty()) o << ", \"status\": " << str(e.unavailable);
     else if (e.screened_out && e.failed_runs)
@@ -554,6 +565,7 @@ void write_report_html(const DiagnosisReport& r, const std::string& path) {
       o << " (indistinguishable from";
       for (std::size_t j = 1; j < r.verdict_groups[i].size(); ++j)
         o << (j > 1 ? ", " : " ") << html(r.verdict_groups[i][j]);
+      if (is_setting(r, r.verdict_groups[i][0])) o << "; a setting turned off is named before a part that fails";
       o << ")";
     }
   }

@@ -52,6 +52,21 @@ double whitened_log_ratio(const double* r0, const double* r1, std::size_t n, dou
   return s0 > 0 && s1 > 0 ? *samples * std::log(s0 / s1) : 0.0;
 }
 
+void add_vuong_terms(const double* r0, const double* r1, std::size_t n, VuongSums& d) {
+  const auto a = fit_ar(r0, n, 5);
+  const auto e0 = whitened(r0, n, a), e1 = whitened(r1, n, a);
+  for (std::size_t t = 0; t < e0.size(); ++t) {
+    const double v = e1[t] * e1[t] - e0[t] * e0[t];
+    d.sum += v, d.sum_sq += v * v, d.count += 1;
+  }
+}
+
+double vuong_z(const VuongSums& d) {
+  if (d.count < 2) return 0.0;
+  const double mean = d.sum / d.count, var = d.sum_sq / d.count - mean * mean;
+  return var > 0 ? mean / std::sqrt(var / d.count) : 0.0;
+}
+
 double ssr_of(const double* r, std::size_t n) {
   double s = 0;
   for (std::size_t i = 0; i < n; ++i) s += r[i] * r[i];

@@ -29,4 +29,16 @@ double whitened_ssr(const double* r, std::size_t n, const std::vector<double>& a
 // `samples` gets n - p.
 double whitened_log_ratio(const double* r0, const double* r1, std::size_t n, double* samples);
 
+// Vuong's test of two non-nested models on one residual series each: the
+// terms d_t = e1_t^2 - e0_t^2 (both whitened with r0's AR(p), p <= 5) added
+// to `d` (their sum, sum of squares and count), so that several series
+// make one statistic (vuong_z).
+struct VuongSums {
+  double sum = 0, sum_sq = 0, count = 0;
+};
+void add_vuong_terms(const double* r0, const double* r1, std::size_t n, VuongSums& d);
+// The statistic: the mean of d_t over its standard error; above about 2,
+// model 0 fits significantly better, below -2 model 1.
+double vuong_z(const VuongSums& d);
+
 }  // namespace pneumo::diagnose

@@ -220,6 +220,11 @@ struct FaultSpec {
   // Empty: always.
   std::string needs_parameter = {};
   std::string needs_port = {};
+  // A value someone sets by hand (a needle, a knob, a dial, a set screw, a
+  // switch's place on its rail) turned off its setting. Settings are turned
+  // far more often than parts fail, so where the runs cannot tell such a
+  // fault from a part's failure, the diagnosis names the setting first.
+  bool setting = false;
 };
 
 // A tagged event a component raises (EventResult::tag), which metrics,
