@@ -226,6 +226,46 @@ TEST(DiagnoseDeclared, ALeakThatFitsClearlyBetterThanANeedleIsNamedBeforeIt) {
   EXPECT_NE(std::find(group.begin(), group.end(), "flow_b.misadjusted"), group.end());
 }
 
+// A catalogue re-calibrates m_load, which the runs set (2 kg calibration, 4
+// kg validation): no single value fits both, so it is one factor on each
+// run's own value - and each cylinder carries a second tool as heavy as its
+// load in every run, so the factor is about 2. Where a run sets the
+// component's parameter itself (load_a.m), the recalibration is refused at
+// the catalogue's line.
+TEST(DiagnoseDeclared, ARecalibratedValueTheRunsSetIsOneFactorOnEachRunsOwnValue) {
+  std::string truth = two_cylinders_with(
+      "  tool_a: {type: translational_mass, m: m_load}\n  tool_b: {type: translational_mass, m: m_load}\n",
+      "[cyl_a.flange, load_a.flange]", "[cyl_a.flange, load_a.flange, tool_a.flange]");
+  truth.replace(truth.find("[cyl_b.flange, load_b.flange]"), 29, "[cyl_b.flange, load_b.flange, tool_b.flange]");
+  TempDir dir;
+  const std::string model = dir.write("two.yaml", kTwoCylinders);
+  const std::string catalogue = dir.write("c.yaml", "recalibrate:\n  m_load: {}\n");
+  make_runs(dir.path() / "runs", truth, {"x_a", "p_a", "x_b", "p_b"});
+  auto opt = declared({});
+  opt.declared_faults = false;
+  const auto rep = diagnose::diagnose(model, (dir.path() / "runs").string(), catalogue, builtin_registry(), opt);
+  expect_named_closing_the_gap(rep, "m_load");
+  EXPECT_NEAR(fitted(rep, "m_load"), 2.0, 0.1);
+
+  std::string literal = kTwoCylinders;
+  literal.replace(literal.find("load_a:  {type: translational_mass, m: m_load}"), 46,
+                  "load_a:  {type: translational_mass, m: 2 kg}");
+  const std::string literal_model = dir.write("literal.yaml", literal);
+  const std::string on_load = dir.write("load.yaml", "\n\nrecalibrate:\n  load_a.m: {}\n");
+  for (const char* run : {"cal", "val"})
+    std::ofstream(dir.path() / "runs" / (std::string(run) + ".yaml"))
+        << "data: " << run << ".csv\nrole: " << (run[0] == 'c' ? "calibration" : "validation")
+        << "\noperating_point:\n  load_a.m: 2 kg\n";
+  try {
+    diagnose::diagnose(literal_model, (dir.path() / "runs").string(), on_load, builtin_registry(), opt);
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& ex) {
+    const std::string w = ex.what();
+    EXPECT_NE(w.find("load.yaml:4:"), std::string::npos) << w;
+    EXPECT_NE(w.find("set by the operating point of run"), std::string::npos) << w;
+  }
+}
+
 // A pressure transducer reading 0.2 bar high, no catalogue: the measured
 // signal's own offset fault is named, with about that offset.
 TEST(DiagnoseDeclared, ATransducerOffsetIsNamedWithoutACatalogue) {

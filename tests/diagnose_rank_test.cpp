@@ -488,9 +488,8 @@ TEST(DiagnoseRanking, AWrongModelParameterIsFoundAsSuch) {
   EXPECT_NEAR(std::stod(page.substr(from + 19)), 50.0, 5.0) << page.substr(at, 120);
 }
 
-TEST(DiagnoseRanking, RecalibrationCandidateIsTheNetlistsValueAndRefusesARunsOperatingPoint) {
+TEST(DiagnoseRanking, RecalibrationCandidateIsTheNetlistsValue) {
   const fs::path dir = scratch("bad_recalibrate");
-  const YAML::Node model = YAML::LoadFile(kModel);
   // A valid entry: null and initial are the netlist's value, the range 0.25x-4x on a log scale.
   std::ofstream(dir / "c.yaml") << "recalibrate:\n  meter_out.C: {}\n";
   const Catalogue cat = load_catalogue((dir / "c.yaml").string(), load_netlist(kModel), builtin_registry());
@@ -501,18 +500,6 @@ TEST(DiagnoseRanking, RecalibrationCandidateIsTheNetlistsValueAndRefusesARunsOpe
   EXPECT_NEAR(p.lower, 0.25 * C, 1e-9 * C);
   EXPECT_NEAR(p.upper, 4 * C, 1e-9 * C);
   EXPECT_TRUE(p.log_scale);
-
-  // m_load is set by the runs' operating points: the diagnosis refuses it at the catalogue's line.
-  write_runs(dir / "runs", model, {kRuns[0], kRuns[2]}, 24);
-  std::ofstream(dir / "c.yaml") << "effects: {}\nrecalibrate:\n  m_load: {}\n";
-  try {
-    run_diagnosis(dir, (dir / "c.yaml").string());
-    ADD_FAILURE() << "no error";
-  } catch (const InputError& ex) {
-    const std::string w = ex.what();
-    EXPECT_NE(w.find("c.yaml:3:"), std::string::npos) << w;
-    EXPECT_NE(w.find("set by the operating point of run"), std::string::npos) << w;
-  }
 }
 
 }  // namespace

@@ -969,6 +969,26 @@ Effect recalibration(const std::string& key, const std::string& lower, const std
   return recalibration(origin, YAML::Node(key), body, model, registry);
 }
 
+void recalibrate_each_runs_value(Effect& e) {
+  EffectParameter& p = e.parameters.at(0);
+  const double netlist = *p.null_value;
+  if (!(netlist > 0))
+    throw InputError(e.where, "", e.recalibrates,
+                     "recalibrate: '" + e.recalibrates + "' is set by the runs' operating points and is " +
+                         format_number(netlist) + " in the netlist, so it cannot be re-calibrated as a factor");
+  e.description = e.recalibrates + " off by one factor in every run (the runs set it; netlist " +
+                  format_number(netlist) + " " + p.unit + ")";
+  p.name = "k";
+  p.unit = "1";
+  p.lower /= netlist, p.upper /= netlist;
+  p.initial = 1.0, p.null_value = 1.0;
+  ValueDecl value;
+  value.text = "${k}";
+  value.where = e.where;
+  e.set = {{e.recalibrates, e.where, value, e.recalibrates}};
+  e.recalibrates.clear();
+}
+
 Catalogue merge_catalogues(Catalogue base, const Catalogue& extra) {
   for (const auto& e : extra.effects) {
     const auto same = std::find_if(base.effects.begin(), base.effects.end(), [&](const Effect& b) { return b.name == e.name; });

@@ -190,6 +190,12 @@ Catalogue declared_faults(const Netlist& model, const Registry& registry, const 
 Effect recalibration(const std::string& key, const std::string& lower, const std::string& upper, const Netlist& model,
                      const Registry& registry, const std::string& origin);
 
+// A recalibration of a top-level parameter the runs' operating points set
+// (a load written m: m_load): no single value can be fitted, so the effect
+// becomes a factor k on each run's own value (a RunFactor), its range the
+// recalibration's over the netlist's value; null and initial 1.
+void recalibrate_each_runs_value(Effect& e);
+
 // `extra`'s effects added to `base`'s, one of the same name replacing it;
 // `extra`'s phases when it has any.
 Catalogue merge_catalogues(Catalogue base, const Catalogue& extra);

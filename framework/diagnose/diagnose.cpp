@@ -166,8 +166,8 @@ class Diagnosis {
       : opt_(opt), eng_(model_file, base, opt) {
     eng_.runs = load_runs(runs_dir, eng_.base(), eng_.base_probes(), eng_.registry());
     cat_ = candidates(catalogue_file, eng_.registry());
+    recalibrate_each_runs_values();
     eng_.learn_nulls(cat_.effects);
-    refuse_recalibrating_operating_points();
     axes_ = experiment_axes();
     rep_.model_file = model_file;
     rep_.catalogue_file = catalogue_file;
@@ -268,15 +268,22 @@ class Diagnosis {
     return cat;
   }
 
-  // A run's operating point would override the re-calibrated value.
-  void refuse_recalibrating_operating_points() const {
-    for (const auto& e : cat_.effects)
+  // A run's operating point would override the re-calibrated value: a
+  // top-level parameter becomes a factor on each run's own value; a
+  // COMPONENT.PARAMETER a run sets is refused (a factor would need the
+  // netlist to write it through a top-level parameter).
+  void recalibrate_each_runs_values() {
+    for (auto& e : cat_.effects)
       for (const auto& run : eng_.runs)
-        for (const auto& op : run.operating_point)
-          if (op.name() == e.recalibrates)
+        for (const auto& op : run.operating_point) {
+          if (e.recalibrates.empty() || op.name() != e.recalibrates) continue;
+          if (e.recalibrates.find('.') != std::string::npos)
             throw InputError(e.where, "", op.name(),
                              "recalibrate: '" + op.name() + "' is set by the operating point of run '" + run.name +
-                                 "', so it cannot be re-calibrated");
+                                 "', so it cannot be re-calibrated (write it as a top-level parameter the runs set: "
+                                 "then it is re-calibrated as one factor on every run's value)");
+          recalibrate_each_runs_value(e);
+        }
   }
 
   // The operating-point parameters the next run may set: those the runs
