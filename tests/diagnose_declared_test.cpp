@@ -205,6 +205,13 @@ TEST(DiagnoseDeclared, ANeedleTheRunsCannotTellFromACheckValvesLeakIsNamedFirst)
   for (const auto& e : rep.effects)
     if (e.name == "flow_b.misadjusted" || e.name == "flow_b.check_leak")
       EXPECT_EQ(e.setting, e.name == "flow_b.misadjusted");
+  const std::string page = (dir.path() / "r.html").string();
+  diagnose::write_report_html(rep, page);
+  const std::string html = read_file(page);
+  const auto verdict = html.find("id=\"verdict\"");
+  ASSERT_NE(verdict, std::string::npos);
+  EXPECT_NE(html.find("a setting turned off is named before a part that fails", verdict), std::string::npos)
+      << html.substr(verdict, 400);
 }
 
 // The same cylinder's rod seal leaks to the atmosphere (a nozzle of 0.15
