@@ -13,6 +13,7 @@
 #include <map>
 #include <set>
 #include <sstream>
+#include <tuple>
 
 #include "components/builtin.hpp"
 #include "framework/diagnose/catalogue.hpp"
@@ -971,6 +972,37 @@ TEST(DeclaredFaults, HtmlVerdictShowsJointValuesAgainstTheirNulls) {
   const auto verdict = html.find("id=\"verdict\"");
   ASSERT_NE(verdict, std::string::npos);
   EXPECT_NE(html.find("k = 1.32 (null 1.00, +32 %)", verdict), std::string::npos) << html.substr(verdict, 400);
+}
+
+// A transducer's offset is a difference: 0.2 bar on a pressure reading
+// (not "bar abs"), 2 K on a temperature reading (not -271 degC), in the
+// verdict and in the ranking.
+TEST(DeclaredFaults, HtmlShowsAnOffsetAsADifferenceOfItsQuantity) {
+  TempDir dir;
+  diagnose::DiagnosisReport rep;
+  rep.verdict = {"p.offset", "T.offset"};
+  rep.verdict_groups = {{"p.offset"}, {"T.offset"}};
+  for (const auto& [name, unit, value] : {std::tuple{"p.offset", "Pa", 2e4}, std::tuple{"T.offset", "K", 2.0}}) {
+    diagnose::EffectResult e;
+    e.name = name;
+    e.parameter_names = {"offset"};
+    e.parameter_units = {unit};
+    e.parameter_nulls = {0.0};
+    e.values = {value};
+    e.rank = 1;
+    rep.effects.push_back(e);
+    rep.final_values.push_back({name, {value}});
+  }
+  const std::string path = (dir.path() / "r.html").string();
+  diagnose::write_report_html(rep, path);
+  const std::string html = read_file(path);
+  const auto verdict = html.find("id=\"verdict\"");
+  ASSERT_NE(verdict, std::string::npos);
+  const std::string shown = html.substr(verdict, 600);
+  EXPECT_NE(shown.find("offset = 0.200 bar (null 0)"), std::string::npos) << shown;
+  EXPECT_NE(shown.find("offset = 2.00 K (null 0)"), std::string::npos) << shown;
+  EXPECT_EQ(html.find("bar abs"), std::string::npos);
+  EXPECT_EQ(html.find("degC"), std::string::npos);
 }
 
 }  // namespace

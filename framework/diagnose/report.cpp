@@ -411,9 +411,17 @@ namespace {
 
 // A fitted parameter in its engineering unit, three digits (the report gives
 // no confidence interval that would say more).
-std::string parameter(double si, const std::string& unit) {
-  const Shown u = shown(unit);
+std::string parameter(double si, const std::string& unit, bool difference = false) {
+  const Shown u = shown(unit, difference);
   return rounded(u(si), 3) + (u.label.empty() || u.label == "1" ? "" : " " + u.label);
+}
+
+// An effect's parameter j at `si`: one whose null is 0 (an offset, a leak,
+// a delay) is an amount - a pressure offset in bar, not bar abs; a
+// temperature offset in K, not degC.
+std::string effect_parameter(const EffectResult& e, std::size_t j, double si) {
+  const bool amount = j < e.parameter_nulls.size() && e.parameter_nulls[j] == 0;
+  return parameter(si, e.parameter_units[j], amount);
 }
 
 // A re-calibrated value beside the netlist's: " (netlist 0.35 dm3/(s*bar), +1.1 %)" -
@@ -448,7 +456,7 @@ std::string recalibrated(const DiagnosisReport& r, std::size_t slot) {
                from_netlist(values[0], e.netlist_value, e.parameter_units[0]);
       std::string out;
       for (std::size_t j = 0; j < values.size() && j < e.parameter_names.size(); ++j)
-        out += (j ? ", " : ": ") + e.parameter_names[j] + " = " + parameter(values[j], e.parameter_units[j]) +
+        out += (j ? ", " : ": ") + e.parameter_names[j] + " = " + effect_parameter(e, j, values[j]) +
                (j < e.parameter_nulls.size() ? from_null(values[j], e.parameter_nulls[j], e.parameter_units[j]) : "");
       return out;
     }
@@ -528,7 +536,7 @@ void ranking_section(std::ostream& o, const DiagnosisReport& r) {
       << "</td><td class=\"l\">";
     const bool fitted = e.unavailable.empty() && !e.screened_out;
     for (std::size_t j = 0; fitted && j < e.parameter_names.size(); ++j)
-      o << html(e.parameter_names[j]) << " = " << html(parameter(e.values[j], e.parameter_units[j]))
+      o << html(e.parameter_names[j]) << " = " << html(effect_parameter(e, j, e.values[j]))
         << html(from_netlist(e.values[j], e.netlist_value, e.parameter_units[j])) << "<br>";
     o << "</td><td>" << gap(e.gap_before) << "</td><td>" << (fitted ? gap(e.gap_after) : "") << "</td><td>"
       << (fitted ? fixed(std::round(e.delta_bic), 0) : "") << "</td><td>" << (fitted ? p_value(e.p_value) : "")
