@@ -1005,5 +1005,37 @@ TEST(DeclaredFaults, HtmlShowsAnOffsetAsADifferenceOfItsQuantity) {
   EXPECT_EQ(html.find("degC"), std::string::npos);
 }
 
+// A re-calibrated pressure is shown as what the component means by it: a
+// check valve's cracking pressure is a difference (bar), a supply's
+// pressure absolute (bar abs).
+TEST(DeclaredFaults, ARecalibratedPressureIsShownAsADifferenceOrAbsoluteAsTheComponentMeansIt) {
+  const Netlist nl = meter_out();
+  const auto cracking =
+      diagnose::recalibration("flow_cap.check_cracking", "", "", nl, builtin_registry(), "--test");
+  const auto supply = diagnose::recalibration("supply.p", "", "", nl, builtin_registry(), "--test");
+  EXPECT_TRUE(cracking.parameters[0].difference);
+  EXPECT_FALSE(supply.parameters[0].difference);
+  TempDir dir;
+  diagnose::DiagnosisReport rep;
+  rep.verdict = {"flow_cap.check_cracking"};
+  rep.verdict_groups = {{"flow_cap.check_cracking"}};
+  diagnose::EffectResult e;
+  e.name = "flow_cap.check_cracking";
+  e.parameter_names = {"check_cracking"};
+  e.parameter_units = {"Pa"};
+  e.parameter_nulls = {1e4};
+  e.parameter_differences = {true};
+  e.netlist_value = 1e4;
+  e.values = {1.2e4};
+  e.rank = 1;
+  rep.effects = {e};
+  rep.final_values = {{e.name, {1.2e4}}};
+  const std::string path = (dir.path() / "r.html").string();
+  diagnose::write_report_html(rep, path);
+  const std::string html = read_file(path);
+  EXPECT_NE(html.find("= 0.120 bar (netlist 0.100 bar, +20 %)"), std::string::npos);
+  EXPECT_EQ(html.find("bar abs"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace pneumo

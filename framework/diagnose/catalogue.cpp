@@ -379,7 +379,7 @@ std::vector<PhaseDecl> read_phases(const std::string& path, const YAML::Node& li
 // range the component accepts.
 struct NetlistValue {
   double value = 0, min = -INFINITY, max = INFINITY;
-  bool min_exclusive = false, max_exclusive = false;
+  bool min_exclusive = false, max_exclusive = false, difference = false;
   std::string unit, set_key;
 };
 
@@ -420,6 +420,7 @@ NetlistValue netlist_value(const std::string& path, const YAML::Node& key_node, 
     fail(path, key_node, key, name, "recalibrate: the netlist gives no value for '" + key + "'");
   }
   v.unit = spec->unit;
+  v.difference = units::dimension_of(spec->unit) == units::dims::pressure && !spec->is_absolute;
   v.min = spec->min, v.max = spec->max;
   v.min_exclusive = spec->min_exclusive, v.max_exclusive = spec->max_exclusive;
   v.set_key = key;
@@ -447,6 +448,7 @@ Effect recalibration(const std::string& path, const YAML::Node& key_node, const 
   ep.name = e.name.substr(e.name.find('.') + 1);
   ep.where = e.where;
   ep.unit = v.unit;
+  ep.difference = v.difference;
   ep.initial = v.value;
   ep.null_value = v.value;
   const std::string scale =

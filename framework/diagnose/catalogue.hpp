@@ -60,6 +60,9 @@ struct EffectParameter {
   std::string unit;
   bool log_scale = false;
   SourceLocation where;
+  // A pressure that is a difference (a cracking pressure, ParameterSpec
+  // without is_absolute): shown in bar, not bar abs.
+  bool difference = false;
 };
 
 // `set: {TARGET: VALUE}`: TARGET is COMPONENT.PARAMETER or parameters.NAME

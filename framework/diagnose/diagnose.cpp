@@ -431,6 +431,7 @@ class Diagnosis {
         er.parameter_names.push_back(p.name);
         er.parameter_units.push_back(p.unit);
         er.parameter_nulls.push_back(p.null_value ? *p.null_value : NAN);
+        er.parameter_differences.push_back(p.difference);
         er.values.push_back(p.null_value ? *p.null_value : p.initial);
       }
       if (!e.recalibrates.empty() && e.parameters.size() == 1) er.netlist_value = e.parameters[0].null_value;

@@ -138,6 +138,7 @@ struct EffectResult {
   double screening_improvement = 0;  // linearised share of the calibration SSR removed
   std::vector<std::string> parameter_names, parameter_units;
   std::vector<double> parameter_nulls;  // where each vanishes (NaN: a structural switch has none)
+  std::vector<bool> parameter_differences;  // each a difference of its quantity (EffectParameter::difference)
   std::vector<double> values;
   std::optional<double> netlist_value;   // a re-calibration candidate: the netlist's value of its parameter
   double gap_before = 0, gap_after = 0;  // validation, normalised RMS

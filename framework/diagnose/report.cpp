@@ -77,6 +77,15 @@ Shown shown(const std::string& si_unit, bool difference = false) {
   return {si_unit};
 }
 
+// Whether an effect's parameter j is a difference of its quantity: one
+// whose null is 0 (an offset, a leak, a delay) is an amount - a pressure
+// offset in bar, not bar abs; a temperature offset in K, not degC - and a
+// pressure difference re-calibrated (a cracking pressure) is one.
+bool is_difference(const EffectResult& e, std::size_t j) {
+  return (j < e.parameter_nulls.size() && e.parameter_nulls[j] == 0) ||
+         (j < e.parameter_differences.size() && e.parameter_differences[j]);
+}
+
 std::string unit_of(const DiagnosisReport& r, const std::string& signal) {
   for (const auto& [n, u] : r.signal_units)
     if (n == signal) return u;
@@ -356,7 +365,8 @@ void write_report_json(const DiagnosisReport& r, const std::string& path) {
         << ", \"unit\": " << str(e.parameter_units[j])
         << (j < e.parameter_nulls.size() && std::isfinite(e.parameter_nulls[j]) ? ", \"null\": " + num(e.parameter_nulls[j])
                                                                                  : "")
-        << (e.netlist_value ? ", \"netlist_value\": " + num(*e.netlist_value) : "") << "}";
+        << (e.netlist_value ? ", \"netlist_value\": " + num(*e.netlist_value) : "")
+        << (is_difference(e, j) ? ", \"difference\": true" : "") << "}";
     o << "}, \"validation_gap_before\": " << num(e.gap_before) << ", \"validation_gap_after\": " << num(e.gap_after)
       << ", \"screening_improvement\": " << num(e.screening_improvement) << ", \"significance\": {\"significant\": "
       << (e.significant ? "true" : "false") << ", \"lr_effective\": " << num(e.lr_eff)
@@ -417,19 +427,18 @@ std::string parameter(double si, const std::string& unit, bool difference = fals
 }
 
 // An effect's parameter j at `si`: one whose null is 0 (an offset, a leak,
-// a delay) is an amount - a pressure offset in bar, not bar abs; a
-// temperature offset in K, not degC.
+// a delay) is an amount, shown as a difference (is_difference).
 std::string effect_parameter(const EffectResult& e, std::size_t j, double si) {
-  const bool amount = j < e.parameter_nulls.size() && e.parameter_nulls[j] == 0;
-  return parameter(si, e.parameter_units[j], amount);
+  return parameter(si, e.parameter_units[j], is_difference(e, j));
 }
 
 // A re-calibrated value beside the netlist's: " (netlist 0.35 dm3/(s*bar), +1.1 %)" -
 // whether the data ask for a setting off by a tolerance or by a factor.
-std::string from_netlist(double si, const std::optional<double>& netlist, const std::string& unit) {
+std::string from_netlist(double si, const std::optional<double>& netlist, const std::string& unit,
+                         bool difference) {
   if (!netlist || *netlist == 0) return "";
   const double pct = 100 * (si / *netlist - 1);
-  return " (netlist " + parameter(*netlist, unit) + ", " + (pct >= 0 ? "+" : "") + rounded(pct, 2) + " %)";
+  return " (netlist " + parameter(*netlist, unit, difference) + ", " + (pct >= 0 ? "+" : "") + rounded(pct, 2) + " %)";
 }
 
 // A value beside its null: " (null 1, +32 %)", or " (null 0)" where no
@@ -452,8 +461,8 @@ std::string recalibrated(const DiagnosisReport& r, std::size_t slot) {
     for (const auto& [n, values] : r.final_values) {
       if (n != name) continue;
       if (e.netlist_value && values.size() == 1)
-        return " = " + parameter(values[0], e.parameter_units[0]) +
-               from_netlist(values[0], e.netlist_value, e.parameter_units[0]);
+        return " = " + effect_parameter(e, 0, values[0]) +
+               from_netlist(values[0], e.netlist_value, e.parameter_units[0], is_difference(e, 0));
       std::string out;
       for (std::size_t j = 0; j < values.size() && j < e.parameter_names.size(); ++j)
         out += (j ? ", " : ": ") + e.parameter_names[j] + " = " + effect_parameter(e, j, values[j]) +
@@ -537,7 +546,7 @@ void ranking_section(std::ostream& o, const DiagnosisReport& r) {
     const bool fitted = e.unavailable.empty() && !e.screened_out;
     for (std::size_t j = 0; fitted && j < e.parameter_names.size(); ++j)
       o << html(e.parameter_names[j]) << " = " << html(effect_parameter(e, j, e.values[j]))
-        << html(from_netlist(e.values[j], e.netlist_value, e.parameter_units[j])) << "<br>";
+        << html(from_netlist(e.values[j], e.netlist_value, e.parameter_units[j], is_difference(e, j))) << "<br>";
     o << "</td><td>" << gap(e.gap_before) << "</td><td>" << (fitted ? gap(e.gap_after) : "") << "</td><td>"
       << (fitted ? fixed(std::round(e.delta_bic), 0) : "") << "</td><td>" << (fitted ? p_value(e.p_value) : "")
       << "</td><td>" << (e.significant ? "yes" : "no") << "</td><td class=\"l w\">";
