@@ -46,7 +46,9 @@ class Iso6358Throttle final : public ComponentT<Iso6358Throttle> {
     i.observables = {{"m_flow", "kg/s", "mass flow from a to b"}};
     i.equations = {"ISO 6358 mass flow", "mass balance", "stream temperature a", "stream temperature b"};
     SignalWatch::declare(i);
-    i.faults = {setting_fault("misadjusted", "conductance off its setting (throttle misadjusted, silencer or filter clogged)",
+    // Not a setting: the element stands for a needle as often as for a
+    // valve's path, a silencer or a fitting, which nobody turns.
+    i.faults = {fault("misadjusted", "conductance off its setting (throttle misadjusted, silencer or filter clogged)",
                       {fault_factor("C", 0.1, 4.0, 0.7)})};
     FaultSpec late = fault("opening_late",
                            "the path opens and closes late behind its command (slow solenoid or pilot, sticky spool)",
