@@ -620,14 +620,17 @@ class Diagnosis {
     return aa > 0 && bb > 0 ? ab / std::sqrt(aa * bb) : 0.0;
   }
 
-  // Among effects the runs cannot tell apart, a setting turned off is named
-  // before a part that fails (FaultSpec::setting): settings are turned far
-  // more often than parts fail - unless the part's fit is clearly the better
-  // one on the validation runs (Vuong's test of the two fits, z > 3): a group
-  // says neither is practically better, not that the data are silent. Three
-  // standard errors, not two: the residuals of two fits that both miss the
-  // truth's form stay correlated beyond the whitening's AR(5), which
-  // inflates z. The best-ranked such setting in er's group, or er itself.
+  // Among effects of one component the runs cannot tell apart, a setting
+  // turned off is named before a part of it that fails (FaultSpec::setting):
+  // a flow control's needle is turned far more often than its check valve
+  // leaks. Across components no such order holds (a rod seal wears as often
+  // as a needle is turned), so there the better fit stays first. And within
+  // one, unless the part's fit is clearly the better one on the validation
+  // runs (Vuong's test of the two fits, z > 3): a group says neither is
+  // practically better, not that the data are silent. Three standard
+  // errors, not two: the residuals of two fits that both miss the truth's
+  // form stay correlated beyond the whitening's AR(5), which inflates z.
+  // The best-ranked such setting in er's group, or er itself.
   static constexpr double kClearlyBetter = 3.0;
   bool setting_first(const std::string& part, const std::vector<double>& r_part, const std::string& setting,
                      const std::vector<double>& r_setting) const {
@@ -643,7 +646,8 @@ class Diagnosis {
     for (int k : order_) {
       const EffectResult& o = results_[k];
       const Cand* oc = cand_of(o.name);
-      if (o.setting && o.significant && oc && std::find(er.group.begin(), er.group.end(), o.name) != er.group.end() &&
+      if (o.setting && o.significant && oc && o.component == er.component &&
+          std::find(er.group.begin(), er.group.end(), o.name) != er.group.end() &&
           setting_first(er.name, c->r_val, o.name, oc->r_val))
         return o;
     }
@@ -653,7 +657,7 @@ class Diagnosis {
                                                         std::vector<Step>::const_iterator bs) const {
     if (bs->e->setting) return bs;
     for (auto it = passed.begin(); it != passed.end(); ++it)
-      if (it->e->setting && indistinguishable(r_val_cur_, *bs, *it) &&
+      if (it->e->setting && it->e->component == bs->e->component && indistinguishable(r_val_cur_, *bs, *it) &&
           setting_first(bs->e->name, bs->r_val, it->e->name, it->r_val))
         return it;
     return bs;
