@@ -13,7 +13,6 @@
 #include <map>
 #include <set>
 #include <sstream>
-#include <tuple>
 
 #include "components/builtin.hpp"
 #include "framework/diagnose/catalogue.hpp"
@@ -950,25 +949,40 @@ TEST(DeclaredFaults, AFailedFitIsNeverRankedAboveAFitThatRan) {
   EXPECT_EQ(r[order[0]].name, "ran");
 }
 
+// An effect fitted at `value` (one parameter of `unit`, null `null`).
+diagnose::EffectResult fitted_effect(const std::string& name, const std::string& parameter, const std::string& unit,
+                                     double null, double value) {
+  diagnose::EffectResult e;
+  e.name = name;
+  e.parameter_names = {parameter};
+  e.parameter_units = {unit};
+  e.parameter_nulls = {null};
+  e.values = {value};
+  e.rank = 1;
+  return e;
+}
+
+// The HTML report whose verdict names each of `effects` in a slot of its
+// own, at the joint value `joint` (the verdict model's; each effect's own
+// `values` are its single fit's).
+std::string verdict_html(const std::vector<diagnose::EffectResult>& effects, const std::vector<double>& joint) {
+  TempDir dir;
+  diagnose::DiagnosisReport rep;
+  for (std::size_t i = 0; i < effects.size(); ++i) {
+    rep.verdict.push_back(effects[i].name);
+    rep.verdict_groups.push_back({effects[i].name});
+    rep.effects.push_back(effects[i]);
+    rep.final_values.push_back({effects[i].name, {joint[i]}});
+  }
+  const std::string path = (dir.path() / "r.html").string();
+  diagnose::write_report_html(rep, path);
+  return read_file(path);
+}
+
 // The HTML verdict gives the values the verdict model was simulated with
 // (the joint fit's), each beside its null.
 TEST(DeclaredFaults, HtmlVerdictShowsJointValuesAgainstTheirNulls) {
-  TempDir dir;
-  diagnose::DiagnosisReport rep;
-  rep.verdict = {"flow_cap.misadjusted"};
-  rep.verdict_groups = {{"flow_cap.misadjusted"}};
-  diagnose::EffectResult e;
-  e.name = "flow_cap.misadjusted";
-  e.parameter_names = {"k"};
-  e.parameter_units = {"1"};
-  e.parameter_nulls = {1.0};
-  e.values = {1.1};  // the single fit's
-  e.rank = 1;
-  rep.effects = {e};
-  rep.final_values = {{"flow_cap.misadjusted", {1.32}}};
-  const std::string path = (dir.path() / "r.html").string();
-  diagnose::write_report_html(rep, path);
-  const std::string html = read_file(path);
+  const std::string html = verdict_html({fitted_effect("flow_cap.misadjusted", "k", "1", 1.0, 1.1)}, {1.32});
   const auto verdict = html.find("id=\"verdict\"");
   ASSERT_NE(verdict, std::string::npos);
   EXPECT_NE(html.find("k = 1.32 (null 1.00, +32 %)", verdict), std::string::npos) << html.substr(verdict, 400);
@@ -978,24 +992,9 @@ TEST(DeclaredFaults, HtmlVerdictShowsJointValuesAgainstTheirNulls) {
 // (not "bar abs"), 2 K on a temperature reading (not -271 degC), in the
 // verdict and in the ranking.
 TEST(DeclaredFaults, HtmlShowsAnOffsetAsADifferenceOfItsQuantity) {
-  TempDir dir;
-  diagnose::DiagnosisReport rep;
-  rep.verdict = {"p.offset", "T.offset"};
-  rep.verdict_groups = {{"p.offset"}, {"T.offset"}};
-  for (const auto& [name, unit, value] : {std::tuple{"p.offset", "Pa", 2e4}, std::tuple{"T.offset", "K", 2.0}}) {
-    diagnose::EffectResult e;
-    e.name = name;
-    e.parameter_names = {"offset"};
-    e.parameter_units = {unit};
-    e.parameter_nulls = {0.0};
-    e.values = {value};
-    e.rank = 1;
-    rep.effects.push_back(e);
-    rep.final_values.push_back({name, {value}});
-  }
-  const std::string path = (dir.path() / "r.html").string();
-  diagnose::write_report_html(rep, path);
-  const std::string html = read_file(path);
+  const std::string html = verdict_html(
+      {fitted_effect("p.offset", "offset", "Pa", 0.0, 2e4), fitted_effect("T.offset", "offset", "K", 0.0, 2.0)},
+      {2e4, 2.0});
   const auto verdict = html.find("id=\"verdict\"");
   ASSERT_NE(verdict, std::string::npos);
   const std::string shown = html.substr(verdict, 600);
@@ -1015,24 +1014,10 @@ TEST(DeclaredFaults, ARecalibratedPressureIsShownAsADifferenceOrAbsoluteAsTheCom
   const auto supply = diagnose::recalibration("supply.p", "", "", nl, builtin_registry(), "--test");
   EXPECT_TRUE(cracking.parameters[0].difference);
   EXPECT_FALSE(supply.parameters[0].difference);
-  TempDir dir;
-  diagnose::DiagnosisReport rep;
-  rep.verdict = {"flow_cap.check_cracking"};
-  rep.verdict_groups = {{"flow_cap.check_cracking"}};
-  diagnose::EffectResult e;
-  e.name = "flow_cap.check_cracking";
-  e.parameter_names = {"check_cracking"};
-  e.parameter_units = {"Pa"};
-  e.parameter_nulls = {1e4};
+  auto e = fitted_effect("flow_cap.check_cracking", "check_cracking", "Pa", 1e4, 1.2e4);
   e.parameter_differences = {true};
   e.netlist_value = 1e4;
-  e.values = {1.2e4};
-  e.rank = 1;
-  rep.effects = {e};
-  rep.final_values = {{e.name, {1.2e4}}};
-  const std::string path = (dir.path() / "r.html").string();
-  diagnose::write_report_html(rep, path);
-  const std::string html = read_file(path);
+  const std::string html = verdict_html({e}, {1.2e4});
   EXPECT_NE(html.find("= 0.120 bar (netlist 0.100 bar, +20 %)"), std::string::npos);
   EXPECT_EQ(html.find("bar abs"), std::string::npos);
 }

@@ -119,14 +119,18 @@ double fitted(const diagnose::DiagnosisReport& rep, const std::string& name) {
   return values.empty() ? NAN : values[0];
 }
 
-// The diagnosis of kTwoCylinders from runs of `truth` (both positions and
-// rod-side pressures measured) among the declared faults `faults`.
-diagnose::DiagnosisReport diagnose_two_cylinders(const std::string& truth, std::vector<std::string> faults) {
+// The diagnosis of `model` (kTwoCylinders unless given) from runs of
+// `truth` (both positions and rod-side pressures measured) with `opt`.
+diagnose::DiagnosisReport diagnose_two_cylinders(const std::string& truth, const diagnose::DiagnoseOptions& opt,
+                                                 const std::string& model = kTwoCylinders) {
   TempDir dir;
-  const std::string model = dir.write("two.yaml", kTwoCylinders);
+  const std::string file = dir.write("two.yaml", model);
   make_runs(dir.path() / "runs", truth, {"x_a", "p_a", "x_b", "p_b"});
-  return diagnose::diagnose(model, (dir.path() / "runs").string(), "", builtin_registry(),
-                            declared(std::move(faults)));
+  return diagnose::diagnose(file, (dir.path() / "runs").string(), "", builtin_registry(), opt);
+}
+// ... among the declared faults `faults`.
+diagnose::DiagnosisReport diagnose_two_cylinders(const std::string& truth, std::vector<std::string> faults) {
+  return diagnose_two_cylinders(truth, declared(std::move(faults)));
 }
 
 // The verdict names `first` first and closes a gap of over 3 x noise to
@@ -192,11 +196,7 @@ std::string with_flow_control(const std::string& leakage, const std::string& par
 }
 
 TEST(DiagnoseDeclared, ANeedleTheRunsCannotTellFromACheckValvesLeakIsNamedFirst) {
-  TempDir dir;
-  const std::string model = dir.write("two.yaml", with_flow_control("0"));
-  make_runs(dir.path() / "runs", with_flow_control("0.025"), {"x_a", "p_a", "x_b", "p_b"});
-  const auto rep =
-      diagnose::diagnose(model, (dir.path() / "runs").string(), "", builtin_registry(), declared({"flow_b"}));
+  const auto rep = diagnose_two_cylinders(with_flow_control("0.025"), declared({"flow_b"}), with_flow_control("0"));
   expect_named_closing_the_gap(rep, "flow_b.misadjusted");
   ASSERT_FALSE(rep.verdict_groups.empty());
   EXPECT_NE(std::find(rep.verdict_groups[0].begin(), rep.verdict_groups[0].end(), "flow_b.check_leak"),
@@ -205,6 +205,7 @@ TEST(DiagnoseDeclared, ANeedleTheRunsCannotTellFromACheckValvesLeakIsNamedFirst)
   for (const auto& e : rep.effects)
     if (e.name == "flow_b.misadjusted" || e.name == "flow_b.check_leak")
       EXPECT_EQ(e.setting, e.name == "flow_b.misadjusted");
+  TempDir dir;
   const std::string page = (dir.path() / "r.html").string();
   diagnose::write_report_html(rep, page);
   const std::string html = read_file(page);
@@ -225,11 +226,7 @@ TEST(DiagnoseDeclared, ACheckValvesLeakThatFitsClearlyBetterThanTheNeedleIsNamed
     text.replace(text.find("check_b: 0.3"), 12, "check_b: 0.9");
     return text;
   };
-  TempDir dir;
-  const std::string model = dir.write("two.yaml", with_check_b("0"));
-  make_runs(dir.path() / "runs", with_check_b("0.05"), {"x_a", "p_a", "x_b", "p_b"});
-  const auto rep =
-      diagnose::diagnose(model, (dir.path() / "runs").string(), "", builtin_registry(), declared({"flow_b"}));
+  const auto rep = diagnose_two_cylinders(with_check_b("0.05"), declared({"flow_b"}), with_check_b("0"));
   expect_named_closing_the_gap(rep, "flow_b.check_leak");
   const auto& group = rep.verdict_groups[0];
   EXPECT_NE(std::find(group.begin(), group.end(), "flow_b.misadjusted"), group.end());
@@ -241,15 +238,12 @@ TEST(DiagnoseDeclared, ACheckValvesLeakThatFitsClearlyBetterThanTheNeedleIsNamed
 // first as the better fit - a setting goes first only before a part of its
 // own component (a rod seal wears as often as a needle is turned).
 TEST(DiagnoseDeclared, ARodSealLeakGroupedWithTheNeedleOfAnotherComponentStaysFirst) {
-  TempDir dir;
-  const std::string model = dir.write("two.yaml", with_flow_control("0"));
-  make_runs(dir.path() / "runs",
-            with_flow_control("0", "  gap_b: {type: nozzle, d: 0.08 mm}\n  gap_air: {type: atmosphere}\n",
-                              "  - [cyl_b.rod, gap_b.a]\n  - [gap_b.b, gap_air.port]\n"),
-            {"x_a", "p_a", "x_b", "p_b"});
   auto opt = declared({"flow_b", "cyl_b"});
   opt.screen_keep = 8;
-  const auto rep = diagnose::diagnose(model, (dir.path() / "runs").string(), "", builtin_registry(), opt);
+  const auto rep = diagnose_two_cylinders(
+      with_flow_control("0", "  gap_b: {type: nozzle, d: 0.08 mm}\n  gap_air: {type: atmosphere}\n",
+                        "  - [cyl_b.rod, gap_b.a]\n  - [gap_b.b, gap_air.port]\n"),
+      opt, with_flow_control("0"));
   expect_named_closing_the_gap(rep, "cyl_b.rod_seal_leak");
   const auto& group = rep.verdict_groups[0];
   EXPECT_NE(std::find(group.begin(), group.end(), "flow_b.misadjusted"), group.end());
