@@ -223,7 +223,8 @@ struct FaultSpec {
   // A value someone sets by hand (a needle, a knob, a dial, a set screw, a
   // switch's place on its rail) turned off its setting. Settings are turned
   // far more often than parts fail, so where the runs cannot tell such a
-  // fault from a part's failure, the diagnosis names the setting first.
+  // fault from the failure of a part of the same component, the diagnosis
+  // names the setting first.
   bool setting = false;
 };
 
