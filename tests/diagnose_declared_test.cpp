@@ -211,7 +211,7 @@ TEST(DiagnoseDeclared, ANeedleTheRunsCannotTellFromACheckValvesLeakIsNamedFirst)
   const std::string html = read_file(page);
   const auto verdict = html.find("id=\"verdict\"");
   ASSERT_NE(verdict, std::string::npos);
-  EXPECT_NE(html.find("a setting turned off is named before a part that fails", verdict), std::string::npos)
+  EXPECT_NE(html.find("a setting turned off is named before a part of the same component that fails", verdict), std::string::npos)
       << html.substr(verdict, 400);
 }
 

@@ -277,9 +277,21 @@ std::string form_clause(const DiagnosisReport& r) {
 
 namespace {
 // Whether the effect named is a setting (FaultSpec::setting).
-bool is_setting(const DiagnosisReport& r, const std::string& effect) {
+const EffectResult* find_effect(const DiagnosisReport& r, const std::string& effect) {
   for (const auto& e : r.effects)
-    if (e.name == effect) return e.setting;
+    if (e.name == effect) return &e;
+  return nullptr;
+}
+
+// The diagnosis names a setting before a part of the same component it is
+// grouped with (diagnose.cpp); the page says so only where that happened.
+bool setting_before_own_part(const DiagnosisReport& r, const std::vector<std::string>& group) {
+  const EffectResult* first = find_effect(r, group[0]);
+  if (!first || !first->setting || first->component.empty()) return false;
+  for (std::size_t j = 1; j < group.size(); ++j) {
+    const EffectResult* other = find_effect(r, group[j]);
+    if (other && !other->setting && other->component == first->component) return true;
+  }
   return false;
 }
 }  // namespace
@@ -582,7 +594,8 @@ void write_report_html(const DiagnosisReport& r, const std::string& path) {
       o << " (indistinguishable from";
       for (std::size_t j = 1; j < r.verdict_groups[i].size(); ++j)
         o << (j > 1 ? ", " : " ") << html(r.verdict_groups[i][j]);
-      if (is_setting(r, r.verdict_groups[i][0])) o << "; a setting turned off is named before a part that fails";
+      if (setting_before_own_part(r, r.verdict_groups[i]))
+        o << "; a setting turned off is named before a part of the same component that fails";
       o << ")";
     }
   }
