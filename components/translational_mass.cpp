@@ -27,8 +27,11 @@ class TranslationalMass final : public ComponentT<TranslationalMass> {
                      {"v", "m/s", "velocity"},
                      {"E_kin", "J", "kinetic energy 1/2 m v^2", "kinetic_energy"}};
     i.equations = {"Newton's law"};
+    // A drawn mass is often the bare tool: the workpiece it carries, a
+    // heavier gripper or a clamp fitted later can weigh many times as much
+    // (and the drawing can hold a part that is not there), so 0.1-10 times.
     i.faults = {fault("mass_off", "moved mass off its value (other tooling, payload)",
-                      {fault_factor("m", 0.25, 4.0, 1.3)})};
+                      {fault_factor("m", 0.1, 10.0, 1.3)})};
     return i;
   }
   explicit TranslationalMass(const Construction& c)
