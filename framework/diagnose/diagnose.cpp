@@ -720,8 +720,9 @@ class Diagnosis {
   // leak beside a heavier load; the mass and the leak together leave the
   // noise). When the verdict leaves the data unexplained, the selection is
   // run again from each of the next kOtherFirsts significant single fits
-  // outside the first slot's group, and a verdict that leaves clearly less
-  // - practically and, by BIC, for the parameters it adds - is named
+  // outside the first slot's group (re-screening fewer candidates:
+  // worth_a_second_look), and a verdict that leaves clearly less -
+  // practically and, by BIC, for the parameters it adds - is named
   // instead. Only a diagnosis that cannot explain its runs pays for it.
   static constexpr int kOtherFirsts = 2;
   void try_other_first_effects(const Selection& before) {
@@ -736,6 +737,7 @@ class Diagnosis {
         continue;
       ++tried;
       restore(before);
+      alternative_ = true;
       log("  the verdict leaves the data unexplained: forward selection again, from " + er.name +
           fmt("  [%.1f s]", elapsed()));
       select_from(results_[k]);
@@ -749,6 +751,7 @@ class Diagnosis {
       if (better) best = selection();
     }
     restore(best);
+    alternative_ = false;
   }
 
   // The first effect, polished alone with a second iteration budget, so that
@@ -821,7 +824,7 @@ class Diagnosis {
     for (const auto& ch : chosen_) held += static_cast<int>(ch.effect->parameters.size());
     std::vector<int> open;
     for (int k : order_)
-      if (may_join(k)) open.push_back(k);
+      if (may_join(k) && (!alternative_ || worth_a_second_look(k))) open.push_back(k);
     const auto with = [&](int k, const std::vector<double>& values) {
       auto m = chosen_;
       m.push_back({&cat_.effects[k], values});
@@ -892,6 +895,17 @@ class Diagnosis {
     return out;
   }
   static constexpr std::size_t kRescreened = 24;
+
+  // A selection from another first effect is a second look, not a second
+  // diagnosis: it re-screens only the candidates fitted alone and the
+  // kRescreened best of the first screen (on a small circuit nearly all of
+  // them; on a line of cylinders a fifth).
+  bool worth_a_second_look(int k) const {
+    if (cand_of(results_[k].name)) return true;
+    int better = 0;
+    for (const auto& er : results_) better += er.screening_improvement > results_[k].screening_improvement;
+    return better < static_cast<int>(kRescreened);
+  }
 
   // Forward selection: the re-screened candidates fitted jointly with the
   // chosen effects (their parameters free); the one that removes the most of
@@ -1173,6 +1187,7 @@ class Diagnosis {
   std::vector<int> order_;
   std::vector<EffectInstance> chosen_;
   std::set<std::string> dropped_;  // named, then dropped on re-test: not offered again
+  bool alternative_ = false;       // selecting from another first effect (try_other_first_effects)
   std::vector<NextRunSetting> axes_;  // what the next run may set (experiment_axes())
 };
 
