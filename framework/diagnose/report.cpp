@@ -276,7 +276,7 @@ std::string form_clause(const DiagnosisReport& r) {
 }
 
 namespace {
-// Whether the effect named is a setting (FaultSpec::setting).
+// The report's result for the effect named `effect` (null: none).
 const EffectResult* find_effect(const DiagnosisReport& r, const std::string& effect) {
   for (const auto& e : r.effects)
     if (e.name == effect) return &e;
