@@ -122,6 +122,22 @@ def seal_friction(cyl, load, F, kv, lo, hi):
         ["[%s.flange, seal_drag.flange]" % load]), None)
 
 
+def silencer_dirt(lo, hi):
+    """Dirt behind the silencer (a throttle of k dm3/(s*bar), b 0.2, before
+    the atmosphere `air`), the silencer's own b 0.4."""
+    return ("silencer.misadjusted", lo, hi, lambda t, k: add_components(
+        set_param(t, "silencer", "b", "0.4"), ["dirt: {type: iso6358_throttle, C: %g dm3/(s*bar), b: 0.2}" % k], []).replace(
+        "  - [silencer.b, air.port]", "  - [silencer.b, dirt.a]\n  - [dirt.b, air.port]"), None)
+
+
+def supply_line(lo, hi):
+    """A throttled supply line (k dm3/(s*bar), b 0.3) with a 20 cm3 tank
+    between the source and the valve's P."""
+    return ("supply.supply_sag", lo, hi, lambda t, k: add_components(
+        t, ["line_S: {type: iso6358_throttle, C: %g dm3/(s*bar), b: 0.3}" % k, "tank_S: {type: volume, V: 20 cm3, p0: 6 bar g}"], []).replace(
+        "  - [supply.port, valve.P]", "  - [supply.port, line_S.a]\n  - [line_S.b, tank_S.port, valve.P]"), None)
+
+
 def zero_offset(signal, lo, hi):
     """k (SI) added to the signal in the CSV: the transducer's zero."""
     return ("%s.offset" % signal, lo, hi, lambda t, k: t, (signal, "offset"))
@@ -137,12 +153,8 @@ FORMS = {
     "piston_leak_laminar": piston_leak("cyl", 0.003, 0.03),
     "rod_leak_nozzle": rod_leak("cyl", 0.05, 0.4),
     "needle_turned": needle("flow_cap", 0.1, 0.4, 0.5, 1.8),
-    "silencer_dirt": ("silencer.misadjusted", 0.3, 2.0, lambda t, k: add_components(
-        set_param(t, "silencer", "b", "0.4"), ["dirt: {type: iso6358_throttle, C: %g dm3/(s*bar), b: 0.2}" % k], []).replace(
-        "  - [silencer.b, air.port]", "  - [silencer.b, dirt.a]\n  - [dirt.b, air.port]"), None),
-    "supply_line": ("supply.supply_sag", 0.3, 1.5, lambda t, k: add_components(
-        t, ["line_S: {type: iso6358_throttle, C: %g dm3/(s*bar), b: 0.3}" % k, "tank_S: {type: volume, V: 20 cm3, p0: 6 bar g}"], []).replace(
-        "  - [supply.port, valve.P]", "  - [supply.port, line_S.a]\n  - [line_S.b, tank_S.port, valve.P]"), None),
+    "silencer_dirt": silencer_dirt(0.3, 2.0),
+    "supply_line": supply_line(0.3, 1.5),
     "seal_friction": seal_friction("cyl", "load", 20, 60, 1.4, 3.0),
     "heavier_tool": heavier("load", 2, 2.0, 6.0),
     "sluggish_spool": sluggish("valve", 10, 3.0, 12.0),

@@ -2,7 +2,7 @@
 quick-exhaust valve (issue #37: the everyday circuit the issue names beside
 the meter-out cylinder and the sequence).
 
-The circuit (below, not among netlists/): a 3/2 valve, a hose, a meter-in
+netlists/quick_exhaust_cylinder.yaml: a 3/2 valve, a hose, a meter-in
 one-way flow control, a quick-exhaust valve with a silencer at its exhaust,
 a single-acting cylinder with its return spring and a load; extend at 0.1 s,
 exhaust at 1.2 s. Measured runs with one withheld fault written in a form
@@ -18,49 +18,13 @@ in meter_out_declared.py. Run by hand, not in CI:
     python3 benchmarks/quick_exhaust_declared.py [--seed N] [--cases K] [--pneumo build/pneumo] [--work DIR]
 """
 import random
+from pathlib import Path
 
 from meter_out_declared import (add_components, common_arguments, heavier, needle, process_force, run_plan,
-                                seal_friction, set_param, sluggish, zero_offset)
+                                seal_friction, silencer_dirt, sluggish, supply_line, zero_offset)
 
-MODEL = """title: single-acting cylinder with a quick-exhaust valve
-ambient: {p: 101325 Pa, T: 293.15 K}
-display: {pressure: barg, length: mm, temperature: degC}
-parameters:
-  p_supply: 6 bar g
-
-components:
-  supply:   {type: pressure_source, p: p_supply, T: 293.15 K}
-  valve:    {type: directional_valve_32, C: 0.6 dm3/(s*bar), b: 0.3, t_switch_time: 8 ms,
-             schedule: [[0.1, 1], [1.2, 0]]}
-  v_air:    {type: atmosphere}
-  hose:     {type: volume, V: 4 cm3, p0: 0 bar g}
-  flow:     {type: one_way_flow_control, C: 0.06 dm3/(s*bar), check_C: 0.8 dm3/(s*bar)}
-  qev:      {type: quick_exhaust_valve, C_PA: 0.8 dm3/(s*bar), C_AR: 2 dm3/(s*bar)}
-  silencer: {type: iso6358_throttle, C: 2.5 dm3/(s*bar), b: 0.3}
-  air:      {type: atmosphere}
-  cyl:      {type: single_acting_cylinder, bore: 32 mm, rod: 12 mm, stroke: 50 mm, spring_preload: 30 N,
-             spring_rate: 600 N/m, friction_model: coulomb_viscous, friction_FC: 15 N, friction_viscous: 80 N*s/m}
-  load:     {type: translational_mass, m: 1.5 kg}
-
-connections:
-  - [supply.port, valve.P]
-  - [valve.R, v_air.port]
-  - [valve.A, hose.port]
-  - [hose.port_b, flow.a]
-  - [flow.b, qev.P]
-  - [qev.A, cyl.cap]
-  - [qev.R, silencer.a]
-  - [silencer.b, air.port]
-  - [cyl.flange, load.flange]
-
-outputs:
-  x: cyl.x
-  p_cap: cyl.p_cap
-
-simulation:
-  t_end: 2 s
-  output_interval: 5 ms
-"""
+ROOT = Path(__file__).resolve().parent.parent
+MODEL = (ROOT / "netlists" / "quick_exhaust_cylinder.yaml").read_text()
 SIGNALS = ["x", "p_cap"]
 NOISE = {"x": 5e-5, "p_cap": 3e3}
 
@@ -76,12 +40,8 @@ def cap_leak(lo, hi):
 FORMS = {
     "cap_leak": cap_leak(0.003, 0.03),
     "needle_turned": needle("flow", 0.06, 0.5, 0.5, 1.8),
-    "exhaust_dirt": ("silencer.misadjusted", 0.3, 2.0, lambda t, k: add_components(
-        set_param(t, "silencer", "b", "0.4"), ["dirt: {type: iso6358_throttle, C: %g dm3/(s*bar), b: 0.2}" % k], []).replace(
-        "  - [silencer.b, air.port]", "  - [silencer.b, dirt.a]\n  - [dirt.b, air.port]"), None),
-    "supply_line": ("supply.supply_sag", 0.1, 0.5, lambda t, k: add_components(
-        t, ["line_S: {type: iso6358_throttle, C: %g dm3/(s*bar), b: 0.3}" % k, "tank_S: {type: volume, V: 20 cm3, p0: 6 bar g}"], []).replace(
-        "  - [supply.port, valve.P]", "  - [supply.port, line_S.a]\n  - [line_S.b, tank_S.port, valve.P]"), None),
+    "exhaust_dirt": silencer_dirt(0.3, 2.0),
+    "supply_line": supply_line(0.1, 0.5),
     "seal_friction": seal_friction("cyl", "load", 15, 50, 1.4, 3.0),
     "heavier_tool": heavier("load", 1.5, 2.0, 6.0),
     "sluggish_spool": sluggish("valve", 8, 3.0, 12.0),

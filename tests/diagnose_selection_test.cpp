@@ -21,37 +21,9 @@ namespace {
 namespace fs = std::filesystem;
 using namespace test_support;
 
-// A single-acting cylinder with spring return behind a quick-exhaust valve,
-// meter-in speed control on a 3/2 valve: extend at 0.1 s, exhaust at 1.2 s.
-const std::string kQuickExhaust = R"(
-parameters:
-  p_supply: 6 bar g
-components:
-  supply:   {type: pressure_source, p: p_supply, T: 293.15 K}
-  valve:    {type: directional_valve_32, C: 0.6 dm3/(s*bar), b: 0.3, t_switch_time: 8 ms,
-             schedule: [[0.1, 1], [1.2, 0]]}
-  v_air:    {type: atmosphere}
-  hose:     {type: volume, V: 4 cm3, p0: 0 bar g}
-  flow:     {type: one_way_flow_control, C: 0.06 dm3/(s*bar), check_C: 0.8 dm3/(s*bar)}
-  qev:      {type: quick_exhaust_valve, C_PA: 0.8 dm3/(s*bar), C_AR: 2 dm3/(s*bar)}
-  silencer: {type: iso6358_throttle, C: 2.5 dm3/(s*bar), b: 0.3}
-  air:      {type: atmosphere}
-  cyl:      {type: single_acting_cylinder, bore: 32 mm, rod: 12 mm, stroke: 50 mm, spring_preload: 30 N,
-             spring_rate: 600 N/m, friction_model: coulomb_viscous, friction_FC: 15 N, friction_viscous: 80 N*s/m}
-  load:     {type: translational_mass, m: 1.5 kg}
-connections:
-  - [supply.port, valve.P]
-  - [valve.R, v_air.port]
-  - [valve.A, hose.port]
-  - [hose.port_b, flow.a]
-  - [flow.b, qev.P]
-  - [qev.A, cyl.cap]
-  - [qev.R, silencer.a]
-  - [silencer.b, air.port]
-  - [cyl.flange, load.flange]
-outputs: {x: cyl.x, p_cap: cyl.p_cap}
-simulation: {t_end: 2 s, output_interval: 5 ms}
-)";
+// netlists/quick_exhaust_cylinder.yaml: a single-acting cylinder behind a
+// quick-exhaust valve, meter-in on a 3/2 valve; runs set p_supply.
+const std::string kQuickExhaust = read_file(fs::path(PNEUMO_SOURCE_DIR) / "netlists" / "quick_exhaust_cylinder.yaml");
 
 // Runs of `truth` at supply 5 and 7 bar g (calibration) and 6 bar g
 // (validation), with noise 0.05 mm on x and 3 kPa on p_cap.
