@@ -28,35 +28,18 @@ const std::string kQuickExhaust = read_file(fs::path(PNEUMO_SOURCE_DIR) / "netli
 // Runs of `truth` at supply 5 and 7 bar g (calibration) and 6 bar g
 // (validation), with noise 0.05 mm on x and 3 kPa on p_cap.
 void make_runs(const fs::path& dir, const std::string& truth) {
-  fs::create_directories(dir);
   std::mt19937 rng(41);
-  const struct {
-    const char* name;
-    const char* role;
-    double p;
-  } runs[] = {{"cal1", "calibration", 601325}, {"cal2", "calibration", 801325}, {"val", "validation", 701325}};
-  for (const auto& r : runs) {
-    Netlist nl = parse_netlist(truth, "truth.yaml");
-    apply_override(nl, "p_supply=" + num(r.p));
-    const RunResult res = run_simulation(nl, builtin_registry());
-    ASSERT_TRUE(res.solver.ok) << res.solver.message;
-    std::ofstream csv(dir / (std::string(r.name) + ".csv"));
-    csv << "t,x,p_cap\n";
-    csv.precision(10);
-    std::normal_distribution<double> nx(0, 5e-5), np(0, 3e3);
-    for (const auto& row : res.table.rows)
-      csv << row[0] << "," << row[res.table.column("x")] + nx(rng) << "," << row[res.table.column("p_cap")] + np(rng)
-          << "\n";
-    std::ofstream(dir / (std::string(r.name) + ".yaml"))
-        << "data: " << r.name << ".csv\nrole: " << r.role << "\noperating_point:\n  p_supply: " << r.p << "\n";
-  }
+  const std::vector<NoisySignal> signals = {{"x", 5e-5}, {"p_cap", 3e3}};
+  write_measured_run(dir, "cal1", "calibration", truth, "p_supply", 601325, signals, rng);
+  write_measured_run(dir, "cal2", "calibration", truth, "p_supply", 801325, signals, rng);
+  write_measured_run(dir, "val", "validation", truth, "p_supply", 701325, signals, rng);
 }
 
 // A worn piston seal venting the cap chamber (a laminar-ish gap of 0.0235
 // dm3/(s*bar) to the atmosphere, not the declared fault's conductance) and a
 // workpiece that makes the load 3.07 times as heavy. Alone, the cylinder's
-// wall heat fits best (25.8 -> 11.4 x noise; the mass alone leaves 14.5, the
-// leak 20.5); beside it the mass leaves 5.5 and the leak no longer screens:
+// wall heat fits best (24.4 -> 10.7 x noise; the mass alone leaves 13.9, the
+// leak 19.2); beside it the mass leaves 5.3 and the leak no longer screens:
 // the verdict was the wall heat and the mass, flagged unexplained. From the
 // mass, the leak is found.
 TEST(DiagnoseSelection, TwoFaultsEachWorseAloneThanAStandInAreFoundFromTheNextFirstEffect) {

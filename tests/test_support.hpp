@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
+#include <random>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -125,6 +126,36 @@ inline double at(const ResultsTable& table, const std::string& name, double t) {
   for (const auto& row : table.rows)
     if (std::abs(row[0] - t) < 1e-9) return row[col];
   throw std::runtime_error("no row at t = " + std::to_string(t));
+}
+
+// A measured run for a diagnosis: `truth` run at the operating point
+// `parameter` = `value` (SI), each signal with Gaussian noise of its sd
+// drawn from `rng`, written as DIR/NAME.csv with DIR/NAME.yaml (its role
+// and operating point).
+struct NoisySignal {
+  std::string name;
+  double sd;
+};
+inline void write_measured_run(const std::filesystem::path& dir, const std::string& name, const std::string& role,
+                               const std::string& truth, const std::string& parameter, double value,
+                               const std::vector<NoisySignal>& signals, std::mt19937& rng) {
+  Netlist nl = parse_netlist(truth, "truth.yaml");
+  apply_override(nl, parameter + "=" + num(value));
+  const RunResult res = run_simulation(nl, builtin_registry());
+  ASSERT_TRUE(res.solver.ok) << res.solver.message;
+  std::filesystem::create_directories(dir);
+  std::ofstream csv(dir / (name + ".csv"));
+  csv << "t";
+  for (const auto& s : signals) csv << "," << s.name;
+  csv << "\n";
+  csv.precision(10);
+  for (const auto& row : res.table.rows) {
+    csv << row[0];
+    for (const auto& s : signals) csv << "," << row[res.table.column(s.name)] + std::normal_distribution<double>(0, s.sd)(rng);
+    csv << "\n";
+  }
+  std::ofstream(dir / (name + ".yaml")) << "data: " << name << ".csv\nrole: " << role << "\noperating_point:\n  "
+                                        << parameter << ": " << num(value) << "\n";
 }
 
 // A fresh directory for the running test, removed with its contents
