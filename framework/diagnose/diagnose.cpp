@@ -721,9 +721,10 @@ class Diagnosis {
   // noise). When the verdict leaves the data unexplained, the selection is
   // run again from each of the next kOtherFirsts significant single fits
   // outside the first slot's group (re-screening fewer candidates:
-  // worth_a_second_look), and a verdict that leaves clearly less -
-  // practically and, by BIC, for the parameters it adds - is named
-  // instead. Only a diagnosis that cannot explain its runs pays for it.
+  // worth_a_second_look), and a verdict that leaves clearly less - a
+  // smaller validation gap, practically significant (on the whole set or
+  // on a badly fitted signal) and, by BIC, for the parameters it adds - is
+  // named instead. Only a diagnosis that cannot explain its runs pays.
   static constexpr int kOtherFirsts = 2;
   void try_other_first_effects(const Selection& before) {
     Selection best = selection();
@@ -744,8 +745,8 @@ class Diagnosis {
       const GapTable gap_best = eng_.gaps(best.r_val, val_), gap_now = eng_.gaps(r_val_cur_, val_);
       const int added = std::max(0, parameter_count(chosen_) - parameter_count(best.chosen));
       const auto s = eng_.significance(best.r_val, r_val_cur_, val_, added);
-      const bool better = failed_runs_in(r_val_cur_) == 0 && practically_significant(gap_best, gap_now, opt_) &&
-                          s.delta_bic > opt_.significance_bic;
+      const bool better = failed_runs_in(r_val_cur_) == 0 && gap_now.total.rms < gap_best.total.rms &&
+                          practically_significant(gap_best, gap_now, opt_) && s.delta_bic > opt_.significance_bic;
       log("  from " + er.name + fmt(": validation gap %.3g against %.3g", gap_now.total.rms, gap_best.total.rms) +
           (better ? ", clearly less: this verdict is named" : ", not clearly less"));
       if (better) best = selection();
