@@ -180,6 +180,7 @@ std::vector<int> System::renumber_aliases(AliasClasses& classes, const std::vect
   std::vector<std::string> names;
   std::vector<double> start, nominal;
   std::vector<unsigned char> kind;
+  std::vector<char> junction;
   int m = 0;
   for (int v = 0; v < n; ++v) {
     const auto [root, s] = classes.find(v);
@@ -188,6 +189,7 @@ std::vector<int> System::renumber_aliases(AliasClasses& classes, const std::vect
     names.push_back(var_names_[v]);
     start.push_back(start_value_[v]);
     kind.push_back(start_kind_[v]);
+    junction.push_back(0);
     nominal.push_back(nominal_[v]);
   }
   for (int v = 0; v < n; ++v) {
@@ -199,6 +201,7 @@ std::vector<int> System::renumber_aliases(AliasClasses& classes, const std::vect
       kind[g] = start_kind_[v];
     }
     nominal[g] = std::min(nominal[g], nominal_[v]);
+    junction[g] = junction[g] || junction_[v];
   }
   aliases_.row_of.assign(n, -1);
   aliases_.eliminated.clear();
@@ -215,6 +218,7 @@ std::vector<int> System::renumber_aliases(AliasClasses& classes, const std::vect
   var_names_ = std::move(names);
   start_value_ = std::move(start);
   start_kind_ = std::move(kind);
+  junction_ = std::move(junction);
   nominal_ = std::move(nominal);
   return reduced;
 }

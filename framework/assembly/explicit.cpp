@@ -158,10 +158,12 @@ void System::eliminate_explicit() {
   std::vector<std::string> names;
   std::vector<double> start, nominal;
   std::vector<unsigned char> kind;
+  std::vector<char> junction;
   for (int v : plan_.ida_to_m) {
     names.push_back(var_names_[v]);
     start.push_back(start_value_[v]);
     kind.push_back(start_kind_[v]);
+    junction.push_back(junction_[v]);
     nominal.push_back(nominal_[v]);
   }
   plan_.m_start = start_value_;
@@ -169,6 +171,7 @@ void System::eliminate_explicit() {
   var_names_ = std::move(names);
   start_value_ = std::move(start);
   start_kind_ = std::move(kind);
+  junction_ = std::move(junction);
   nominal_ = std::move(nominal);
   id_ = id;
   n_ = static_cast<int>(plan_.ida_to_m.size());

@@ -194,6 +194,7 @@ int System::new_var(std::string name, double start, unsigned char kind, double n
   var_names_.push_back(std::move(name));
   start_value_.push_back(start);
   start_kind_.push_back(kind);
+  junction_.push_back(0);
   nominal_.push_back(nominal);
   return n_++;
 }
@@ -319,6 +320,16 @@ void System::guess_junction_pressures(const NodeLayout& l) {
   const Circuit& c = circuit_;
   std::vector<char> known(n_, 0);
   for (int v = 0; v < n_; ++v) known[v] = start_kind_[v] != 0;
+  for (std::size_t ni = 0; ni < l.nodes.size(); ++ni) {
+    const int p = l.across[ni];
+    if (p < 0 || l.nodes[ni].empty() || spec(c, l.nodes[ni][0]).domain != Domain::pneumatic) continue;
+    if (known[p]) pressure_levels_.push_back(start_value_[p]);
+    else junction_[p] = 1;  // 2 once guessed from its neighbours
+  }
+  std::sort(pressure_levels_.begin(), pressure_levels_.end());
+  pressure_levels_.erase(std::unique(pressure_levels_.begin(), pressure_levels_.end(),
+                                     [](double a, double b) { return std::abs(a - b) <= 1e-6 * std::abs(b); }),
+                         pressure_levels_.end());
   for (bool changed = true; changed;) {
     changed = false;
     for (std::size_t ni = 0; ni < l.nodes.size(); ++ni) {
@@ -340,6 +351,7 @@ void System::guess_junction_pressures(const NodeLayout& l) {
       if (count == 0) continue;
       start_value_[p] = sum / count;
       known[p] = 1;
+      junction_[p] = 2;
       changed = true;
     }
   }
@@ -643,6 +655,13 @@ void System::check_point(int pass, std::mt19937& rng, std::vector<double>& y0, s
 void System::start_values(std::vector<double>& y0, std::vector<double>& yp0) const {
   y0 = start_value_;
   yp0.assign(n_, 0.0);
+}
+
+System::Junctions System::junction_pressures() const {
+  Junctions out;
+  for (int i = 0; i < n_; ++i)
+    if (junction_[i] && start_kind_[i] == 0) (junction_[i] == 2 ? out.guessed : out.unguessed).push_back(i);
+  return out;
 }
 
 // Lower bound of a variable's typical magnitude, by unit.

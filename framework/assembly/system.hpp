@@ -142,6 +142,16 @@ class System {
   std::string row_name(int row) const;
 
   void start_values(std::vector<double>& y0, std::vector<double>& yp0) const;
+  // The pressures (IDA's indices) of pneumatic junctions no component
+  // starts - no volume there: those guess_junction_pressures started from
+  // their neighbours, and those it left at ambient - and the distinct start
+  // pressures the components give, ascending: other starts for them when
+  // the guess finds no consistent values (IdaRun::consistent_ic).
+  struct Junctions {
+    std::vector<int> unguessed, guessed;
+  };
+  Junctions junction_pressures() const;
+  const std::vector<double>& start_pressure_levels() const { return pressure_levels_; }
 
   // Whether the System has rest-heat rows (AssemblyOptions::rest_heat;
   // Evaluator::set_resting switches them on).
@@ -229,6 +239,8 @@ class System {
   std::vector<std::string> var_names_;
   std::vector<double> start_value_;
   std::vector<unsigned char> start_kind_;
+  std::vector<char> junction_;  // a pneumatic node's pressure no component starts: 1, 2 once guessed
+  std::vector<double> pressure_levels_;
   std::vector<double> nominal_;
   std::vector<double> id_;
   std::vector<long> col_ptr_, row_idx_;

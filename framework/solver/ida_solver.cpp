@@ -148,6 +148,7 @@ class IdaRun {
   }
   void fail(const std::string& msg);
   bool consistent_ic();
+  bool consistent_ic_from_here();
   int calc_ic_without_line_search(double t_next);
   int calc_ic_with_more_iterations(double t_next);
   bool settle();
@@ -182,6 +183,7 @@ class IdaRun {
   const OutputFn output_;
   const Quadratures* quad_;
   SolverResult result_;
+  System::Junctions junctions_;  // System::junction_pressures
   const int n_;
   const int n_quad_;
   ContextOwner context_;
@@ -373,6 +375,7 @@ void IdaRun::create_vectors() {
   eval_.reset_modes();
   system_.start_values(y0, yp0);
   user_.nominal = system_.nominal();
+  junctions_ = system_.junction_pressures();
   user_.y_phys.assign(n_, 0.0);
   user_.yp_phys.assign(n_, 0.0);
   for (int i = 0; i < n_; ++i) {
@@ -475,7 +478,41 @@ void IdaRun::fail(const std::string& msg) {
   result_.t_reached = t_;
 }
 
+// Consistent values at t_. A junction without volume starts where
+// System::guess_junction_pressures puts it (after an event, where the last
+// step left it); from there the search can find every flow at the junction
+// flat in its pressure (a regulator drawn straight onto a valve: at
+// ambient its supply path and the valve's path from a charged chamber both
+// choke). Then the junctions start at each of the start pressures the
+// components give and halfway between them, lowest first - those the guess
+// left at ambient alone, then all together - until one finds consistent
+// values; the first failure's words stay when none does.
 bool IdaRun::consistent_ic() {
+  const std::vector<double> y0(N_VGetArrayPointer(y_.get()), N_VGetArrayPointer(y_.get()) + n_);
+  const std::vector<double> yp0(N_VGetArrayPointer(yp_.get()), N_VGetArrayPointer(yp_.get()) + n_);
+  if (consistent_ic_from_here()) return true;
+  const std::string failed = result_.message;
+  const auto from = [&](double p, bool all) {
+    std::copy(y0.begin(), y0.end(), N_VGetArrayPointer(y_.get()));
+    std::copy(yp0.begin(), yp0.end(), N_VGetArrayPointer(yp_.get()));
+    for (const auto* js : {&junctions_.unguessed, all ? &junctions_.guessed : nullptr})
+      if (js)
+        for (int j : *js) N_VGetArrayPointer(y_.get())[j] = p / user_.nominal[j];
+    check(IDAReInit(ida_, t_, y_.get(), yp_.get()), "IDAReInit");
+    result_.message.clear();
+    return consistent_ic_from_here();
+  };
+  const auto& levels = system_.start_pressure_levels();
+  for (std::size_t k = 0; k + 1 < 2 * levels.size(); ++k) {
+    const double p = k % 2 == 0 ? levels[k / 2] : 0.5 * (levels[k / 2] + levels[k / 2 + 1]);
+    if (!junctions_.unguessed.empty() && from(p, false)) return true;
+    if (!junctions_.guessed.empty() && from(p, true)) return true;
+  }
+  fail(failed);
+  return false;
+}
+
+bool IdaRun::consistent_ic_from_here() {
   // IDACalcIC corrects the states' y' with the iteration matrix
   // dF/dy + cj dF/dy', cj = 1 / (1e-3 (t_next - t)): the dF/dy part is an
   // error of that Newton which shrinks with cj. With the algebraic unknowns
