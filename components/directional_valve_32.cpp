@@ -35,6 +35,7 @@ class DirectionalValve32 final : public SpoolValve<DirectionalValve32> {
     i.faults = SpoolDrive::faults();
     i.events = SpoolDrive::events();
     i.faults.push_back(ValvePath::leakage_fault());
+    i.faults.push_back(ValvePath::supply_restriction_fault());
     return i;
   }
 

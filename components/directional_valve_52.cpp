@@ -33,6 +33,7 @@ class DirectionalValve52 final : public SpoolValve<DirectionalValve52> {
     i.faults = SpoolDrive::faults();
     i.events = SpoolDrive::events();
     i.faults.push_back(ValvePath::leakage_fault());
+    i.faults.push_back(ValvePath::supply_restriction_fault());
     return i;
   }
 

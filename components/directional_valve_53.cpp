@@ -56,6 +56,7 @@ class DirectionalValve53 final : public SpoolValve<DirectionalValve53> {
     i.faults = SpoolDrive::faults("command_14");
     i.events = SpoolDrive::events({"12", "centre", "14"});
     i.faults.push_back(ValvePath::leakage_fault());
+    i.faults.push_back(ValvePath::supply_restriction_fault());
     return i;
   }
 

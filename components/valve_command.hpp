@@ -361,6 +361,11 @@ struct ValvePath {
                         .range(0.0, 0.99)
                         .optional());
     }
+    out.push_back(ParameterSpec::scalar("fault_supply_factor", "1",
+                                        "fault (diagnosis): factor on the conductance of every path from P (dirt, a "
+                                        "kinked or undersized fitting at the supply port); 1 = none",
+                                        1.0)
+                      .positive());
     out.push_back(ParameterSpec::scalar("fault_leakage", "1",
                                         "fault (diagnosis): fraction of each path's C open whatever the spool (worn "
                                         "spool or seals); 0 = none",
@@ -372,8 +377,14 @@ struct ValvePath {
     return {"internal_leak", "leaks across the spool (worn spool or seals): every path a little open",
             {{"leak", "fault_leakage", "1", false, 0.0, 0.0, 0.1, 0.01, false}}};
   }
+  // The supply port throttled: a restriction in series with every path
+  // from P, as one factor on their conductances.
+  static FaultSpec supply_restriction_fault() {
+    return {"supply_restricted", "the supply port throttled (dirt, a kinked or undersized fitting at P)",
+            {{"k", "fault_supply_factor", "1", false, 1.0, 0.05, 1.0, 0.5, true}}};
+  }
   ValvePath(const ParameterValues& v, const std::string& path)
-      : C(v.has("C_" + path) ? v["C_" + path] : v["C"]),
+      : C((v.has("C_" + path) ? v["C_" + path] : v["C"]) * (path[0] == 'P' ? v["fault_supply_factor"] : 1.0)),
         b(v.has("b_" + path) ? v["b_" + path] : v["b"]),
         leakage(v["fault_leakage"]) {}
 
