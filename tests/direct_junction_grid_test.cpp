@@ -39,13 +39,6 @@ std::string direct_netlist(const Point& pt, const std::string& line) {
   return replace_once(s, "  - [valve.B, flow_rod.b]", "  - [valve.B, line_B.port]\n  - [line_B.port_b, flow_rod.b]");
 }
 
-// The first event with `tag` after t.
-double first_after(const SolverResult& r, const std::string& tag, double t) {
-  for (const auto& e : r.events)
-    if (e.tag == tag && e.t > t) return e.t;
-  return NAN;
-}
-
 TEST(DirectJunctionGrid, FailedPointsRunToTheEndLikeTinyLines) {
   // Before: the first failed 6 ms after the rod-end contact (t = 0.4159 s),
   // the second 2 s after the retraction's cap-end contact (t = 3.9284 s),

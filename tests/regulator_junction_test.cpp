@@ -62,13 +62,6 @@ std::string clamp(double p_supply_g, double p_rod_g, bool line) {
   return replace_once(s, "  - [reg.out, valve.P]", "  - [reg.out, line.port]\n  - [line.port_b, valve.P]");
 }
 
-// The first event with `tag` after t.
-double first_after(const SolverResult& r, const std::string& tag, double t) {
-  for (const auto& e : r.events)
-    if (e.tag == tag && e.t > t) return e.t;
-  return NAN;
-}
-
 TEST(RegulatorJunction, ARegulatorDrawnStraightOntoAValveStartsAndHoldsItsSetting) {
   const double ambient = 101325, p_set = 4e5 + ambient, droop = 0.3e5, relief_offset = 0.1e5;
   // Supply and rod chamber (bar g): each failed to start before.

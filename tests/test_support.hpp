@@ -101,6 +101,13 @@ inline double to_si(double shown, const std::string& unit, double ambient_pa = 1
 
 inline double rel_err(double actual, double expected) { return std::abs(actual - expected) / std::abs(expected); }
 
+// The time of the first event with `tag` after t (NAN: none).
+inline double first_after(const SolverResult& r, const std::string& tag, double t) {
+  for (const auto& e : r.events)
+    if (e.tag == tag && e.t > t) return e.t;
+  return NAN;
+}
+
 // Runs a netlist text with the built-in components; a failed solve fails the
 // test (the partial result is returned for the report).
 inline RunResult run_text(const std::string& text, const std::string& name) {
