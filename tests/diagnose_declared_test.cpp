@@ -423,6 +423,7 @@ TEST(DiagnoseDeclared, ALongHoseDrawnAsASmallVolumeIsNamedAsTheLinesVolumeAndRes
             {"x_a", "p_a", "x_b", "p_b"});
   auto opt = declared({"line_b", "cyl_b", "valve_b"});
   opt.max_effects = 2;
+  opt.screen_keep = 8;  // the default: the valve's five faults screen near the line's volume
   const auto rep = diagnose::diagnose(model, (dir.path() / "runs").string(), "", builtin_registry(), opt);
   ASSERT_EQ(rep.verdict.size(), 2u);
   EXPECT_EQ(rep.verdict[0], "line_b.volume_off");
