@@ -493,11 +493,12 @@ bool IdaRun::consistent_ic() {
   if (consistent_ic_from_here()) return true;
   const std::string failed = result_.message;
   const auto from = [&](double p, bool all) {
-    std::copy(y0.begin(), y0.end(), N_VGetArrayPointer(y_.get()));
+    double* y = N_VGetArrayPointer(y_.get());
+    std::copy(y0.begin(), y0.end(), y);
     std::copy(yp0.begin(), yp0.end(), N_VGetArrayPointer(yp_.get()));
-    for (const auto* js : {&junctions_.unguessed, all ? &junctions_.guessed : nullptr})
-      if (js)
-        for (int j : *js) N_VGetArrayPointer(y_.get())[j] = p / user_.nominal[j];
+    for (int j : junctions_.unguessed) y[j] = p / user_.nominal[j];
+    if (all)
+      for (int j : junctions_.guessed) y[j] = p / user_.nominal[j];
     check(IDAReInit(ida_, t_, y_.get(), yp_.get()), "IDAReInit");
     result_.message.clear();
     return consistent_ic_from_here();
