@@ -54,13 +54,7 @@ TEST(DirectJunctionGrid, FailedPointsRunToTheEndLikeTinyLines) {
     ASSERT_TRUE(tube.solver.ok) << tube.solver.message;
     // Extension from the command at 0.1 s to the rod-end contact, retraction
     // from the command at 2 s to the cap-end contact.
-    const double ext_direct = first_after(direct.solver, "extended", 0.1) - 0.1;
-    const double ext_tube = first_after(tube.solver, "extended", 0.1) - 0.1;
-    const double ret_direct = first_after(direct.solver, "retracted", 2.0) - 2.0;
-    const double ret_tube = first_after(tube.solver, "retracted", 2.0) - 2.0;
-    ASSERT_TRUE(std::isfinite(ext_direct) && std::isfinite(ret_direct)) << "the piston did not stroke";
-    EXPECT_NEAR(ext_direct / ext_tube, 1.0, 0.01) << ext_direct << " s against " << ext_tube << " s";
-    EXPECT_NEAR(ret_direct / ret_tube, 1.0, 0.01) << ret_direct << " s against " << ret_tube << " s";
+    expect_strokes_like(direct.solver, tube.solver, 0.1, 2.0, 0.01);
     // It ends retracted, against the cap-end stop.
     EXPECT_LT(std::abs(at(direct.table, "x", 4.0)), 1e-4);
   }

@@ -83,13 +83,7 @@ TEST(RegulatorJunction, ARegulatorDrawnStraightOntoAValveStartsAndHoldsItsSettin
     } else {
       EXPECT_NEAR(p_cap, p_supply, 0.01e5);
     }
-    const double ext_direct = first_after(direct.solver, "extended", 0.1) - 0.1;
-    const double ext_line = first_after(line.solver, "extended", 0.1) - 0.1;
-    const double ret_direct = first_after(direct.solver, "retracted", 1.5) - 1.5;
-    const double ret_line = first_after(line.solver, "retracted", 1.5) - 1.5;
-    ASSERT_TRUE(std::isfinite(ext_direct) && std::isfinite(ret_direct)) << "the piston did not stroke";
-    EXPECT_NEAR(ext_direct / ext_line, 1.0, 0.01) << ext_direct << " s against " << ext_line << " s";
-    EXPECT_NEAR(ret_direct / ret_line, 1.0, 0.01) << ret_direct << " s against " << ret_line << " s";
+    expect_strokes_like(direct.solver, line.solver, 0.1, 1.5, 0.01);
   }
 }
 

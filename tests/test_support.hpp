@@ -108,6 +108,19 @@ inline double first_after(const SolverResult& r, const std::string& tag, double 
   return NAN;
 }
 
+// A cylinder's strokes in `run` take the time they take in `like` (within
+// the fraction tol): the extension from the command at t_out to the first
+// "extended" after it, the retraction from t_back to "retracted".
+inline void expect_strokes_like(const SolverResult& run, const SolverResult& like, double t_out, double t_back,
+                                double tol) {
+  const double ext = first_after(run, "extended", t_out) - t_out, ext_like = first_after(like, "extended", t_out) - t_out;
+  const double ret = first_after(run, "retracted", t_back) - t_back;
+  const double ret_like = first_after(like, "retracted", t_back) - t_back;
+  ASSERT_TRUE(std::isfinite(ext) && std::isfinite(ret)) << "the piston did not stroke";
+  EXPECT_NEAR(ext / ext_like, 1.0, tol) << ext << " s against " << ext_like << " s";
+  EXPECT_NEAR(ret / ret_like, 1.0, tol) << ret << " s against " << ret_like << " s";
+}
+
 // Runs a netlist text with the built-in components; a failed solve fails the
 // test (the partial result is returned for the report).
 inline RunResult run_text(const std::string& text, const std::string& name) {
