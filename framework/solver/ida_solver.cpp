@@ -488,6 +488,7 @@ void IdaRun::fail(const std::string& msg) {
 // left at ambient alone, then all together - until one finds consistent
 // values; the first failure's words stay when none does.
 bool IdaRun::consistent_ic() {
+  if (junctions_.unguessed.empty() && junctions_.guessed.empty()) return consistent_ic_from_here();
   const std::vector<double> y0(N_VGetArrayPointer(y_.get()), N_VGetArrayPointer(y_.get()) + n_);
   const std::vector<double> yp0(N_VGetArrayPointer(yp_.get()), N_VGetArrayPointer(yp_.get()) + n_);
   if (consistent_ic_from_here()) return true;
