@@ -228,7 +228,7 @@ ComponentInfo describe() {
     for (auto& f : CushionFaults::parameters(end)) i.parameters.push_back(std::move(f));
   DoubleActingCylinder::add_parts(layout(), i, true, true, true, FrictionState::lugre);
   i.faults = {
-      FrictionFaults::running_friction_fault(),
+      FrictionLaw::running_fault(),
       setting_fault("cushion_needle_misadjusted", "cushion needle opening off its setting (turned, clogged)",
                     {{"k", "z_EC", "1", true, 1.0, 0.2, 5.0, 1.3, true}}),
       {"cushion_check_off", "cushion check valve conductance off (sticking, leaking)",

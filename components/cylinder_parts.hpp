@@ -754,19 +754,6 @@ struct FrictionFaults {
             .non_negative(),
     };
   }
-  // Seal wear, a dry or swollen seal and a side load change the dry
-  // (Coulomb) part of the running friction; the lubricant's film, its
-  // viscosity and temperature the viscous part: each has a factor, so that
-  // either can move alone. On a linear scale, since the force is linear in
-  // both: a fit then crosses the valley where the two trade off (at a
-  // steady speed they nearly do) in a Gauss-Newton step, not in dozens.
-  static FaultSpec running_friction_fault() {
-    return {"friction_running",
-            "running friction off (seal wear, lubrication, side load): its dry (Coulomb) and its viscous part "
-            "each by a factor",
-            {{"k_coulomb", "friction_coulomb_scale", "1", true, 1.0, 0.25, 4.0, 1.3, false},
-             {"k_viscous", "friction_viscous_scale", "1", true, 1.0, 0.25, 4.0, 1.3, false}}};
-  }
   static std::vector<FaultSpec> faults() {
     return {
         {"friction_breakaway", "breakaway (stiction) force beyond the running friction (dry seals, long standstill)",
@@ -989,7 +976,7 @@ struct Piston {
   // `volumes`: the dead-volume parameters, a factor each.
   static std::vector<FaultSpec> faults(const std::vector<std::string>& volumes) {
     std::vector<FaultSpec> out = ChamberFaults::faults();
-    out.insert(out.begin() + 2, FrictionFaults::running_friction_fault());  // after the two leaks, as before
+    out.insert(out.begin() + 2, FrictionLaw::running_fault());  // after the two leaks, as before
     for (auto& f : FrictionFaults::faults()) out.push_back(std::move(f));
     for (const auto& v : volumes) out.push_back(dead_volume_fault(v, true));
     return out;

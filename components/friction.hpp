@@ -115,6 +115,20 @@ struct FrictionLaw {
   static std::vector<ParameterSpec> parameters(bool with_cushion);
   // Throws ParameterError for inconsistent values.
   static FrictionLaw from(const ParameterValues& p);
+  // The law's running friction off its data (FaultSpec). Seal wear, a dry
+  // or swollen seal and a side load change the dry (Coulomb) part; the
+  // lubricant's film, its viscosity and temperature the viscous part: each
+  // has a factor, so that either can move alone. On a linear scale, since
+  // the force is linear in both: a fit then crosses the valley where the
+  // two trade off (at a steady speed they nearly do) in a Gauss-Newton
+  // step, not in dozens.
+  static FaultSpec running_fault() {
+    return {"friction_running",
+            "running friction off (seal wear, lubrication, side load): its dry (Coulomb) and its viscous part "
+            "each by a factor",
+            {{"k_coulomb", "friction_coulomb_scale", "1", true, 1.0, 0.25, 4.0, 1.3, false},
+             {"k_viscous", "friction_viscous_scale", "1", true, 1.0, 0.25, 4.0, 1.3, false}}};
+  }
 
   bool has_state() const { return model == FrictionModel::lugre; }
 

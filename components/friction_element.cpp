@@ -32,6 +32,7 @@ class FrictionElement final : public ComponentT<FrictionElement> {
                      {"z", "m", "bristle deflection (lugre; 0 otherwise)"},
                      {"P", "W", "friction power F v (<= 0: dissipated)"}};
     i.equations = {"friction force"};
+    i.faults = {FrictionLaw::running_fault()};
     return i;
   }
 

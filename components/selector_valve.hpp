@@ -10,6 +10,7 @@
 #pragma once
 
 #include "components/check_valve_flow.hpp"
+#include "components/faults.hpp"
 #include "components/symbols.hpp"
 #include "components/valve_command.hpp"
 #include "framework/model/component.hpp"
@@ -26,6 +27,11 @@ class SelectorValve {
         ParameterSpec::scalar("b", "1", "critical pressure ratio", 0.3).range(0.0, 0.99),
         ParameterSpec::scalar("ramp", "Pa", "pressure difference over which the ball changes sides", 0.05e5)
             .positive(),
+        ParameterSpec::scalar("fault_leakage", "1",
+                              "fault (diagnosis): fraction of C open toward the inlet the ball seals (worn ball or "
+                              "seat); 0 = none",
+                              0.0)
+            .range(0.0, 1.0),
     };
     i.ports = {{"in_1", Domain::pneumatic, Causality::acausal, "inlet 1"},
                {"in_2", Domain::pneumatic, Causality::acausal, "inlet 2"},
@@ -35,18 +41,24 @@ class SelectorValve {
                      {"opening_1", "1", "open fraction toward in_1"}};
     i.equations = {"flow at in_1", "flow at in_2", "flow at out", "temperature out of in_1",
                    "temperature out of in_2", "temperature out of out"};
+    i.faults = {fault("restricted", "conductance off (dirt in the valve, an undersized fitting)",
+                      {fault_factor("C", 0.05, 2.0, 0.5)}),
+                fault("seat_leak", "the ball does not seal the other inlet (worn ball or seat): a fraction of C open "
+                                   "toward it",
+                      {fault_amount("leak", "fault_leakage", "1", 0.0, 0.2, 0.02)})};
   }
 
   // higher_wins: OR (shuttle), else AND (two-pressure).
   SelectorValve(const ParameterValues& p, bool higher_wins)
-      : C_(p["C"]), b_(p["b"]), ramp_(p["ramp"]), sign_(higher_wins ? 1.0 : -1.0) {}
+      : C_(p["C"]), b_(p["b"]), ramp_(p["ramp"]), leak_(p["fault_leakage"]), sign_(higher_wins ? 1.0 : -1.0) {}
 
   template <class T>
   void flows(const Eval<T>& e, T& open_1, T& m_1, T& m_2) const {
     const auto in1 = e.gas_port(kIn1), in2 = e.gas_port(kIn2), out = e.gas_port(kOut);
     open_1 = check_valve_opening(T(sign_ * (in1.p - in2.p)), -0.5 * ramp_, ramp_);
-    m_1 = iso6358_mass_flow(in1.p, out.p, in1.T_in, out.T_in, T(C_ * open_1), b_, 0.999, e.gas());
-    m_2 = iso6358_mass_flow(in2.p, out.p, in2.T_in, out.T_in, T(C_ * (1.0 - open_1)), b_, 0.999, e.gas());
+    const T to_1 = leak_ + (1.0 - leak_) * open_1, to_2 = leak_ + (1.0 - leak_) * (1.0 - open_1);
+    m_1 = iso6358_mass_flow(in1.p, out.p, in1.T_in, out.T_in, T(C_ * to_1), b_, 0.999, e.gas());
+    m_2 = iso6358_mass_flow(in2.p, out.p, in2.T_in, out.T_in, T(C_ * to_2), b_, 0.999, e.gas());
   }
 
   template <class T>
@@ -69,7 +81,7 @@ class SelectorValve {
   }
 
  private:
-  double C_, b_, ramp_, sign_;
+  double C_, b_, ramp_, leak_, sign_;
 };
 
 template <class Kind>

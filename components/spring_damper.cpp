@@ -1,5 +1,6 @@
 // Linear spring and damper in parallel between two flanges.
 #include "components/builtin.hpp"
+#include "components/faults.hpp"
 #include "components/symbols.hpp"
 
 namespace pneumo::components {
@@ -26,6 +27,8 @@ class SpringDamper final : public ComponentT<SpringDamper> {
                      {"E", "J", "spring energy k (s_b - s_a - L0)^2 / 2"},
                      {"P_damper", "W", "power dissipated in the damper (>= 0)"}};
     i.equations = {"force at a", "force at b"};
+    i.faults = {fault("spring_off", "spring stiffness off its value (fatigue, a broken coil, the wrong spring)",
+                      {fault_factor("k", 0.05, 2.0, 0.7)})};
     return i;
   }
   explicit SpringDamper(const Construction& c)

@@ -63,6 +63,11 @@ TEST(DeclaredFaults, EachComponentTypeListsWhatCanFailInIt) {
       {"pressure_switch", {"misadjusted"}},
       {"limit_switch", {"misplaced"}},
       {"timer", {"misadjusted"}},
+      {"shuttle_valve", {"restricted", "seat_leak"}},
+      {"two_pressure_valve", {"restricted", "seat_leak"}},
+      {"quick_exhaust_valve", {"exhaust_misadjusted"}},
+      {"spring_damper", {"spring_off"}},
+      {"friction_element", {"friction_running"}},
   };
   for (const auto& [type, faults] : want) {
     const auto have = fault_names(type);
@@ -775,23 +780,79 @@ TEST(DeclaredFaults, AMisadjustedRegulatorRegulatesAtItsShiftedSetting) {
 
 // A mass pushed by a constant force F against friction reaches the speed
 // where F = k_C F_C + k_v d v: the running-friction fault's two factors act
-// on the dry and on the viscous part alone, in every law that has both.
+// on the dry and on the viscous part alone, in every law that has both (a
+// guide's friction element declares it as a cylinder's seal does).
 TEST(DeclaredFaults, RunningFrictionScalesItsDryAndViscousPartsApart) {
   const double F = 50, FC = 20, d = 100, kc = 1.5, kv = 0.5;
   for (const std::string law : {"friction_model: coulomb_viscous, friction_FC: 20 N, friction_viscous: 100 N*s/m",
                                 "friction: custom, friction_b0: 20 N, friction_kv0: 100 N, friction_a: 1"}) {
-    const RunResult r = run_text(
+    const RunResult r = run_with_fault(
         "components:\n"
         "  load: {type: translational_mass, m: 1 kg}\n"
         "  push: {type: force_source, F: " + num(F) + " N}\n"
-        "  seal: {type: friction_element, " + law + ", friction_coulomb_scale: " + num(kc) +
-            ", friction_viscous_scale: " + num(kv) + "}\n"
+        "  seal: {type: friction_element, " + law + "}\n"
         "connections:\n  - [load.flange, push.flange, seal.flange]\n"
         "outputs: {v: load.v}\n"
         "simulation: {t_end: 1 s, output_interval: 10 ms}\n",
-        "running_friction.yaml");
+        "seal.friction_running", {kc, kv});
+    ASSERT_TRUE(r.solver.ok) << r.solver.message;
     EXPECT_LT(rel_err(column(r.table, "v").back(), (F - kc * FC) / (kv * d)), 1e-5) << law;
   }
+}
+
+// Held pressures on a shuttle valve (OR) and a two-pressure valve (AND):
+// the inlet that wins passes the flow of the whole conductance, the other
+// none; with a seat leak the other passes the flow of a throttle of that
+// fraction of C (same b), the winner's path still the whole C; restricted,
+// the winner passes the flow of k C.
+TEST(DeclaredFaults, ALogicValvesSeatLeakOpensAFractionTowardTheInletItSeals) {
+  for (const std::string type : {"shuttle_valve", "two_pressure_valve"}) {
+    // OR: in_1 (6 bar) wins against in_2 (2 bar); AND: in_2 (2 bar) wins.
+    const bool or_valve = type == "shuttle_valve";
+    const auto text = "components:\n"
+                      "  in1: {type: pressure_source, p: 6 bar}\n"
+                      "  in2: {type: pressure_source, p: 2 bar}\n"
+                      "  out: {type: pressure_source, p: " + std::string(or_valve ? "4 bar" : "1.5 bar") + "}\n"
+                      "  v: {type: " + type + ", C: 1 dm3/(s*bar), b: 0.3}\n"
+                      "  twin: {type: iso6358_throttle, C: 0.04 dm3/(s*bar), b: 0.3}\n"
+                      "  sound: {type: iso6358_throttle, C: 1 dm3/(s*bar), b: 0.3}\n"
+                      "connections:\n"
+                      "  - [in1.port, v.in_1" + std::string(or_valve ? ", sound.a" : ", twin.a") + "]\n"
+                      "  - [in2.port, v.in_2" + std::string(or_valve ? ", twin.a" : ", sound.a") + "]\n"
+                      "  - [out.port, v.out, twin.b, sound.b]\n"
+                      "outputs: {m1: v.m_flow_1, m2: v.m_flow_2, m_twin: twin.m_flow, m_sound: sound.m_flow}\n"
+                      "simulation: {t_end: 0.01 s, output_interval: 10 ms}\n";
+    const std::string win = or_valve ? "m1" : "m2", lose = or_valve ? "m2" : "m1";
+    const RunResult healthy = run_with_fault(text, "v.seat_leak", {0.0});
+    const RunResult leaking = run_with_fault(text, "v.seat_leak", {0.04});
+    const RunResult restricted = run_with_fault(text, "v.restricted", {0.5});
+    ASSERT_TRUE(healthy.solver.ok && leaking.solver.ok && restricted.solver.ok) << type;
+    const double m_sound = column(healthy.table, "m_sound").back();
+    EXPECT_LT(rel_err(column(healthy.table, win).back(), m_sound), 1e-9) << type;
+    EXPECT_EQ(column(healthy.table, lose).back(), 0.0) << type;
+    EXPECT_LT(rel_err(column(leaking.table, win).back(), m_sound), 1e-9) << type;
+    EXPECT_NE(column(leaking.table, lose).back(), 0.0) << type;
+    EXPECT_LT(rel_err(column(leaking.table, lose).back(), column(leaking.table, "m_twin").back()), 1e-9) << type;
+    EXPECT_LT(rel_err(column(restricted.table, win).back(), 0.5 * m_sound), 1e-9) << type;
+  }
+}
+
+// A spring loaded by a constant force settles at F / (k k_f): the spring's
+// fault is a factor on its stiffness.
+TEST(DeclaredFaults, AWeakSpringSettlesFurtherUnderItsLoad) {
+  const double F = 40, k = 2000, kf = 0.6;
+  const RunResult r = run_with_fault(
+      "components:\n"
+      "  frame: {type: fixed_position}\n"
+      "  spring: {type: spring_damper, k: " + num(k) + " N/m, d: 200 N*s/m}\n"
+      "  load: {type: translational_mass, m: 1 kg}\n"
+      "  push: {type: force_source, F: " + num(F) + " N}\n"
+      "connections:\n  - [frame.flange, spring.a]\n  - [spring.b, load.flange, push.flange]\n"
+      "outputs: {s: load.s}\n"
+      "simulation: {t_end: 3 s, output_interval: 10 ms}\n",
+      "spring.spring_off", {kf});
+  ASSERT_TRUE(r.solver.ok) << r.solver.message;
+  EXPECT_LT(rel_err(column(r.table, "s").back(), F / (kf * k)), 1e-5);
 }
 
 // A load written as the top-level m_load, which the runs set: its mass
