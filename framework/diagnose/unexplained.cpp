@@ -19,6 +19,9 @@ namespace pneumo::diagnose {
 
 namespace {
 
+// A balance is named only when its disturbance removes at least half of the
+// excess gap: less, and the "correction" is as much noise fitting as finding.
+constexpr double kMinExplained = 0.5;
 constexpr int kConfirm = 3;  // candidates confirmed by simulation, best predicted first
 constexpr int kTrials = 8, kSteps = 3;  // simulated steps of one confirmation: tried, accepted at most
 constexpr double kShortestStep = 1.0 / 64;  // of the distance to the linearised optimum
@@ -441,18 +444,24 @@ class Search {
   // a balance holds), and, unless that form beats its time-shaped
   // correction, on the best state balance, and on the next best when the
   // first's does not beat its own. The form that leaves least is kept.
+  // Only a correction that could be named has a law to look for: one
+  // whose time-shaped correction, simulated, removes less than
+  // kMinExplained of the excess gap - or was only predicted - is not
+  // searched (a search costs every candidate term's simulation on every
+  // run in its first round).
+  static bool named(const Candidate& c) { return c.finding.confirmed && c.finding.explained >= kMinExplained; }
   std::optional<FormFinding> form_of(const std::vector<Candidate>& cands) const {
     FormInput f{&runs_, used, r0, in_.netlist_of, in_.registry,
                 [&](int k, const std::vector<Disturbance>& d, std::string* why) { return simulate_from(k, 0, d, why); },
                 [&](int k, const std::vector<std::vector<double>>& sim) { return residual(k, sim); }, in_.log, opt_.threads};
     std::optional<FormFinding> best;
-    if (!cands.empty() && cands.front().variable.empty() && in_.netlist_of) {
+    if (!cands.empty() && cands.front().variable.empty() && named(cands.front()) && in_.netlist_of) {
       best = discover_reading_form(f, cands.front().finding.balance.substr(7), cands.front().finding.gap_after);
       if (best && best->beats_shape) return best;
     }
     int tried = 0;
     for (const auto& c : cands) {
-      if (c.variable.empty() || tried == 2 || !in_.netlist_of) continue;
+      if (c.variable.empty() || !named(c) || tried == 2 || !in_.netlist_of) continue;
       ++tried;
       auto found = discover_form(f, c.variable, c.finding.unit, c.finding.gap_after);
       if (!found) break;
@@ -517,10 +526,6 @@ class Search {
     });
   }
 };
-
-// A balance is named only when its disturbance removes at least half of the
-// excess gap: less, and the "correction" is as much noise fitting as finding.
-constexpr double kMinExplained = 0.5;
 
 std::string percent(double share) { return std::to_string(static_cast<int>(std::lround(100 * share))) + " %"; }
 
