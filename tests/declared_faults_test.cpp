@@ -65,7 +65,7 @@ TEST(DeclaredFaults, EachComponentTypeListsWhatCanFailInIt) {
       {"timer", {"misadjusted"}},
       {"shuttle_valve", {"restricted", "seat_leak"}},
       {"two_pressure_valve", {"restricted", "seat_leak"}},
-      {"quick_exhaust_valve", {"exhaust_misadjusted"}},
+      {"quick_exhaust_valve", {"exhaust_misadjusted", "disc_leak"}},
       {"spring_damper", {"spring_off"}},
       {"friction_element", {"friction_running"}},
   };
@@ -835,6 +835,29 @@ TEST(DeclaredFaults, ALogicValvesSeatLeakOpensAFractionTowardTheInletItSeals) {
     EXPECT_LT(rel_err(column(leaking.table, lose).back(), column(leaking.table, "m_twin").back()), 1e-9) << type;
     EXPECT_LT(rel_err(column(restricted.table, win).back(), 0.5 * m_sound), 1e-9) << type;
   }
+}
+
+// A quick exhaust valve feeding a cylinder (P 6 bar above A 4 bar): the
+// sound disc seals the exhaust; a leaking one passes from A to R the flow
+// of a throttle of that fraction of C_AR, and P -> A is as it was.
+TEST(DeclaredFaults, AQuickExhaustValvesLeakingDiscVentsItsWorkingPortWhileItFeeds) {
+  const std::string text =
+      "components:\n"
+      "  p: {type: pressure_source, p: 6 bar}\n"
+      "  a: {type: pressure_source, p: 4 bar}\n"
+      "  air: {type: atmosphere}\n"
+      "  qev: {type: quick_exhaust_valve, C_PA: 0.6 dm3/(s*bar), C_AR: 2 dm3/(s*bar), b: 0.3}\n"
+      "  twin: {type: iso6358_throttle, C: 0.06 dm3/(s*bar), b: 0.3}\n"
+      "connections:\n  - [p.port, qev.P]\n  - [a.port, qev.A, twin.a]\n  - [qev.R, air.port, twin.b]\n"
+      "outputs: {m_PA: qev.m_flow_PA, m_AR: qev.m_flow_AR, m_twin: twin.m_flow}\n"
+      "simulation: {t_end: 0.01 s, output_interval: 10 ms}\n";
+  const RunResult sound = run_with_fault(text, "qev.disc_leak", {0.0});
+  const RunResult worn = run_with_fault(text, "qev.disc_leak", {0.03});
+  ASSERT_TRUE(sound.solver.ok && worn.solver.ok);
+  EXPECT_EQ(column(sound.table, "m_AR").back(), 0.0);
+  EXPECT_GT(column(worn.table, "m_AR").back(), 0.0);
+  EXPECT_LT(rel_err(column(worn.table, "m_AR").back(), column(worn.table, "m_twin").back()), 1e-9);
+  EXPECT_LT(rel_err(column(worn.table, "m_PA").back(), column(sound.table, "m_PA").back()), 1e-12);
 }
 
 // A spring loaded by a constant force settles at F / (k k_f): the spring's
