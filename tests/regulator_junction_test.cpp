@@ -87,5 +87,22 @@ TEST(RegulatorJunction, ARegulatorDrawnStraightOntoAValveStartsAndHoldsItsSettin
   }
 }
 
+// Precharged at the setting and fed from below it, the rod chamber drains
+// back through the valve and the regulator, whose supply path closes as
+// its outlet rises: the junction between them, holding no gas, loses its
+// balance a few ms in. The failure names the junction and the cure; with
+// the 1 mm3 line drawn the same start runs to t_end and strokes.
+TEST(RegulatorJunction, AJunctionWhoseBalanceIsLostIsNamedWithTheVolumeThatCuresIt) {
+  const RunResult direct = run_simulation(parse_netlist(clamp(3.0, 4.0, false), "direct"), builtin_registry());
+  ASSERT_FALSE(direct.solver.ok);
+  EXPECT_NE(direct.solver.message.find("p at {reg.out, valve.P} is a junction without volume"), std::string::npos)
+      << direct.solver.message;
+  EXPECT_NE(direct.solver.message.find("draw the line there as a volume"), std::string::npos);
+  const RunResult line = run_simulation(parse_netlist(clamp(3.0, 4.0, true), "line"), builtin_registry());
+  ASSERT_TRUE(line.solver.ok) << line.solver.message;
+  EXPECT_NEAR(line.solver.t_reached, 2.5, 1e-9);
+  EXPECT_GT(at(line.table, "x", 1.4), 0.0249);
+}
+
 }  // namespace
 }  // namespace pneumo

@@ -47,23 +47,51 @@ std::string rejected_rows(UserData& u, N_Vector y, N_Vector yp, double t) {
                       : " Not finite at the last state: " + listed(rows) + ".";
 }
 
+// A junction without volume holds no gas: its pressure is where the flows
+// through it balance, and two restrictions whose flows bend back on
+// themselves (a regulator's supply path throttled shut as its outlet rises,
+// fed backwards from a charged chamber) can leave no balance nearby - the
+// volume of the line that joins them in reality gives the pressure a state.
+std::string junction_hint(const System& s, int unknown) {
+  const auto j = s.junction_pressures();
+  const auto is = [unknown](const std::vector<int>& v) { return std::find(v.begin(), v.end(), unknown) != v.end(); };
+  if (!is(j.unguessed) && !is(j.guessed)) return "";
+  return " " + s.variable_names()[unknown] +
+         " is a junction without volume, set only by the flows through it: draw the line there as a volume (a "
+         "few mm3 will do) to give its pressure a state.";
+}
+
+// The weighted local error of IDA's last step per unknown; empty when IDA
+// cannot tell it.
+std::vector<double> weighted_errors(void* ida, N_Vector y) {
+  std::vector<double> w;
+  N_Vector ewt = N_VClone(y), ele = N_VClone(y);
+  if (ewt && ele && IDAGetErrWeights(ida, ewt) == IDA_SUCCESS && IDAGetEstLocalErrors(ida, ele) == IDA_SUCCESS) {
+    w.resize(NV_LENGTH_S(y));
+    for (std::size_t i = 0; i < w.size(); ++i) w[i] = std::abs(NV_Ith_S(ele, i) * NV_Ith_S(ewt, i));
+  }
+  if (ewt) N_VDestroy(ewt);
+  if (ele) N_VDestroy(ele);
+  return w;
+}
+
 }  // namespace
+
+std::string junction_failure_hint(void* ida, const System& s, N_Vector y) {
+  const std::vector<int> worst = largest(weighted_errors(ida, y), 1, 0.0);
+  return worst.empty() ? "" : junction_hint(s, worst[0]);
+}
 
 std::string step_failure_report(void* ida, UserData& u, N_Vector y, N_Vector yp, double t,
                                 const std::vector<EventLogEntry>& events) {
   const System& s = u.eval->system();
-  const int n = s.size();
   std::string out;
-  N_Vector ewt = N_VClone(y), ele = N_VClone(y);
-  if (ewt && ele && IDAGetErrWeights(ida, ewt) == IDA_SUCCESS && IDAGetEstLocalErrors(ida, ele) == IDA_SUCCESS) {
-    std::vector<double> w(n);
-    for (int i = 0; i < n; ++i) w[i] = std::abs(NV_Ith_S(ele, i) * NV_Ith_S(ewt, i));
-    std::vector<std::string> names;
-    for (int i : largest(w, 3, 0.0)) names.push_back(s.variable_names()[i] + " (" + number(w[i]) + ")");
-    if (!names.empty()) out += " Largest weighted error (1 = the tolerance): " + listed(names) + ".";
-  }
-  if (ewt) N_VDestroy(ewt);
-  if (ele) N_VDestroy(ele);
+  const std::vector<double> w = weighted_errors(ida, y);
+  std::vector<std::string> names;
+  const std::vector<int> worst = largest(w, 3, 0.0);
+  for (int i : worst) names.push_back(s.variable_names()[i] + " (" + number(w[i]) + ")");
+  if (!names.empty()) out += " Largest weighted error (1 = the tolerance): " + listed(names) + ".";
+  if (!worst.empty()) out += junction_hint(s, worst[0]);
   out += rejected_rows(u, y, yp, t);
   if (!events.empty()) {
     const auto& e = events.back();

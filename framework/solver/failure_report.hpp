@@ -19,6 +19,11 @@ namespace pneumo {
 std::string step_failure_report(void* ida, UserData& u, N_Vector y, N_Vector yp, double t,
                                 const std::vector<EventLogEntry>& events);
 
+// When the unknown with the largest weighted local error of IDA's last step
+// is the pressure of a junction without volume: that it is, and the line to
+// draw as a volume there; else empty. Reads IDA's memory only.
+std::string junction_failure_hint(void* ida, const System& s, N_Vector y);
+
 // No consistent values at t: the unknowns no equation determines there (a
 // zero column of the Newton matrix: a node between closed ports or flat
 // flow laws), equations that depend on no unknown there, and the equations

@@ -940,7 +940,7 @@ IdaRun::Next IdaRun::too_much_work(const std::string& budget) {
 bool IdaRun::recover(double t_ret) {
   if (recoveries_ - recoveries_at_budget_ >= 3) return false;
   ++recoveries_;
-  const std::string failure = flag_text(IDA_CONV_FAIL, user_);
+  const std::string failure = flag_text(IDA_CONV_FAIL, user_) + "." + junction_failure_hint(ida_, system_, y_.get());
   double h = 0.0;
   IDAGetLastStep(ida_, &h);
   const double t_back = t_ret - h;
@@ -951,7 +951,7 @@ bool IdaRun::recover(double t_ret) {
     t_ = t_ret;
   if (restart(nullptr)) return true;
   result_.message = "integration failed at t = " + std::to_string(t_ret) + " s: " + failure +
-                    "; a restart from consistent values at t = " + std::to_string(t_) +
+                    " A restart from consistent values at t = " + std::to_string(t_) +
                     " s failed too: " + result_.message;
   return false;
 }
