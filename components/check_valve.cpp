@@ -58,7 +58,7 @@ class CheckValve final : public ComponentT<CheckValve> {
 
   double observe(int k, const Eval<double>& e) const override {
     const auto in = e.gas_port(kIn), out = e.gas_port(kOut);
-    return k == 0 ? in.m_flow : leakage_ + (1.0 - leakage_) * check_valve_opening(in.p - out.p, cracking_, ramp_);
+    return k == 0 ? in.m_flow : with_leakage(check_valve_opening(in.p - out.p, cracking_, ramp_), leakage_);
   }
 
  private:

@@ -24,7 +24,7 @@ T check_valve_opening(const T& dp, double cracking, double ramp) {
 template <class T>
 T check_valve_mass_flow(const T& p_in, const T& p_out, const T& T_in, const T& T_out, double C, double b,
                         double cracking, double ramp, double leakage, const GasModel& gas) {
-  const T open = leakage + (1.0 - leakage) * check_valve_opening(T(p_in - p_out), cracking, ramp);
+  const T open = with_leakage(check_valve_opening(T(p_in - p_out), cracking, ramp), leakage);
   return iso6358_mass_flow(p_in, p_out, T_in, T_out, T(C * open), b, 0.999, gas);
 }
 

@@ -47,6 +47,13 @@ T iso6358_ratio_for_flow(const T& x, double b, double r_lam) {
   return select_lazy<T>(value(x) <= phi_lam, laminar, above_laminar);
 }
 
+// The open fraction of a path whose seat or spool no longer seals: the
+// fraction `leakage` of its conductance open whatever `open` says.
+template <class T>
+T with_leakage(const T& open, double leakage) {
+  return leakage + (1.0 - leakage) * open;
+}
+
 // Mass flow from port a to port b (negative for reverse flow). T_a and T_b are
 // the temperatures of the gas arriving from each side (the upstream one is
 // used). C in m3/(s Pa).

@@ -65,8 +65,7 @@ class QuickExhaustValve final : public ComponentT<QuickExhaustValve> {
     const T open_PA = check_valve_opening(T(P.p - A.p), cracking_, ramp_);
     const T open_AR = check_valve_opening(T(A.p - P.p), cracking_, ramp_);
     m_PA = iso6358_mass_flow(P.p, A.p, P.T_in, A.T_in, T(C_PA_ * open_PA), b_, 0.999, e.gas());
-    m_AR = iso6358_mass_flow(A.p, R.p, A.T_in, R.T_in, T(C_AR_ * (leak_ + (1.0 - leak_) * open_AR)), b_, 0.999,
-                             e.gas());
+    m_AR = iso6358_mass_flow(A.p, R.p, A.T_in, R.T_in, T(C_AR_ * with_leakage(open_AR, leak_)), b_, 0.999, e.gas());
   }
 
   template <class T>

@@ -56,7 +56,7 @@ class ReliefValve final : public ComponentT<ReliefValve> {
 
   template <class T>
   T opening(const T& p_in) const {
-    return leakage_ + (1.0 - leakage_) * check_valve_opening(T(p_in - p_set_), 0.0, band_);
+    return with_leakage(check_valve_opening(T(p_in - p_set_), 0.0, band_), leakage_);
   }
 
   template <class T>

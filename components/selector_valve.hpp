@@ -56,7 +56,7 @@ class SelectorValve {
   void flows(const Eval<T>& e, T& open_1, T& m_1, T& m_2) const {
     const auto in1 = e.gas_port(kIn1), in2 = e.gas_port(kIn2), out = e.gas_port(kOut);
     open_1 = check_valve_opening(T(sign_ * (in1.p - in2.p)), -0.5 * ramp_, ramp_);
-    const T to_1 = leak_ + (1.0 - leak_) * open_1, to_2 = leak_ + (1.0 - leak_) * (1.0 - open_1);
+    const T to_1 = with_leakage(open_1, leak_), to_2 = with_leakage(T(1.0 - open_1), leak_);
     m_1 = iso6358_mass_flow(in1.p, out.p, in1.T_in, out.T_in, T(C_ * to_1), b_, 0.999, e.gas());
     m_2 = iso6358_mass_flow(in2.p, out.p, in2.T_in, out.T_in, T(C_ * to_2), b_, 0.999, e.gas());
   }

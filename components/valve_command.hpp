@@ -392,7 +392,7 @@ struct ValvePath {
   // the leakage fraction whatever `open`: at 0, C open exactly).
   template <class T>
   T mass_flow(const GasPortView<T>& from, const GasPortView<T>& to, const T& open, const GasModel& gas) const {
-    return iso6358_mass_flow(from.p, to.p, from.T_in, to.T_in, T(C * (leakage + (1.0 - leakage) * open)), b, 0.999,
+    return iso6358_mass_flow(from.p, to.p, from.T_in, to.T_in, T(C * with_leakage(open, leakage)), b, 0.999,
                              gas);
   }
 };
