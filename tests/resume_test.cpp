@@ -16,6 +16,7 @@
 #include "components/builtin.hpp"
 #include "framework/netlist/netlist.hpp"
 #include "framework/run/run.hpp"
+#include "tests/test_support.hpp"
 
 namespace pneumo {
 namespace {
@@ -36,17 +37,6 @@ RunResult run(const Netlist& nl, const Resumption& r = {}, long max_total_steps 
   o.threads = 1;
   o.max_total_steps = max_total_steps;
   return run_circuit(elaborate(nl, builtin_registry()), o, r);
-}
-
-// The value of column c at time t, linear between rows.
-double at(const RunResult& r, int c, double t) {
-  const auto& rows = r.table.rows;
-  for (std::size_t i = 1; i < rows.size(); ++i)
-    if (rows[i][0] >= t) {
-      const double w = rows[i][0] > rows[i - 1][0] ? (t - rows[i - 1][0]) / (rows[i][0] - rows[i - 1][0]) : 1.0;
-      return rows[i - 1][c] + w * (rows[i][c] - rows[i - 1][c]);
-    }
-  return rows.back()[c];
 }
 
 TEST(Resume, ACheckpointedRunGoesOnAsTheWholeRunWithItsModesAndIntegrals) {
@@ -80,8 +70,8 @@ TEST(Resume, ACheckpointedRunGoesOnAsTheWholeRunWithItsModesAndIntegrals) {
             travel = resumed.table.column("travel_A");
   const double x_A0 = whole.table.rows.front()[x_A];
   for (const auto& row : resumed.table.rows) {
-    EXPECT_NEAR(row[x_A], at(whole, x_A, row[0]), 5e-5) << "t = " << row[0];  // 0.05 mm
-    EXPECT_NEAR(row[x_B], at(whole, x_B, row[0]), 5e-5) << "t = " << row[0];
+    EXPECT_NEAR(row[x_A], test_support::value_at(whole, x_A, row[0]), 5e-5) << "t = " << row[0];  // 0.05 mm
+    EXPECT_NEAR(row[x_B], test_support::value_at(whole, x_B, row[0]), 5e-5) << "t = " << row[0];
     EXPECT_NEAR(row[travel], row[x_A] - x_A0, 5e-5) << "t = " << row[0];
   }
 }
@@ -115,6 +105,39 @@ TEST(Resume, AResumedRunBoundedInStepsStopsWhereTheBudgetRunsOut) {
   EXPECT_GT(short_of.table.rows.back()[0], 0.3);
   EXPECT_LT(short_of.table.rows.back()[0], t_end);
   EXPECT_NEAR(short_of.solver.t_reached, short_of.table.rows.back()[0], 1e-9);
+}
+
+// Checkpoints taken in passing (read off the interpolant at output rows):
+// the run is the one kept nowhere, row for row, and a run resumed from one
+// goes on as the whole run does.
+TEST(Resume, CheckpointsTakenInPassingLeaveTheRunAsItIsAndResumeAsStoppedOnes) {
+  const Netlist nl = sequence_with_travel();
+  const RunResult whole = run(nl);
+  Resumption passing{{0.3, 0.9}, nullptr};
+  passing.in_passing = true;
+  const RunResult kept = run(nl, passing);
+  ASSERT_TRUE(whole.solver.ok && kept.solver.ok);
+  ASSERT_EQ(kept.table.rows.size(), whole.table.rows.size());
+  for (std::size_t i = 0; i < whole.table.rows.size(); ++i) EXPECT_EQ(kept.table.rows[i], whole.table.rows[i]) << i;
+  EXPECT_EQ(kept.solver.stats.steps, whole.solver.stats.steps);
+  ASSERT_EQ(kept.checkpoints.size(), 2u);
+  EXPECT_GE(kept.checkpoints[1].t, 0.9);
+  EXPECT_LT(kept.checkpoints[1].t, 0.9 + nl.simulation.output_interval + 1e-12);
+
+  const RunResult resumed = run(nl, {{}, &kept.checkpoints[1]});
+  ASSERT_TRUE(resumed.solver.ok) << resumed.solver.message;
+  std::vector<EventLogEntry> after;
+  for (const auto& e : whole.solver.events)
+    if (e.t > kept.checkpoints[1].t) after.push_back(e);
+  ASSERT_GE(after.size(), 5u);
+  ASSERT_EQ(resumed.solver.events.size(), after.size());
+  for (std::size_t i = 0; i < after.size(); ++i) EXPECT_NEAR(resumed.solver.events[i].t, after[i].t, 1e-4) << i;
+  const int x_A = resumed.table.column("x_A"), travel = resumed.table.column("travel_A");
+  const double x_A0 = whole.table.rows.front()[x_A];
+  for (const auto& row : resumed.table.rows) {
+    EXPECT_NEAR(row[x_A], test_support::value_at(whole, x_A, row[0]), 5e-5) << "t = " << row[0];
+    EXPECT_NEAR(row[travel], row[x_A] - x_A0, 5e-5) << "t = " << row[0];
+  }
 }
 
 TEST(Resume, ACheckpointOfAnotherCircuitIsRefused) {

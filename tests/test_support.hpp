@@ -130,6 +130,17 @@ inline RunResult run_text(const std::string& text, const std::string& name) {
   return r;
 }
 
+// The value of column c of a run's rows at time t, linear between rows.
+inline double value_at(const RunResult& r, int c, double t) {
+  const auto& rows = r.table.rows;
+  for (std::size_t i = 1; i < rows.size(); ++i)
+    if (rows[i][0] >= t) {
+      const double w = rows[i][0] > rows[i - 1][0] ? (t - rows[i - 1][0]) / (rows[i][0] - rows[i - 1][0]) : 1.0;
+      return rows[i - 1][c] + w * (rows[i][c] - rows[i - 1][c]);
+    }
+  return rows.back()[c];
+}
+
 // Column `name` over all output rows; a missing column throws (fails the test).
 inline std::vector<double> column(const ResultsTable& table, const std::string& name) {
   const int col = table.column(name);

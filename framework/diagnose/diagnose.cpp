@@ -820,6 +820,7 @@ class Diagnosis {
   // the first screen's sensitivities alone misses effects whose timing the
   // chosen one moves (docs/benchmarks.md).
   std::vector<EffectInstance> rescreen() {
+    eng_.anchor(chosen_);  // every candidate re-screened extends the chosen effects
     const double c0 = ssr(r_cal_cur_);
     int held = 0;  // the chosen effects' parameters: the first columns
     for (const auto& ch : chosen_) held += static_cast<int>(ch.effect->parameters.size());

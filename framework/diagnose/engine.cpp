@@ -8,6 +8,7 @@
 
 #include "framework/analysis/run_metrics.hpp"
 #include "framework/core/parallel.hpp"
+#include "framework/diagnose/departure.hpp"
 #include "framework/diagnose/statistics.hpp"
 #include "framework/fit/bounded_lm.hpp"
 #include "framework/run/parts.hpp"
@@ -137,6 +138,7 @@ std::vector<double> lag_filter(const std::vector<double>& ts, const std::vector<
 
 Engine::Engine(const std::string& model_file, const Registry& base, const DiagnoseOptions& options)
     : loaded_(load_model(model_file, base, options.sets)), options_(options) {
+  anchor_.memo_key = "";
   base_probes_ = elaborate(loaded_.netlist, loaded_.registry).probes;  // input errors now
 }
 
@@ -170,7 +172,8 @@ std::vector<std::vector<double>> Engine::simulate(const Model& m, int k, const s
   const std::string key = remembered ? *m.memo_key + "@" + std::to_string(k) : "";
   if (remembered)
     if (auto signals = memo_.find(key)) return std::move(*signals);
-  const auto res = run(m, k, disturbances, at, {}, why);
+  std::optional<RunResult> res = remembered ? run_resumed(m, k, why) : std::nullopt;
+  if (!res) res = run(m, k, disturbances, at, {}, why);
   if (!res) return {};
   auto out = signals_of(m, k, *res, why);
   if (remembered && !out.empty()) memo_.keep(key, out);
@@ -197,6 +200,81 @@ std::optional<RunResult> Engine::run(const Model& m, int k, const std::vector<Di
     if (why) *why = ex.what();
     return std::nullopt;
   }
+}
+
+std::vector<double> Engine::stops(int k) const {
+  const auto& t = runs[k].t;
+  const std::size_t stride = std::max<std::size_t>(1, t.size() / kKeptCheckpoints);
+  std::vector<double> times;
+  for (std::size_t i = 0; i < t.size(); i += stride) times.push_back(t[i]);
+  return times;
+}
+
+void Engine::anchor(const std::vector<EffectInstance>& effects) {
+  std::lock_guard lock(kept_mutex_);
+  anchor_ = model(effects);
+  if (!anchor_.memo_key) anchor_.memo_key = "";  // a model the memo cannot name anchors nothing
+  anchor_kept_.clear();
+}
+
+Engine::Kept Engine::kept_for(const Model& m, int k) {
+  std::lock_guard lock(kept_mutex_);
+  auto kept = [&](std::map<int, Kept>& cache, const Model& which, const Kept& from) {
+    if (auto it = cache.find(k); it != cache.end()) return it->second;
+    return cache.emplace(k, keep_resumed(which, k, from)).first->second;
+  };
+  const Kept unpatched = kept(unpatched_kept_, model({}), Kept{});
+  const std::string& a = *anchor_.memo_key;
+  if (!a.empty() && m.memo_key->compare(0, a.size(), a) == 0) return kept(anchor_kept_, anchor_, unpatched);
+  return unpatched;
+}
+
+Engine::Kept Engine::keep_resumed(const Model& m, int k, const Kept& from) {
+  const Netlist nl = netlist_of(m, k);
+  const SolverOptions so = solver_options(nl.simulation);
+  try {
+    auto system = assembled(m, k, nl, so);
+    if (!system || (from.run && !from.system)) return {};
+    const long j = from.run ? last_checkpoint_before_departure(*from.system, *system, *from.run, so) : -1;
+    Resumption keep{stops(k), j >= 1 ? &from.run->checkpoints[j] : nullptr, j >= 1 ? &from.run->table : nullptr};
+    keep.in_passing = true;
+    ++simulations;
+    RunResult res = run_assembled(*system, so, keep);
+    if (!res.solver.ok) return {};
+    // Up to where it departs, its run is the one it resumed from: so are
+    // the checkpoints there.
+    if (j >= 1)
+      res.checkpoints.insert(res.checkpoints.begin(), from.run->checkpoints.begin(), from.run->checkpoints.begin() + j + 1);
+    return {system, std::make_shared<const RunResult>(std::move(res)), *m.memo_key};
+  } catch (const std::exception&) {
+    return {};  // its own run reports what failed
+  }
+}
+
+std::optional<RunResult> Engine::run_resumed(const Model& m, int k, std::string* why) {
+  const Kept kept = kept_for(m, k);
+  if (!kept.run) return std::nullopt;
+  if (*m.memo_key == kept.key) return *kept.run;
+  const Netlist nl = netlist_of(m, k);
+  const SolverOptions so = solver_options(nl.simulation);
+  std::shared_ptr<const System> system;
+  try {
+    system = assembled(m, k, nl, so);
+  } catch (const std::exception&) {
+    return std::nullopt;  // the whole run reports it
+  }
+  if (!system) return std::nullopt;
+  const long j = last_checkpoint_before_departure(*kept.system, *system, *kept.run, so);
+  if (j < 1) return std::nullopt;
+  ++simulations;
+  try {
+    RunResult res = run_assembled(*system, so, {{}, &kept.run->checkpoints[j], &kept.run->table});
+    // A restart the solver fails on is no verdict on the model: the whole run is.
+    if (res.solver.ok) return res;
+  } catch (const std::exception& ex) {
+    if (why) *why = ex.what();
+  }
+  return std::nullopt;
 }
 
 std::shared_ptr<const System> Engine::assembled(const Model& m, int k, const Netlist& nl, const SolverOptions& so) {

@@ -32,6 +32,7 @@ constexpr long kDisturbedMaxSteps = 20000;  // a disturbed run's step budget (th
 constexpr long kDisturbedStepsPerKept = 5;
 constexpr double kFailedResidual = 1e4;  // per sample, for a run the solver could not finish
 constexpr std::size_t kMemoValues = std::size_t{1} << 23;  // remembered signal values (64 MB)
+constexpr std::size_t kKeptCheckpoints = 250;  // the unpatched run's checkpoints (Engine::unpatched_kept), at most
 constexpr std::size_t kAssembledModels = 64;  // Systems kept for disturbed runs (Engine::assembled)
 
 // One measured signal of one run inside a concatenated residual vector.
@@ -86,6 +87,11 @@ class Engine {
   // The model at run `k`'s operating point over its measured span; `at`
   // (top-level parameter, SI value) set on top: an operating point no run has.
   Netlist netlist_of(const Model& m, int k, const Setting& at = {}) const;
+
+  // The models simulated next extend these effects (the chosen ones, with a
+  // candidate added): their runs resume from this model's where they
+  // depart from it, not only from the unpatched model's.
+  void anchor(const std::vector<EffectInstance>& effects);
 
   // Simulated signals of run `k` at its measurement times; empty if the run
   // failed (the reason kept, failures_since(), and given in `why`).
@@ -176,6 +182,26 @@ class Engine {
   // (nothing names it) or the circuit has independent parts (run_circuit
   // splits those).
   std::shared_ptr<const System> assembled(const Model& m, int k, const Netlist& nl, const SolverOptions& so);
+  // A model's run k kept at the run's measurement times (in passing), with
+  // its System and its memo key; null when it failed or the circuit has
+  // independent parts. Resumed from `from`'s run where it departs from it
+  // (departure.hpp), as its runs in the memo are.
+  struct Kept {
+    std::shared_ptr<const System> system;
+    std::shared_ptr<const RunResult> run;
+    std::string key;
+  };
+  Kept keep_resumed(const Model& m, int k, const Kept& from);
+  // The kept run model m's run k resumes from: the anchor's (anchor()) when
+  // m extends it, else the unpatched model's. Each taken once.
+  Kept kept_for(const Model& m, int k);
+  // Where every undisturbed run k is kept: the run's measurement times, at
+  // most kKeptCheckpoints of them.
+  std::vector<double> stops(int k) const;
+  // Model m's run k resumed from the kept run it extends at the last
+  // checkpoint before m departs from it - the kept model's own run is the
+  // kept one; nullopt when m departs at the start or cannot resume.
+  std::optional<RunResult> run_resumed(const Model& m, int k, std::string* why);
 
   pneumo::Model loaded_;  // the model file with its plugins
   DiagnoseOptions options_;
@@ -188,6 +214,9 @@ class Engine {
   SignalMemo memo_{kMemoValues};
   std::mutex assembled_mutex_;
   std::map<std::string, std::shared_ptr<const System>> assembled_;  // by memo key @ run; null: not shareable
+  std::mutex kept_mutex_;
+  std::map<int, Kept> unpatched_kept_, anchor_kept_;  // by run
+  Model anchor_;  // memo_key "" when none (anchor())
 };
 
 }  // namespace pneumo::diagnose::engine

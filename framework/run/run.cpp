@@ -82,6 +82,7 @@ PartRun run_part(const System& system, const SolverOptions& options, const Resum
     out.solver.t_reached = out.table.rows.empty() ? resumption.from->t : out.table.rows.back()[0];
   } else {
     Resumption own{resumption.keep_at, nullptr};
+    own.in_passing = resumption.in_passing;
     RunCheckpoint from;
     if (resumption.from) {
       from = {resumption.from->t, {resumption.from->parts[p]}};
@@ -144,15 +145,17 @@ RunResult run_system(const System& system, const SolverOptions& options, const R
   SolverOptions opt = options;
   opt.outputs_read_yp = sampled_set.reads_yp;
   Integration integration(eval, opt, output, quad.integrands.empty() ? nullptr : &quad);
+  if (resumption.in_passing) integration.keep_in_passing(resumption.keep_at);
   bool ok = resumption.from ? integration.resume(resumption.from->parts[0]) : integration.start();
   // One checkpoint a time kept (one at or before the start: the start's).
-  for (double t : resumption.keep_at) {
+  for (double t : resumption.in_passing ? std::vector<double>{} : resumption.keep_at) {
     if (!ok || t > opt.t_end) break;
     ok = t <= integration.time() || integration.advance_to(t);
     if (!ok) break;
     out.checkpoints.push_back({integration.time(), {integration.checkpoint()}});
   }
   if (ok) integration.advance_to(opt.t_end);
+  for (auto& c : integration.passed()) out.checkpoints.push_back({c.t, {std::move(c)}});
   out.solver = integration.finish();
   return out;
 }

@@ -35,6 +35,10 @@ struct Resumption {
   // its own - and a part no disturbance reaches is not integrated again,
   // its rows all the kept run's. Without it, the rows start after `from`.
   const ResultsTable* kept = nullptr;
+  // keep_at's checkpoints taken as the run passes them, at output rows,
+  // without stopping there (Integration::keep_in_passing): the run is the
+  // one kept nowhere, step for step.
+  bool in_passing = false;
 };
 
 SolverOptions solver_options(const SimulationSettings& s);

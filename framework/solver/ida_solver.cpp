@@ -120,6 +120,8 @@ class IdaRun {
   bool start();
   bool resume(const Checkpoint& from);
   Checkpoint checkpoint();
+  void keep_in_passing(std::vector<double> times) { passing_ = std::move(times), next_passing_ = 0; }
+  std::vector<Checkpoint> passed() { return std::move(passed_); }
   bool advance_to(double target);
   bool inputs_changed();
   SolverResult finish_run();
@@ -164,9 +166,13 @@ class IdaRun {
   void emit();
   void emit_at(double t_out, N_Vector yy, N_Vector yyp);
   void emit_interpolated(double t_out) {
-    interpolate(t_out, y_out_.get(), yp_out_.get(), opt_.outputs_read_yp);
+    const bool keep = passing_due(t_out);
+    interpolate(t_out, y_out_.get(), yp_out_.get(), opt_.outputs_read_yp || keep);
     emit_at(t_out, y_out_.get(), yp_out_.get());
+    if (keep) keep_passing(t_out, y_out_.get(), yp_out_.get());
   }
+  bool passing_due(double t) const { return next_passing_ < passing_.size() && t >= passing_[next_passing_] - eps_t_; }
+  void keep_passing(double t, N_Vector yy, N_Vector yyp);
   enum class Next { step, restarted, stop };
   Next step();
   Next state_events(double t_ret);
@@ -204,6 +210,11 @@ class IdaRun {
   std::vector<double> events_;  // time events up to t_end
   std::size_t next_event_ = 0;
   OutputGrid grid_;
+  // Checkpoints taken at the first output row at or after each of these
+  // times, from the interpolating polynomial (keep_in_passing): no stop.
+  std::vector<double> passing_;
+  std::size_t next_passing_ = 0;
+  std::vector<Checkpoint> passed_;
   RootLocator roots_;
   long steps_without_output_ = 0;
   long steps_taken_ = 0;  // this integration's, against max_total_steps
@@ -761,6 +772,22 @@ void IdaRun::emit_at(double t_out, N_Vector yy, N_Vector yyp) {
   output_(t_out, user_.physical_y(yy), user_.physical_yp(yyp));
 }
 
+// A checkpoint at the output row at t (its state yy, yyp: IDA's, or read
+// off the last step's interpolant, over which the modes hold), with the
+// integrals the row was given.
+void IdaRun::keep_passing(double t, N_Vector yy, N_Vector yyp) {
+  Checkpoint c;
+  c.t = t;
+  const double* y = user_.physical_y(yy);
+  c.y.assign(y, y + n_);
+  const double* yp = user_.physical_yp(yyp);
+  c.yp.assign(yp, yp + n_);
+  c.modes = eval_.modes();
+  if (n_quad_ > 0) c.integrals = *quad_->values;
+  passed_.push_back(std::move(c));
+  while (next_passing_ < passing_.size() && passing_[next_passing_] <= t + eps_t_) ++next_passing_;
+}
+
 // Events at t_start, consistent values (a steady start's settling), the
 // first output row. False on failure (result().message).
 bool IdaRun::start() {
@@ -774,6 +801,9 @@ bool IdaRun::start() {
   if (!consistent_ic() || !settle()) return false;
   if (opt_.steady_start && !rest_start()) return false;
   emit();
+  // The start's row is a checkpoint when one is due; the rows at events
+  // are not (their roots sit at zero, counted as crossed by this run alone).
+  if (passing_due(t_)) keep_passing(t_, y_.get(), yp_.get());
   restart_roots(nullptr);
   return true;
 }
@@ -1122,6 +1152,8 @@ Integration::~Integration() = default;
 bool Integration::start() { return run_->start(); }
 bool Integration::resume(const Checkpoint& from) { return run_->resume(from); }
 Checkpoint Integration::checkpoint() { return run_->checkpoint(); }
+void Integration::keep_in_passing(std::vector<double> times) { run_->keep_in_passing(std::move(times)); }
+std::vector<Checkpoint> Integration::passed() { return run_->passed(); }
 bool Integration::advance_to(double t) { return run_->advance_to(t); }
 bool Integration::inputs_changed() { return run_->inputs_changed(); }
 double Integration::time() const { return run_->time(); }

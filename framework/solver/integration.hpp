@@ -43,6 +43,12 @@ class Integration {
   const double* yp();
   // The state at time() (after start(), resume() or advance_to()).
   Checkpoint checkpoint();
+  // Checkpoints taken as the run passes `times` (ascending), at the first
+  // output row at or after each, from IDA's interpolating polynomial: no
+  // stop, so the run is the one without them, step for step. The output
+  // rows' y' are then interpolated too. Taken once: passed().
+  void keep_in_passing(std::vector<double> times);
+  std::vector<Checkpoint> passed();
   const SolverResult& result() const;
   // The statistics, warnings and outcome; once, at the end.
   SolverResult finish();
