@@ -36,33 +36,46 @@ double first_other_time_event(const System& a, const System& b) {
   return INFINITY;
 }
 
-// The largest move of an unknown, in IDA's error weights, that the residual
-// difference d causes through the unpatched model's Newton matrix at
-// cj = 1/dt.
-double weighted_move(const System& s, const Evaluator& eval, const Checkpoint& c, const std::vector<double>& d,
-                     const SolverOptions& options, double dt) {
-  const int n = s.size();
-  std::vector<double> values(static_cast<std::size_t>(s.nnz()));
-  if (eval.jacobian(c.t, c.y.data(), c.yp.data(), 1.0 / dt, values.data()) != 0) return INFINITY;
-  std::vector<Eigen::Triplet<double>> entries;
-  entries.reserve(values.size());
-  for (int col = 0; col < n; ++col)
-    for (long k = s.col_ptr()[col]; k < s.col_ptr()[col + 1]; ++k)
-      entries.emplace_back(static_cast<int>(s.row_idx()[k]), col, values[k]);
-  Eigen::SparseMatrix<double> J(n, n);
-  J.setFromTriplets(entries.begin(), entries.end());
-  Eigen::SparseLU<Eigen::SparseMatrix<double>> lu;
-  lu.compute(J);
-  if (lu.info() != Eigen::Success) return INFINITY;
-  const Eigen::VectorXd move = lu.solve(Eigen::Map<const Eigen::VectorXd>(d.data(), n));
-  if (lu.info() != Eigen::Success) return INFINITY;
-  double worst = 0;
-  for (int i = 0; i < n; ++i) {
-    const double weight = options.rtol * std::abs(c.y[i]) + options.atol * s.nominal()[i];
-    worst = std::max(worst, std::abs(move[i]) / weight);
+// The largest move of an unknown, in IDA's error weights, that a residual
+// difference causes through the unpatched model's Newton matrix at
+// cj = 1/dt. The matrix's pattern is the System's: its ordering is found
+// once.
+class WeightedMove {
+ public:
+  WeightedMove(const System& s, const Evaluator& eval, const SolverOptions& options)
+      : s_(s), eval_(eval), options_(options) {}
+
+  double operator()(const Checkpoint& c, const std::vector<double>& d, double dt) {
+    const int n = s_.size();
+    std::vector<double> values(static_cast<std::size_t>(s_.nnz()));
+    if (eval_.jacobian(c.t, c.y.data(), c.yp.data(), 1.0 / dt, values.data()) != 0) return INFINITY;
+    std::vector<Eigen::Triplet<double>> entries;
+    entries.reserve(values.size());
+    for (int col = 0; col < n; ++col)
+      for (long k = s_.col_ptr()[col]; k < s_.col_ptr()[col + 1]; ++k)
+        entries.emplace_back(static_cast<int>(s_.row_idx()[k]), col, values[k]);
+    Eigen::SparseMatrix<double> J(n, n);
+    J.setFromTriplets(entries.begin(), entries.end());
+    if (!analysed_) lu_.analyzePattern(J), analysed_ = true;
+    lu_.factorize(J);
+    if (lu_.info() != Eigen::Success) return INFINITY;
+    const Eigen::VectorXd move = lu_.solve(Eigen::Map<const Eigen::VectorXd>(d.data(), n));
+    if (lu_.info() != Eigen::Success) return INFINITY;
+    double worst = 0;
+    for (int i = 0; i < n; ++i) {
+      const double weight = options_.rtol * std::abs(c.y[i]) + options_.atol * s_.nominal()[i];
+      worst = std::max(worst, std::abs(move[i]) / weight);
+    }
+    return std::isfinite(worst) ? worst : INFINITY;
   }
-  return std::isfinite(worst) ? worst : INFINITY;
-}
+
+ private:
+  const System& s_;
+  const Evaluator& eval_;
+  const SolverOptions& options_;
+  Eigen::SparseLU<Eigen::SparseMatrix<double>> lu_;
+  bool analysed_ = false;
+};
 
 int sign(double g) { return (g > 0) - (g < 0); }
 
@@ -71,7 +84,8 @@ class SideBySide {
  public:
   SideBySide(const System& unpatched, const System& patched, const SolverOptions& options)
       : unpatched_(unpatched), options_(options), eu_(unpatched), ep_(patched),
-        outputs_u_(unpatched.probe_set(integrands(unpatched))), outputs_p_(patched.probe_set(integrands(patched))) {}
+        outputs_u_(unpatched.probe_set(integrands(unpatched))), outputs_p_(patched.probe_set(integrands(patched))),
+        move_(unpatched, eu_, options) {}
 
   // Whether the patched model is the unpatched one at checkpoint c and,
   // for its events, since the one before.
@@ -119,7 +133,7 @@ class SideBySide {
     return same;
   }
 
-  bool same_residual(const Checkpoint& c) const {
+  bool same_residual(const Checkpoint& c) {
     const auto n = static_cast<std::size_t>(unpatched_.size());
     std::vector<double> Fu(n), Fp(n);
     if (eu_.residual(c.t, c.y.data(), c.yp.data(), Fu.data()) != 0 ||
@@ -131,13 +145,14 @@ class SideBySide {
       d[i] = Fp[i] - Fu[i];
       differs = differs || d[i] != 0.0;
     }
-    return !differs || weighted_move(unpatched_, eu_, c, d, options_, options_.output_interval) <= kNegligible;
+    return !differs || move_(c, d, options_.output_interval) <= kNegligible;
   }
 
   const System& unpatched_;
   const SolverOptions& options_;
   Evaluator eu_, ep_;
   ProbeSet outputs_u_, outputs_p_;
+  WeightedMove move_;
   std::vector<double> gu_, gp_;  // the roots at the checkpoint before
 };
 

@@ -229,23 +229,31 @@ Engine::Kept Engine::kept_for(const Model& m, int k) {
   return unpatched;
 }
 
-Engine::Kept Engine::keep_resumed(const Model& m, int k, const Kept& from) {
+Engine::Departure Engine::departure(const Model& m, int k, const Kept& from) {
+  Departure d;
   const Netlist nl = netlist_of(m, k);
-  const SolverOptions so = solver_options(nl.simulation);
+  d.options = solver_options(nl.simulation);
+  d.system = assembled(m, k, nl, d.options);
+  if (d.system && from.run && from.system)
+    d.checkpoint = last_checkpoint_before_departure(*from.system, *d.system, *from.run, d.options);
+  return d;
+}
+
+Engine::Kept Engine::keep_resumed(const Model& m, int k, const Kept& from) {
   try {
-    auto system = assembled(m, k, nl, so);
-    if (!system || (from.run && !from.system)) return {};
-    const long j = from.run ? last_checkpoint_before_departure(*from.system, *system, *from.run, so) : -1;
+    const Departure d = departure(m, k, from);
+    if (!d.system || (from.run && !from.system)) return {};
+    const long j = d.checkpoint;
     Resumption keep{stops(k), j >= 1 ? &from.run->checkpoints[j] : nullptr, j >= 1 ? &from.run->table : nullptr};
     keep.in_passing = true;
     ++simulations;
-    RunResult res = run_assembled(*system, so, keep);
+    RunResult res = run_assembled(*d.system, d.options, keep);
     if (!res.solver.ok) return {};
     // Up to where it departs, its run is the one it resumed from: so are
     // the checkpoints there.
     if (j >= 1)
       res.checkpoints.insert(res.checkpoints.begin(), from.run->checkpoints.begin(), from.run->checkpoints.begin() + j + 1);
-    return {system, std::make_shared<const RunResult>(std::move(res)), *m.memo_key};
+    return {d.system, std::make_shared<const RunResult>(std::move(res)), *m.memo_key};
   } catch (const std::exception&) {
     return {};  // its own run reports what failed
   }
@@ -255,20 +263,16 @@ std::optional<RunResult> Engine::run_resumed(const Model& m, int k, std::string*
   const Kept kept = kept_for(m, k);
   if (!kept.run) return std::nullopt;
   if (*m.memo_key == kept.key) return *kept.run;
-  const Netlist nl = netlist_of(m, k);
-  const SolverOptions so = solver_options(nl.simulation);
-  std::shared_ptr<const System> system;
+  Departure d;
   try {
-    system = assembled(m, k, nl, so);
+    d = departure(m, k, kept);
   } catch (const std::exception&) {
     return std::nullopt;  // the whole run reports it
   }
-  if (!system) return std::nullopt;
-  const long j = last_checkpoint_before_departure(*kept.system, *system, *kept.run, so);
-  if (j < 1) return std::nullopt;
+  if (!d.system || d.checkpoint < 1) return std::nullopt;
   ++simulations;
   try {
-    RunResult res = run_assembled(*system, so, {{}, &kept.run->checkpoints[j], &kept.run->table});
+    RunResult res = run_assembled(*d.system, d.options, {{}, &kept.run->checkpoints[d.checkpoint], &kept.run->table});
     // A restart the solver fails on is no verdict on the model: the whole run is.
     if (res.solver.ok) return res;
   } catch (const std::exception& ex) {

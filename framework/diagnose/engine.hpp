@@ -192,6 +192,15 @@ class Engine {
     std::string key;
   };
   Kept keep_resumed(const Model& m, int k, const Kept& from);
+  // Model m's run k: its System (null: not shareable), its solver options
+  // and the last checkpoint of `from`'s run before it departs from it (-1:
+  // none, or no run to depart from). Throws what assembling it throws.
+  struct Departure {
+    std::shared_ptr<const System> system;
+    SolverOptions options;
+    long checkpoint = -1;
+  };
+  Departure departure(const Model& m, int k, const Kept& from);
   // The kept run model m's run k resumes from: the anchor's (anchor()) when
   // m extends it, else the unpatched model's. Each taken once.
   Kept kept_for(const Model& m, int k);

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <map>
 #include <numeric>
+#include <optional>
 #include <sstream>
 
 #include "framework/assembly/system.hpp"
@@ -232,8 +233,10 @@ class Search {
   // holds there) over the hat's width. With many states (a line of
   // cylinders has dozens) they are screened first on coarse hats - every
   // third knot's, a subspace of the fine hats', so a coarse fit's gap is no
-  // smaller than the fine one's - and only the best kFineStates get the
-  // fine hats; the others keep their coarse fit, reported as such.
+  // smaller than the fine one's - on the run the verdict misses most (where
+  // a balance that explains the gap must act most), and only the best
+  // kFineStates get the fine hats on every run; the others keep their
+  // coarse fit there, no correction on the other runs, reported as such.
   std::vector<Candidate> balances() {
     std::vector<Candidate> cands;
     for (const auto& st : model_states(*in_.model, *in_.registry)) {
@@ -260,7 +263,7 @@ class Search {
       respond(all, hat_shapes(kDisturbanceKnots));
       return cands;
     }
-    respond(all, hat_shapes(kCoarseHats));
+    respond(all, hat_shapes(kCoarseHats), worst_run());
     for (auto& c : cands) regularised_fit(c, r0);
     std::sort(cands.begin(), cands.end(), [](const Candidate& a, const Candidate& b) { return a.ssr < b.ssr; });
     std::vector<Candidate*> best;
@@ -282,23 +285,38 @@ class Search {
     return T;
   }
 
+  // The used run with the largest misfit.
+  std::size_t worst_run() const {
+    std::size_t worst = 0;
+    for (std::size_t q = 1; q < used.size(); ++q)
+      if (r0[q].squaredNorm() > r0[worst].squaredNorm()) worst = q;
+    return worst;
+  }
+
   // Each candidate's output sensitivity to each hat of `shapes` (columns:
-  // knot values), by one simulation per hat and run; its J, roughness and
-  // coefficients are then on those hats.
-  void respond(const std::vector<Candidate*>& cs, const Eigen::MatrixXd& shapes) {
-    const long nr = static_cast<long>(used.size()), H = shapes.cols();
+  // knot values), by one simulation per hat and run - on used run `only`
+  // alone when given, the others' columns zero (no correction there); its
+  // J, roughness and coefficients are then on those hats.
+  void respond(const std::vector<Candidate*>& cs, const Eigen::MatrixXd& shapes,
+               std::optional<std::size_t> only = std::nullopt) {
+    const long H = shapes.cols();
+    std::vector<long> qs;
+    for (std::size_t q = 0; q < used.size(); ++q)
+      if (!only || q == *only) qs.push_back(static_cast<long>(q));
+    const long nr = static_cast<long>(qs.size());
     for (Candidate* c : cs) {
       c->P = roughness(static_cast<int>(H), 0);
       c->shapes = shapes;
       c->finding.hats = static_cast<int>(H);
       c->J.clear();
-      for (long q = 0; q < nr; ++q) c->J.push_back(Eigen::MatrixXd::Zero(r0[q].size(), H));
+      for (std::size_t q = 0; q < used.size(); ++q) c->J.push_back(Eigen::MatrixXd::Zero(r0[q].size(), H));
     }
     if (in_.log)
       in_.log("unexplained: " + std::to_string(cs.size()) + " balances x " + std::to_string(nr) + " runs x " +
-              std::to_string(H) + " hats: " + std::to_string(cs.size() * nr * H) + " simulations");
+              std::to_string(H) + " hats: " + std::to_string(cs.size() * nr * H) + " simulations" +
+              (only ? " (on run " + runs_[used[*only]].name + ", the one the verdict misses most)" : ""));
     parallel_for(static_cast<long>(cs.size()) * nr * H, opt_.threads, [&](int, long job) {
-      const long i = job / (nr * H), q = (job / H) % nr, j = job % H;
+      const long i = job / (nr * H), q = qs[(job / H) % nr], j = job % H;
       Candidate& c = *cs[i];
       std::vector<double> rate(kDisturbanceKnots);
       int first = kDisturbanceKnots;  // the hat's first knot not zero
@@ -676,7 +694,7 @@ std::string unexplained_html(const std::optional<Unexplained>& u,
     const auto& b = u->balances[i];
     o << "<tr><td class=\"l\">" << html(b.balance) << "</td><td class=\"l\">" << html(b.kind) << "</td><td>"
       << rounded(b.gap_after, 2)
-      << (b.hats < kDisturbanceKnots ? " (predicted on " + std::to_string(b.hats) + " coarse hats; screened only)"
+      << (b.hats < kDisturbanceKnots ? " (predicted on " + std::to_string(b.hats) + " coarse hats of the run missed most; screened only)"
           : !b.confirmed ? b.failure.empty() ? " (predicted)" : " (predicted; its simulation failed: " + html(b.failure) + ")"
           : !b.longer_step_failed.empty() ? " (fitted on simulations from " + rounded(100 * b.share, 2) +
                                                   " % of its linear fit; a longer step left the model's domain: " +
